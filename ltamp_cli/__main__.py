@@ -1,0 +1,3 @@
+from ltamp_cli.cli.app import main
+
+main()

@@ -1,0 +1,121 @@
+"""The backend protocol: the one small interface every physics backend implements.
+
+A *backend* (Box2D Kitchen2D, PyBullet Kitchen3D, SAPIEN, or the analytic ``synthetic``
+backend) exposes a set of parameterised skills and runs trials of them. Learning and data
+collection only ever talk to backends through :class:`SkillBackend`, in the spirit of
+Gymnasium's ``Env``: everything else a backend does is its own business.
+
+Conventions
+-----------
+* Parameters are given in *physical units* (what :class:`ParamSpace` bounds describe);
+  learners normalise to ``[-1, 1]`` themselves.
+* ``context`` has shape ``(d_context,)`` and ``control`` has shape ``(d_control,)``.
+* A trial is deterministic given ``(context, control, seed)``.
+* ``score > 0`` means the skill succeeded (the super-level set ``g > 0`` is what is learned).
+* An *invalid* control (e.g. a colliding start) is not simulated: it gets ``valid=False``
+  and the skill's invalid score (usually ``-1``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class ParamSpace:
+    """Named box-bounded real parameters. ``lows``/``highs`` are in physical units."""
+
+    names: tuple[str, ...]
+    lows: tuple[float, ...]
+    highs: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        if not (len(self.names) == len(self.lows) == len(self.highs)):
+            raise ValueError("names, lows and highs must have the same length")
+        if any(lo > hi for lo, hi in zip(self.lows, self.highs, strict=True)):
+            raise ValueError("every low must be <= its high")
+
+    @property
+    def dim(self) -> int:
+        return len(self.names)
+
+    def low_array(self) -> np.ndarray:
+        return np.asarray(self.lows, dtype=float)
+
+    def high_array(self) -> np.ndarray:
+        return np.asarray(self.highs, dtype=float)
+
+    def sample_uniform(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """``n`` uniform points in the box, shape ``(n, dim)``."""
+        return rng.uniform(self.low_array(), self.high_array(), size=(n, self.dim))
+
+
+@dataclass(frozen=True)
+class SkillSpec:
+    """What a skill is: its context and control parameters and how it is scored."""
+
+    name: str
+    context: ParamSpace
+    control: ParamSpace
+    description: str = ""
+    invalid_score: float = -1.0
+
+
+@dataclass(frozen=True)
+class TrialResult:
+    """Outcome of one trial. ``info`` holds skill-specific measurements (JSON-able)."""
+
+    score: float
+    valid: bool
+    info: Mapping[str, Any] = field(default_factory=dict)
+
+
+@runtime_checkable
+class SkillBackend(Protocol):
+    """What every backend provides to learning and data collection."""
+
+    name: str
+
+    def skills(self) -> Mapping[str, SkillSpec]:
+        """All skills this backend can run, by name."""
+        ...
+
+    def sample_context(self, skill: str, rng: np.random.Generator) -> np.ndarray:
+        """Draw one context from the skill's context distribution, shape ``(d_context,)``."""
+        ...
+
+    def is_valid(self, skill: str, context: np.ndarray, controls: np.ndarray) -> np.ndarray:
+        """Cheap hard validity test (no simulation) for a batch.
+
+        ``controls`` has shape ``(n, d_control)``; returns a bool array of shape ``(n,)``.
+        """
+        ...
+
+    def run_trial(
+        self, skill: str, context: np.ndarray, control: np.ndarray, seed: int
+    ) -> TrialResult:
+        """Run (simulate) one trial of ``skill``; deterministic given ``seed``."""
+        ...
+
+    def close(self) -> None:
+        """Release physics resources. Backends reuse their world across trials until then."""
+        ...
+
+
+def skill_spec(backend: SkillBackend, skill: str) -> SkillSpec:
+    """Look a skill up by name, or raise ``KeyError`` naming the known ones."""
+    specs = backend.skills()
+    if skill not in specs:
+        known = ", ".join(sorted(specs))
+        raise KeyError(f"backend {backend.name!r} has no skill {skill!r} (known: {known})")
+    return specs[skill]
+
+
+def as_batch(controls: Sequence[float] | np.ndarray, dim: int) -> np.ndarray:
+    """View one control or a batch of controls as an array of shape ``(n, dim)``."""
+    array = np.asarray(controls, dtype=float)
+    return array.reshape(-1, dim)

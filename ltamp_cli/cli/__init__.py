@@ -1,0 +1,1 @@
+"""The ``ltamp`` command line (Typer). One module per command; :mod:`.app` wires them."""

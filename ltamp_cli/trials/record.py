@@ -1,0 +1,160 @@
+"""Trial records and append-only JSONL datasets.
+
+One trial per line. Lines are appended with a single ``write`` on an ``O_APPEND`` file
+descriptor followed by ``fsync``, so concurrent writers never interleave and a crash can at
+worst leave one partial last line, which :meth:`TrialDataset.read` ignores and the next
+:meth:`TrialDataset.append` removes first. Nothing ever rewrites earlier lines.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ltamp_cli.errors import InputError, location_in
+
+
+@dataclass(frozen=True)
+class TrialRecord:
+    """One executed (or imported) trial of a skill.
+
+    ``context``/``control`` are in physical units, in the order of the skill's
+    :class:`~ltamp_cli.backends.protocol.ParamSpace` names. ``index`` identifies the trial
+    within the job that produced it (collection resumes by skipping done indices).
+    """
+
+    skill: str
+    context: tuple[float, ...]
+    control: tuple[float, ...]
+    score: float
+    valid: bool
+    seed: int
+    backend: str
+    wall_time_s: float = 0.0
+    index: int = -1
+    info: Mapping[str, Any] = field(default_factory=dict)
+
+    def to_json(self) -> str:
+        record = asdict(self)
+        record["context"] = [float(v) for v in self.context]
+        record["control"] = [float(v) for v in self.control]
+        record["score"] = _finite_or_none(self.score)
+        record["info"] = dict(self.info)
+        return json.dumps(record, sort_keys=True, allow_nan=False)
+
+    @staticmethod
+    def from_dict(data: Mapping[str, Any]) -> TrialRecord:
+        score = data["score"]
+        return TrialRecord(
+            skill=str(data["skill"]),
+            context=tuple(float(v) for v in data["context"]),
+            control=tuple(float(v) for v in data["control"]),
+            score=float("nan") if score is None else float(score),
+            valid=bool(data["valid"]),
+            seed=int(data["seed"]),
+            backend=str(data["backend"]),
+            wall_time_s=float(data.get("wall_time_s", 0.0)),
+            index=int(data.get("index", -1)),
+            info=dict(data.get("info", {})),
+        )
+
+
+def _finite_or_none(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+_REQUIRED_FIELDS = ("skill", "context", "control", "score", "valid", "seed", "backend")
+
+
+class TrialDataset:
+    """An append-only JSONL file of :class:`TrialRecord` lines."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+
+    def exists(self) -> bool:
+        return self.path.exists()
+
+    def read(self) -> list[TrialRecord]:
+        """All complete records; a torn last line (crash while writing) is skipped."""
+        return list(self.iter_records())
+
+    def iter_records(self) -> Iterator[TrialRecord]:
+        if not self.path.exists():
+            return
+        with self.path.open("rb") as handle:
+            lines = handle.read().split(b"\n")
+        # After the final newline split() yields b"" — any other last piece is torn.
+        complete, _torn = lines[:-1], lines[-1]
+        for number, raw in enumerate(complete, start=1):
+            if not raw.strip():
+                continue
+            try:
+                data = json.loads(raw)
+                missing = [name for name in _REQUIRED_FIELDS if name not in data]
+                if missing:
+                    raise KeyError(", ".join(missing))
+                yield TrialRecord.from_dict(data)
+            except (ValueError, KeyError, TypeError) as error:
+                raise InputError(
+                    f"not a trial record ({type(error).__name__}: {error}); expected one JSON "
+                    f"object per line with fields {', '.join(_REQUIRED_FIELDS)}",
+                    location_in(self.path, number, 1),
+                ) from None
+
+    def append(self, records: TrialRecord | Iterable[TrialRecord]) -> None:
+        """Append records durably; each call is one atomic ``write``."""
+        if isinstance(records, TrialRecord):
+            records = [records]
+        payload = "".join(record.to_json() + "\n" for record in records).encode()
+        if not payload:
+            return
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._drop_torn_tail()
+        fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+        try:
+            written = os.write(fd, payload)
+            if written != len(payload):  # pragma: no cover - disk full or similar
+                raise OSError(f"short write to {self.path}: {written} of {len(payload)} bytes")
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+    def _drop_torn_tail(self) -> None:
+        if not self.path.exists():
+            return
+        with self.path.open("rb+") as handle:
+            handle.seek(0, os.SEEK_END)
+            size = handle.tell()
+            if size == 0:
+                return
+            handle.seek(size - 1)
+            if handle.read(1) == b"\n":
+                return
+            data = handle.seek(0) or handle.read()
+            handle.truncate(data.rfind(b"\n") + 1)
+            handle.flush()
+            os.fsync(handle.fileno())
+
+    def done_indices(self) -> set[int]:
+        return {record.index for record in self.iter_records() if record.index >= 0}
+
+
+def records_to_arrays(
+    records: Sequence[TrialRecord],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Stack records into ``(contexts (n, dc), controls (n, dθ), scores (n,), valid (n,))``."""
+    if not records:
+        raise ValueError("no trial records")
+    contexts = np.array([record.context for record in records], dtype=float)
+    controls = np.array([record.control for record in records], dtype=float)
+    scores = np.array([record.score for record in records], dtype=float)
+    valid = np.array([record.valid for record in records], dtype=bool)
+    return contexts, controls, scores, valid
