@@ -1,0 +1,1 @@
+"""The learned Kitchen2D skills. Each module defines ``SPEC``, ``valid_mask`` and ``run``."""
