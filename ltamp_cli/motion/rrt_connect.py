@@ -23,7 +23,7 @@ from ompl import base as ob
 from ompl import geometric as og
 from ompl import util as ou
 
-from ltamp_cli.motion.interpolation import is_path_valid
+from ltamp_cli.motion.interpolation import is_path_valid, shortcut_path
 
 ValidityFn = Callable[[np.ndarray], bool]
 
@@ -35,15 +35,16 @@ class RRTConnectConfig:
     ``resolution``: largest joint change (radians, infinity norm) between checked
     configurations on an edge, for OMPL's motion checks and the final dense re-check.
     ``max_step``: RRT-Connect's extension range in joint units (``None``: OMPL's default,
-    a fifth of the space's extent). ``simplify_time``: seconds of OMPL path simplification
-    (shortcutting and smoothing); 0 disables it.
+    a fifth of the space's extent). ``shortcut_iterations``: random shortcutting attempts
+    (:func:`~ltamp_cli.motion.interpolation.shortcut_path`, seeded from ``seed``; OMPL's
+    own simplifier is time-bounded and so not reproducible); 0 disables it.
     """
 
     time_limit: float = 2.0
     seed: int = 0
     resolution: float = 0.02
     max_step: float | None = None
-    simplify_time: float = 0.2
+    shortcut_iterations: int = 20
 
     def __post_init__(self) -> None:
         if self.time_limit <= 0:
@@ -52,8 +53,8 @@ class RRTConnectConfig:
             raise ValueError("resolution must be positive")
         if self.max_step is not None and self.max_step <= 0:
             raise ValueError("max_step must be positive")
-        if self.simplify_time < 0:
-            raise ValueError("simplify_time must be >= 0")
+        if self.shortcut_iterations < 0:
+            raise ValueError("shortcut_iterations must be >= 0")
 
 
 @dataclass(frozen=True)
@@ -115,12 +116,19 @@ def plan_rrt_connect(
     counter.raise_pending()
     if raw_path is None:
         return MotionPlan(None, "timeout", time.perf_counter() - began, counter.calls)
+    if settings.shortcut_iterations > 0:
+        raw_path = shortcut_path(
+            raw_path,
+            counter,
+            settings.resolution,
+            np.random.default_rng(settings.seed),
+            settings.shortcut_iterations,
+        )
+        counter.raise_pending()
     # Re-check densely ourselves: never trust a path only because the planner returned it.
     if not is_path_valid(raw_path, counter, settings.resolution):
         counter.raise_pending()
-        return MotionPlan(
-            None, "dense re-check failed", time.perf_counter() - began, counter.calls
-        )
+        return MotionPlan(None, "dense re-check failed", time.perf_counter() - began, counter.calls)
     return MotionPlan(raw_path, "solved", time.perf_counter() - began, counter.calls)
 
 
@@ -190,8 +198,6 @@ def _solve_with_ompl(
         setup.solve(settings.time_limit)
         if not setup.haveExactSolutionPath():
             return None
-        if settings.simplify_time > 0:
-            setup.simplifySolution(settings.simplify_time)
         solution = setup.getSolutionPath()
         path = np.array(
             [
