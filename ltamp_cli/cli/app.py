@@ -24,6 +24,8 @@ def build_app() -> typer.Typer:
         add_completion=False,
         pretty_exceptions_enable=False,
     )
+    # A callback keeps `ltamp COMMAND` form even while only one command is registered.
+    app.callback()(lambda: None)
     # Command modules are imported here, not at module import, to keep start-up cheap.
     from ltamp_cli.cli import solve
 
@@ -48,12 +50,9 @@ def main(argv: list[str] | None = None) -> None:
     except KeyboardInterrupt:
         print("ltamp: interrupted", file=sys.stderr)
         sys.exit(130)
-    except Exception as error:  # click usage errors and friends
-        import click
-
-        if isinstance(error, click.ClickException):
-            message = " ".join(error.format_message().split())
-            print(f"ltamp: error: {message}", file=sys.stderr)
-            sys.exit(EXIT_BAD_INPUT)
-        raise
+    except typer.TyperException as error:  # usage errors: bad options or arguments
+        format_message = getattr(error, "format_message", None)
+        message = format_message() if callable(format_message) else str(error)
+        print(f"ltamp: error: {' '.join(str(message).split())}", file=sys.stderr)
+        sys.exit(EXIT_BAD_INPUT)
     sys.exit(code if isinstance(code, int) else 0)

@@ -1,0 +1,94 @@
+"""``ltamp solve``: plan for a YAML (or PDDL) problem and print the plan."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ltamp_cli.errors import InputError
+
+
+def register(app: typer.Typer) -> None:
+    app.command("solve")(solve_command)
+
+
+def solve_command(
+    problem: Annotated[Path, typer.Argument(help="Problem file (.yaml, or .pddl with --domain).")],
+    algorithm: Annotated[str | None, typer.Option(
+        help="incremental | focused (default: the problem's, else focused).")] = None,
+    max_time: Annotated[float | None, typer.Option(
+        "--max-time", help="Time limit in seconds (default: the problem's, else 60).")] = None,
+    seed: Annotated[int | None, typer.Option(help="Seed for the stream samplers.")] = None,
+    search: Annotated[str | None, typer.Option(
+        help="Discrete search: lazy-greedy | wastar.")] = None,
+    domain: Annotated[Path | None, typer.Option(
+        help="Domain folder, for a .pddl problem file.")] = None,
+    unit_costs: Annotated[bool, typer.Option(
+        "--unit-costs", help="Ignore action costs while searching.")] = False,
+    json_output: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+) -> None:
+    """Solve PROBLEM; exit 0 when solved, 1 when infeasible or out of time, 2 on bad input."""
+    from ltamp_cli.planner.algorithms.common import PlannerConfig, StreamError
+    from ltamp_cli.planner.api import solve
+    from ltamp_cli.planner.problem import load_problem
+
+    loaded = load_problem(problem, domain)
+    options = dict(loaded.planner_options)
+    known = {"algorithm", "max_time", "seed", "search", "unit_costs", "initial_complexity",
+             "max_complexity"}
+    for key in options:
+        if key not in known:
+            raise InputError(f"{problem}: unknown planner option {key!r}: expected one of "
+                             f"{', '.join(sorted(known))}")
+    if algorithm is not None:
+        options["algorithm"] = algorithm
+    if max_time is not None:
+        options["max_time"] = max_time
+    if seed is not None:
+        options["seed"] = seed
+    if search is not None:
+        options["search"] = search
+    if unit_costs:
+        options["unit_costs"] = True
+    try:
+        config = PlannerConfig(**options)
+        result = solve(loaded, config)
+    except StreamError as error:
+        raise InputError(f"{loaded.bindings_source}: {error}") from None
+    except TypeError as error:
+        raise InputError(f"{problem}: bad planner options: {error}") from None
+    if json_output:
+        print(result.to_json())
+    else:
+        _print_human(result)
+    if not result.solved:
+        raise typer.Exit(1)
+
+
+def _print_human(result) -> None:  # type: ignore[no-untyped-def]
+    out = sys.stdout
+    if result.plan is None:
+        print(f"status: {result.status} after {result.time_s:.3f} s", file=out)
+        return
+    print(f"status: {result.status}  actions: {len(result.plan)}  cost: {result.cost:g}  "
+          f"time: {result.time_s:.3f} s", file=out)
+    width = len(str(len(result.plan)))
+    for number, step in enumerate(result.plan, start=1):
+        values = " ".join(_short(v) for v in step.values)
+        print(f"{number:>{width}}. {step.name} {values}", file=out)
+
+
+def _short(value) -> str:  # type: ignore[no-untyped-def]
+    from ltamp_cli.planner.result import to_jsonable
+
+    value = to_jsonable(value)
+    if isinstance(value, list):
+        flat = [_short(v) for v in value]
+        text = "[" + ", ".join(flat) + "]"
+        return text if len(text) <= 40 else text[:37] + "...]"
+    if isinstance(value, float):
+        return f"{value:.3g}"
+    return str(value)

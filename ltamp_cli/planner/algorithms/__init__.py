@@ -1,0 +1,1 @@
+"""PDDLStream algorithms over a :class:`~ltamp_cli.planner.problem.PlanningProblem`."""

@@ -1,0 +1,264 @@
+"""State shared by the PDDLStream algorithms: known facts, objects, stream instances."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ltamp_cli.errors import InputError
+from ltamp_cli.planner.objects import ObjectTable
+from ltamp_cli.planner.pddl.syntax import (
+    OBJECT_TYPE,
+    Atom,
+    ExternalPredicate,
+    Stream,
+    StreamFunction,
+)
+from ltamp_cli.planner.problem import PlanningProblem
+from ltamp_cli.planner.result import (
+    INFEASIBLE,
+    SOLVED,
+    TIMEOUT,
+    Certificate,
+    PlanResult,
+    PlanStep,
+    StreamResult,
+)
+from ltamp_cli.planner.search.ground import Fact, FactIndex, join
+from ltamp_cli.planner.search.normalize import LiftedLiteral
+from ltamp_cli.planner.search.solve import DiscreteResult, plan_discrete
+from ltamp_cli.planner.streams import (
+    Binding,
+    External,
+    StreamInstance,
+    StreamStats,
+    resolve_bindings,
+)
+
+ALGORITHMS = ("incremental", "focused")
+
+
+@dataclass(frozen=True)
+class PlannerConfig:
+    """Options of one planner run (all passed explicitly, nothing global).
+
+    ``max_time`` in seconds; ``seed`` seeds the stream bindings' RNG; ``search`` is the
+    discrete search (``lazy-greedy`` or ``wastar``); ``unit_costs`` ignores action costs.
+    """
+
+    algorithm: str = "focused"
+    max_time: float = 60.0
+    seed: int = 0
+    search: str = "lazy-greedy"
+    unit_costs: bool = False
+    initial_complexity: int = 0
+    max_complexity: int = 20
+
+
+def external_domain(external: External) -> tuple[Atom, ...]:
+    return external.domain
+
+
+def external_inputs(external: External) -> tuple[str, ...]:
+    if isinstance(external, Stream):
+        return external.inputs
+    if isinstance(external, StreamFunction):
+        return external.head.args
+    return external.head.args
+
+
+def instantiate_atoms(atoms: Iterable[Atom], mapping: Mapping[str, str]) -> list[Fact]:
+    return [(atom.predicate, *(mapping.get(a, a) for a in atom.args)) for atom in atoms]
+
+
+def certified_facts(instance: StreamInstance, outputs: tuple[str, ...]) -> list[Fact]:
+    """Facts an instance certifies for one output tuple (tests: for no outputs)."""
+    external = instance.external
+    mapping = dict(zip(external_inputs(external), instance.inputs, strict=True))
+    if isinstance(external, Stream):
+        mapping.update(zip(external.outputs, outputs, strict=True))
+        return instantiate_atoms(external.certified, mapping)
+    if isinstance(external, ExternalPredicate):
+        return instantiate_atoms((external.head,), mapping)
+    return []
+
+
+@dataclass
+class PlannerState:
+    """Facts known to be true (from the problem or certified by streams) and objects."""
+
+    problem: PlanningProblem
+    config: PlannerConfig
+    objects: ObjectTable
+    object_types: dict[str, str]
+    externals: dict[str, External]
+    bindings: dict[str, Binding]
+    facts: FactIndex = field(default_factory=FactIndex)
+    function_values: dict[Fact, float] = field(default_factory=dict)
+    instances: dict[tuple[str, tuple[str, ...]], StreamInstance] = field(default_factory=dict)
+    producers: dict[Fact, StreamResult] = field(default_factory=dict)
+    stream_stats: dict[str, StreamStats] = field(default_factory=dict)
+    start_time: float = field(default_factory=time.perf_counter)
+    search_time: float = 0.0
+    sampling_time: float = 0.0
+    iterations: int = 0
+    searches: int = 0
+
+    @property
+    def deadline(self) -> float:
+        return self.start_time + self.config.max_time
+
+    def timed_out(self) -> bool:
+        return time.perf_counter() > self.deadline
+
+    def add_fact(self, fact: Fact, producer: StreamResult | None = None) -> bool:
+        added = self.facts.add(fact)
+        if added and producer is not None:
+            self.producers[fact] = producer
+        return added
+
+    def instance(self, name: str, inputs: tuple[str, ...]) -> StreamInstance:
+        key = (name, inputs)
+        found = self.instances.get(key)
+        if found is None:
+            found = StreamInstance(self.externals[name], self.bindings[name], inputs)
+            self.instances[key] = found
+        return found
+
+    def call(self, instance: StreamInstance) -> list[tuple[str, ...]]:
+        """Call an instance once and record what it certified. Returns new output tuples."""
+        start = time.perf_counter()
+        stats = self.stream_stats.setdefault(instance.name, StreamStats())
+        try:
+            outputs = instance.call(self.objects, stats)
+        except InputError:
+            raise
+        except Exception as error:
+            raise StreamError(instance, error) from error
+        finally:
+            self.sampling_time += time.perf_counter() - start
+        external = instance.external
+        if isinstance(external, StreamFunction):
+            mapping = dict(zip(external.head.args, instance.inputs, strict=True))
+            key = (external.name, *(mapping[a] for a in external.head.args))
+            self.function_values[key] = float(instance.value)
+            return outputs
+        if instance.is_test:
+            if instance.value:
+                facts = certified_facts(instance, ())
+                result = StreamResult(instance.name, instance.inputs, (), tuple(facts))
+                for fact in facts:
+                    self.add_fact(fact, result)
+            return outputs
+        for output in outputs:
+            for name in output:
+                self.object_types.setdefault(name, OBJECT_TYPE)
+            facts = certified_facts(instance, output)
+            result = StreamResult(instance.name, instance.inputs, output, tuple(facts))
+            for fact in facts:
+                self.add_fact(fact, result)
+        return outputs
+
+    def search(self, init: Iterable[Fact], objects: Mapping[str, str],
+               function_values: Mapping[Fact, float]) -> DiscreteResult:
+        start = time.perf_counter()
+        self.searches += 1
+        try:
+            return plan_discrete(
+                self.problem.domain, objects, init, function_values, self.problem.goal,
+                self.deadline, self.config.search, self.config.unit_costs)
+        finally:
+            self.search_time += time.perf_counter() - start
+
+    def bindings_of(self, external: External, index: FactIndex) -> Iterator[tuple[str, ...]]:
+        """Input tuples whose domain facts all hold in ``index``."""
+        inputs = external_inputs(external)
+        literals = [LiftedLiteral(a.predicate, a.args) for a in external_domain(external)]
+        if not literals:
+            if inputs:
+                raise InputError(f"stream {external.name!r} has inputs but an empty :domain; "
+                                 "every input must appear in a :domain fact")
+            yield ()
+            return
+        for binding in join(literals, index):
+            yield tuple(binding[v] for v in inputs)
+
+    def result(self, status: str, discrete: DiscreteResult | None,
+               preimage: Iterable[Fact] = ()) -> PlanResult:
+        plan = None
+        cost = float("inf")
+        certificate = Certificate(facts=sorted(self.facts.members))
+        if discrete is not None and discrete.actions is not None:
+            plan = [PlanStep(a.name, a.args, tuple(self.objects.value(x) for x in a.args),
+                             a.cost) for a in discrete.actions]
+            cost = float(sum(step.cost for step in plan))
+            used = sorted(set(preimage))
+            certificate.preimage = used
+            seen: set[StreamResult] = set()
+            for fact in used:
+                producer = self.producers.get(fact)
+                if producer is not None and producer not in seen:
+                    seen.add(producer)
+                    certificate.stream_results.append(producer)
+        stats = {
+            "algorithm": self.config.algorithm,
+            "iterations": self.iterations,
+            "searches": self.searches,
+            "search_time_s": round(self.search_time, 6),
+            "sampling_time_s": round(self.sampling_time, 6),
+            "facts": len(self.facts.members),
+            "streams": {name: s.as_dict() for name, s in sorted(self.stream_stats.items())},
+        }
+        return PlanResult(status, plan, cost, time.perf_counter() - self.start_time, stats,
+                          certificate, {n: self.objects.value(n) for n in self.objects.names()})
+
+
+class StreamError(Exception):
+    """A stream binding raised: reported with the stream's name and inputs."""
+
+    def __init__(self, instance: StreamInstance, error: Exception) -> None:
+        super().__init__(f"stream {instance.name!r} raised {type(error).__name__}: {error} "
+                         f"(inputs {', '.join(instance.inputs)})")
+        self.instance = instance
+
+
+def initial_state(problem: PlanningProblem, config: PlannerConfig) -> PlannerState:
+    """Objects, facts and bindings of a problem, ready for an algorithm."""
+    objects = ObjectTable()
+    for name, (_, value) in problem.objects.items():
+        objects.add(name, value)
+    externals: dict[str, External] = {}
+    bindings: dict[str, Binding] = {}
+    if problem.stream_file is not None and problem.streams_factory is not None:
+        rng = np.random.default_rng(config.seed)
+        try:
+            provided = problem.streams_factory(dict(problem.world), rng)
+        except InputError:
+            raise
+        except Exception as error:
+            raise InputError(f"make_streams of {problem.bindings_source!r} failed: "
+                             f"{type(error).__name__}: {error}") from None
+        if not isinstance(provided, Mapping):
+            raise InputError(f"make_streams of {problem.bindings_source!r} must return a "
+                             "mapping of stream name to callable")
+        bindings = resolve_bindings(problem.stream_file, provided, repr(problem.bindings_source))
+        externals = {
+            **{s.name: s for s in problem.stream_file.streams},
+            **{f.name: f for f in problem.stream_file.functions},
+            **{p.name: p for p in problem.stream_file.predicates},
+        }
+    state = PlannerState(problem, config, objects,
+                         {name: type_name for name, (type_name, _) in problem.objects.items()},
+                         externals, bindings)
+    for atom in problem.init:
+        state.add_fact((atom.predicate, *atom.args))
+    for value in problem.function_values:
+        state.function_values[(value.term.name, *value.term.args)] = value.value
+    return state
+
+
+__all__ = ["ALGORITHMS", "INFEASIBLE", "SOLVED", "TIMEOUT", "PlannerConfig",
+           "PlannerState", "StreamError", "initial_state"]

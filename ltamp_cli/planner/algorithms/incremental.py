@@ -1,0 +1,46 @@
+"""The incremental algorithm: alternate calling every stream instance and searching.
+
+Complete for problems whose streams eventually produce the needed values: every legal
+stream instance is called once per iteration, so all reachable values appear level by level.
+"""
+
+from __future__ import annotations
+
+from ltamp_cli.planner.algorithms.common import PlannerState
+from ltamp_cli.planner.algorithms.preimage import plan_preimage
+from ltamp_cli.planner.result import INFEASIBLE, SOLVED, TIMEOUT, PlanResult
+from ltamp_cli.planner.search.engine import SearchTimeout
+
+
+def solve_incremental(state: PlannerState) -> PlanResult:
+    changed = True
+    try:
+        while True:
+            state.iterations += 1
+            if changed:
+                discrete = state.search(state.facts.members, state.object_types,
+                                        state.function_values)
+                if discrete.solved:
+                    facts, terms = plan_preimage(discrete)
+                    return state.result(SOLVED, discrete, facts | terms)
+            if state.timed_out():
+                return state.result(TIMEOUT, None)
+            changed = sample_all(state)
+            if not changed and all(i.exhausted for i in state.instances.values()):
+                return state.result(INFEASIBLE, None)
+    except SearchTimeout:
+        return state.result(TIMEOUT, None)
+
+
+def sample_all(state: PlannerState) -> bool:
+    """Create every new legal instance, then call each non-exhausted one once."""
+    for external in state.externals.values():
+        for inputs in list(state.bindings_of(external, state.facts)):
+            state.instance(external.name, inputs)
+    before = (len(state.facts.members), len(state.function_values))
+    for instance in list(state.instances.values()):
+        if state.timed_out():
+            break
+        if not instance.exhausted:
+            state.call(instance)
+    return (len(state.facts.members), len(state.function_values)) != before

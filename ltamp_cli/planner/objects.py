@@ -1,0 +1,64 @@
+"""Objects of one planning run: PDDL names for (possibly continuous) Python values.
+
+Values that compare equal (and are hashable, or are numpy arrays with the same bytes) get
+the same object, so a stream that outputs an existing value does not create a new one.
+Each :class:`ObjectTable` is private to one planner run.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Hashable
+from typing import Any
+
+import numpy as np
+
+
+def _value_key(value: Any) -> Hashable:
+    if isinstance(value, np.ndarray):
+        return ("ndarray", value.dtype.str, value.shape, value.tobytes())
+    if isinstance(value, list | tuple):
+        return (type(value).__name__, tuple(_value_key(v) for v in value))
+    if isinstance(value, dict):
+        return ("dict", tuple(sorted((str(k), _value_key(v)) for k, v in value.items())))
+    if isinstance(value, float | int | str | bool | type(None)):
+        return (type(value).__name__, value)
+    try:
+        hash(value)
+    except TypeError:
+        return ("id", id(value))
+    return (type(value).__name__, value)
+
+
+class ObjectTable:
+    def __init__(self) -> None:
+        self._values: dict[str, Any] = {}
+        self._by_key: dict[Hashable, str] = {}
+        self._counter = 0
+
+    def add(self, name: str, value: Any) -> None:
+        """Register a named object (from the problem file)."""
+        self._values[name] = value
+        if value is not None:
+            self._by_key.setdefault(_value_key(value), name)
+
+    def intern(self, value: Any, prefix: str = "v") -> str:
+        """The object for ``value``, created as ``@{prefix}{n}`` if new."""
+        key = _value_key(value)
+        name = self._by_key.get(key)
+        if name is None:
+            name = f"@{prefix}{self._counter}"
+            self._counter += 1
+            self._by_key[key] = name
+            self._values[name] = value
+        return name
+
+    def value(self, name: str) -> Any:
+        """The Python value of an object; symbolic objects are their own name."""
+        value = self._values.get(name)
+        return name if value is None else value
+
+    def __contains__(self, name: str) -> bool:
+        return name in self._values
+
+    def names(self) -> list[str]:
+        return list(self._values)

@@ -1,0 +1,1 @@
+"""PDDL / PDDLStream syntax and parsers."""

@@ -1,0 +1,209 @@
+"""Semantic checks: names, arities and types of parsed domains, problems and stream files.
+
+Parsing (:mod:`.parse`) checks shape; these functions check meaning and report the first
+problem as an :class:`~ltamp_cli.errors.InputError` at its source location.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from ltamp_cli.errors import InputError, SourceLocation
+from ltamp_cli.planner.pddl.syntax import (
+    EQUALITY,
+    OBJECT_TYPE,
+    Atom,
+    Domain,
+    Effect,
+    FunctionTerm,
+    IncreaseCost,
+    Problem,
+    StreamFile,
+    TypedName,
+    effect_atoms,
+    formula_atoms,
+    is_variable,
+)
+from ltamp_cli.planner.pddl.syntax import (
+    Exists as _Exists,
+)
+from ltamp_cli.planner.pddl.syntax import (
+    ForAll as _ForAll,
+)
+
+
+def _known_types(domain: Domain) -> set[str]:
+    return {OBJECT_TYPE, *(child for child, _ in domain.types), *(p for _, p in domain.types)}
+
+
+def _check_types(names: Iterable[TypedName], known: set[str], location: SourceLocation) -> None:
+    for typed in names:
+        if typed.type not in known:
+            raise InputError(
+                f"unknown type {typed.type!r} for {typed.name!r}: expected one of "
+                f"{', '.join(sorted(known))}",
+                location,
+            )
+
+
+def _check_atom(atom: Atom, arities: dict[str, int], scope: set[str] | None,
+                constants: set[str] | None, what: str) -> None:
+    if atom.predicate == EQUALITY:
+        expected = 2
+    elif atom.predicate not in arities:
+        raise InputError(f"unknown predicate {atom.predicate!r} in {what}", atom.location)
+    else:
+        expected = arities[atom.predicate]
+    if len(atom.args) != expected:
+        raise InputError(
+            f"predicate {atom.predicate!r} takes {expected} argument(s), got {len(atom.args)} "
+            f"in {what}",
+            atom.location,
+        )
+    for arg in atom.args:
+        if is_variable(arg):
+            if scope is not None and arg not in scope:
+                raise InputError(f"variable {arg} is not a parameter in {what}", atom.location)
+        elif constants is not None and arg not in constants:
+            raise InputError(f"unknown object {arg!r} in {what}", atom.location)
+
+
+def _quantified_variables(formula: object) -> set[str]:
+    """Variables bound by exists/forall anywhere inside a formula or effect."""
+    found: set[str] = set()
+    stack = [formula]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, _Exists | _ForAll):
+            found.update(p.name for p in node.parameters)
+        for value in getattr(node, "__dict__", {}).values():
+            if isinstance(value, tuple):
+                stack.extend(value)
+            elif hasattr(value, "__dataclass_fields__"):
+                stack.append(value)
+    return found
+
+
+def _cost_terms(effect: Effect) -> list[FunctionTerm]:
+    terms: list[FunctionTerm] = []
+    stack: list[object] = [effect]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, IncreaseCost) and isinstance(node.amount, FunctionTerm):
+            terms.append(node.amount)
+        for value in getattr(node, "__dict__", {}).values():
+            if isinstance(value, tuple):
+                stack.extend(value)
+            elif hasattr(value, "__dataclass_fields__"):
+                stack.append(value)
+    return terms
+
+
+def check_domain(domain: Domain) -> None:
+    known = _known_types(domain)
+    _check_types(domain.constants, known, domain.location)
+    arities = {name: sig.arity for name, sig in domain.predicate_map().items()}
+    function_arities = {sig.name: sig.arity for sig in domain.functions}
+    constants = {c.name for c in domain.constants}
+    for signature in (*domain.predicates, *domain.functions):
+        _check_types(signature.parameters, known, signature.location)
+    for action in domain.actions:
+        _check_types(action.parameters, known, action.location)
+        scope = {p.name for p in action.parameters}
+        scope |= _quantified_variables(action.precondition) | _quantified_variables(action.effect)
+        what = f"action {action.name!r}"
+        for atom in formula_atoms(action.precondition):
+            _check_atom(atom, arities, scope, constants, what)
+        for atom, _ in effect_atoms(action.effect):
+            _check_atom(atom, arities, scope, constants, what)
+            if atom.predicate in domain.derived_predicates():
+                raise InputError(f"derived predicate {atom.predicate!r} cannot be an effect",
+                                 atom.location)
+        for term in _cost_terms(action.effect):
+            if term.name not in function_arities:
+                raise InputError(f"unknown function {term.name!r} in {what}: declare it in "
+                                 ":functions", term.location)
+            if len(term.args) != function_arities[term.name]:
+                raise InputError(
+                    f"function {term.name!r} takes {function_arities[term.name]} argument(s), "
+                    f"got {len(term.args)}", term.location)
+            for arg in term.args:
+                if is_variable(arg) and arg not in scope:
+                    raise InputError(f"variable {arg} is not a parameter in {what}",
+                                     term.location)
+    for axiom in domain.axioms:
+        scope = {p.name for p in axiom.head.parameters} | _quantified_variables(axiom.body)
+        for atom in formula_atoms(axiom.body):
+            # Free body variables of a derived predicate are implicitly existential.
+            _check_atom(atom, arities, None, constants, f"derived predicate {axiom.head.name!r}")
+        del scope
+
+
+def check_problem(problem: Problem, domain: Domain) -> None:
+    known = _known_types(domain)
+    _check_types(problem.objects, known, problem.location)
+    if problem.domain_name and problem.domain_name != domain.name:
+        raise InputError(
+            f"problem is for domain {problem.domain_name!r} but the domain is {domain.name!r}",
+            problem.location,
+        )
+    arities = {name: sig.arity for name, sig in domain.predicate_map().items()}
+    names = {o.name for o in problem.objects} | {c.name for c in domain.constants}
+    for atom in problem.init:
+        _check_atom(atom, arities, set(), names, "the initial state")
+        if atom.predicate in domain.derived_predicates():
+            raise InputError(f"derived predicate {atom.predicate!r} cannot be an initial fact",
+                             atom.location)
+    scope = _quantified_variables(problem.goal)
+    for atom in formula_atoms(problem.goal):
+        _check_atom(atom, arities, scope, names, "the goal")
+
+
+def check_streams(streams: StreamFile, domain: Domain) -> None:
+    arities = {name: sig.arity for name, sig in domain.predicate_map().items()}
+    constants = {c.name for c in domain.constants}
+    for predicate in streams.predicates:
+        arities.setdefault(predicate.name, len(predicate.head.args))
+    seen: set[str] = set()
+    for name, location in [*((s.name, s.location) for s in streams.streams),
+                           *((f.name, f.location) for f in streams.functions),
+                           *((p.name, p.location) for p in streams.predicates)]:
+        if name in seen:
+            raise InputError(f"{name!r} is declared twice in the stream file", location)
+        seen.add(name)
+    for stream in streams.streams:
+        what = f"stream {stream.name!r}"
+        overlap = set(stream.inputs) & set(stream.outputs)
+        if overlap:
+            raise InputError(f"{what} uses {sorted(overlap)[0]} as both input and output",
+                             stream.location)
+        for atom in stream.domain:
+            _check_atom(atom, arities, set(stream.inputs), constants, f"the :domain of {what}")
+        for atom in stream.certified:
+            _check_atom(atom, arities, set(stream.inputs) | set(stream.outputs), constants,
+                        f"the :certified of {what}")
+            if atom.predicate in domain.derived_predicates():
+                raise InputError(f"{what} cannot certify derived predicate {atom.predicate!r}",
+                                 atom.location)
+        for fluent in stream.fluents:
+            if fluent not in arities:
+                raise InputError(f"unknown fluent predicate {fluent!r} in {what}",
+                                 stream.location)
+    function_arities = {sig.name: sig.arity for sig in domain.functions}
+    for function in streams.functions:
+        if function.name not in function_arities:
+            raise InputError(f"function {function.name!r} is not declared in the domain's "
+                             ":functions", function.location)
+        if len(function.head.args) != function_arities[function.name]:
+            raise InputError(f"function {function.name!r} takes "
+                             f"{function_arities[function.name]} argument(s)", function.location)
+        for atom in function.domain:
+            _check_atom(atom, arities, set(function.head.args), constants,
+                        f"the domain of function {function.name!r}")
+    for predicate in streams.predicates:
+        if predicate.name in domain.derived_predicates():
+            raise InputError(f"external predicate {predicate.name!r} is also derived",
+                             predicate.location)
+        for atom in predicate.domain:
+            _check_atom(atom, arities, set(predicate.head.args), constants,
+                        f"the domain of predicate {predicate.name!r}")

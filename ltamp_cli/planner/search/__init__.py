@@ -1,0 +1,1 @@
+"""In-process grounding and heuristic search for PDDL with derived predicates."""

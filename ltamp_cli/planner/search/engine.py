@@ -1,0 +1,157 @@
+"""Heuristic search engines: lazy greedy best-first with preferred operators, weighted A*."""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import time
+from dataclasses import dataclass, field
+
+from ltamp_cli.planner.search.heuristic import INFINITY, FFHeuristic
+from ltamp_cli.planner.search.task import Task
+
+SEARCH_ALGORITHMS = ("lazy-greedy", "wastar")
+
+
+@dataclass
+class SearchOutcome:
+    plan: list[int] | None  # operator indices
+    cost: float
+    expanded: int
+    evaluated: int
+    time_s: float
+    states: list[frozenset[int]] = field(default_factory=list)
+
+
+class SearchTimeout(Exception):
+    pass
+
+
+def _reconstruct(parents: dict, state: frozenset[int]) -> tuple[list[int], list[frozenset[int]]]:
+    ops: list[int] = []
+    states = [state]
+    while parents[state] is not None:
+        parent, op = parents[state]
+        ops.append(op)
+        states.append(parent)
+        state = parent
+    return ops[::-1], states[::-1]
+
+
+def lazy_greedy(task: Task, deadline: float, boost: int = 1000,
+                unit_costs: bool = False) -> SearchOutcome:
+    """FD-style lazy GBFS with the FF heuristic and a boosted preferred-operator queue."""
+    start_time = time.perf_counter()
+    heuristic = FFHeuristic(task, unit_costs=unit_costs)
+    counter = itertools.count()
+    parents: dict[frozenset[int], tuple[frozenset[int], int] | None] = {task.init: None}
+    g_values = {task.init: 0.0}
+    queues: list[list] = [[], []]  # regular, preferred
+    priorities = [0, boost]
+    best_h = INFINITY
+    expanded = evaluated = 0
+    pending = [(task.init, None, None)]  # (state, parent, op) to evaluate
+
+    def evaluate_and_expand(state: frozenset[int]) -> SearchOutcome | None:
+        nonlocal best_h, expanded, evaluated
+        vector = task.state_vector(state)
+        if task.is_goal(vector):
+            ops, states = _reconstruct(parents, state)
+            return SearchOutcome(ops, g_values[state], expanded, evaluated,
+                                 time.perf_counter() - start_time, states)
+        result = heuristic(vector)
+        evaluated += 1
+        if result.value == INFINITY:
+            return None
+        expanded += 1
+        if result.value < best_h:
+            best_h = result.value
+            priorities[1] += boost
+        preferred = set(result.preferred)
+        applicable = task.applicable(vector)
+        ordered = [*(i for i in applicable if i in preferred),
+                   *(i for i in applicable if i not in preferred)]
+        for op in ordered:
+            entry = (result.value, next(counter), state, int(op), vector)
+            heapq.heappush(queues[0], entry)
+            if op in preferred:
+                heapq.heappush(queues[1], entry)
+        return None
+
+    outcome = evaluate_and_expand(task.init)
+    if outcome is not None:
+        return outcome
+    del pending
+    while queues[0] or queues[1]:
+        if time.perf_counter() > deadline:
+            raise SearchTimeout
+        which = 1 if queues[1] and priorities[1] >= priorities[0] else 0
+        if not queues[which]:
+            which = 1 - which
+        _, _, parent, op, parent_vector = heapq.heappop(queues[which])
+        priorities[which] -= 1
+        child = task.successor(parent, parent_vector, op)
+        if child in parents:
+            continue
+        parents[child] = (parent, op)
+        g_values[child] = g_values[parent] + task.operators[op].cost
+        outcome = evaluate_and_expand(child)
+        if outcome is not None:
+            return outcome
+    return SearchOutcome(None, INFINITY, expanded, evaluated, time.perf_counter() - start_time)
+
+
+def weighted_astar(task: Task, deadline: float, weight: float = 2.0) -> SearchOutcome:
+    """Eager weighted A* on real action costs with the FF heuristic (reopening closed)."""
+    start_time = time.perf_counter()
+    heuristic = FFHeuristic(task, cost_bias=0.0)
+    counter = itertools.count()
+    parents: dict[frozenset[int], tuple[frozenset[int], int] | None] = {task.init: None}
+    g_values = {task.init: 0.0}
+    vector = task.state_vector(task.init)
+    h0 = heuristic(vector).value
+    expanded = evaluated = 1
+    if h0 == INFINITY:
+        return SearchOutcome(None, INFINITY, 0, 1, time.perf_counter() - start_time)
+    queue = [(weight * h0, h0, next(counter), task.init)]
+    closed: set[frozenset[int]] = set()
+    while queue:
+        if time.perf_counter() > deadline:
+            raise SearchTimeout
+        _, _, _, state = heapq.heappop(queue)
+        if state in closed:
+            continue
+        closed.add(state)
+        vector = task.state_vector(state)
+        if task.is_goal(vector):
+            ops, states = _reconstruct(parents, state)
+            return SearchOutcome(ops, g_values[state], expanded, evaluated,
+                                 time.perf_counter() - start_time, states)
+        expanded += 1
+        for op in task.applicable(vector):
+            child = task.successor(state, vector, int(op))
+            g = g_values[state] + task.operators[op].cost
+            if child in g_values and g_values[child] <= g:
+                continue
+            g_values[child] = g
+            parents[child] = (state, int(op))
+            closed.discard(child)
+            child_h = heuristic(task.state_vector(child)).value
+            evaluated += 1
+            if child_h == INFINITY:
+                continue
+            heapq.heappush(queue, (g + weight * child_h, child_h, next(counter), child))
+    return SearchOutcome(None, INFINITY, expanded, evaluated, time.perf_counter() - start_time)
+
+
+def run_search(task: Task, algorithm: str, deadline: float, unit_costs: bool = False
+               ) -> SearchOutcome:
+    if algorithm == "lazy-greedy":
+        return lazy_greedy(task, deadline, unit_costs=unit_costs)
+    if algorithm == "wastar":
+        return weighted_astar(task, deadline)
+    raise ValueError(f"unknown search algorithm {algorithm!r}; expected one of "
+                     f"{', '.join(SEARCH_ALGORITHMS)}")
+
+
+

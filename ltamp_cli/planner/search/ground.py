@@ -1,0 +1,322 @@
+"""Grounding by relaxed reachability (semi-naive Datalog evaluation).
+
+Starting from the initial facts, rules (action variants, axiom rules) are instantiated
+whenever all their positive literals are reachable; their add effects / heads become
+reachable in turn, until a fixpoint. Negative literals are ignored for reachability except
+on *static* predicates (never changed by an action), which are decided exactly.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+
+from ltamp_cli.planner.pddl.syntax import EQUALITY, FunctionTerm, Number, is_variable
+from ltamp_cli.planner.search.normalize import (
+    Clause,
+    LiftedLiteral,
+    NormalAction,
+    NormalAxiom,
+)
+
+Fact = tuple[str, ...]  # (predicate, *args)
+
+
+@dataclass(frozen=True)
+class GroundEffect:
+    condition_pos: tuple[Fact, ...]
+    condition_neg: tuple[Fact, ...]
+    fact: Fact
+    positive: bool
+
+
+@dataclass(frozen=True)
+class GroundAction:
+    name: str
+    args: tuple[str, ...]
+    pre_pos: tuple[Fact, ...]
+    pre_neg: tuple[Fact, ...]
+    effects: tuple[GroundEffect, ...]
+    cost: float
+    static_pre: tuple[Fact, ...] = ()
+    cost_term: Fact | None = None
+
+    def __str__(self) -> str:
+        return "(" + " ".join((self.name, *self.args)) + ")"
+
+
+@dataclass(frozen=True)
+class GroundAxiom:
+    head: Fact
+    body_pos: tuple[Fact, ...]
+    body_neg: tuple[Fact, ...]
+    static_pos: tuple[Fact, ...] = ()
+
+
+@dataclass
+class Grounding:
+    actions: list[GroundAction]
+    axioms: list[GroundAxiom]
+    reachable: set[Fact]
+    static_predicates: frozenset[str]
+    # Axiom instances discarded because a static negative literal held: (head, the
+    # non-static positive body, the blocking static fact). Needed to explain *why* a
+    # negated derived fact is false (e.g. which collision-free certificates a plan uses).
+    blocked_axioms: list[tuple[Fact, tuple[Fact, ...], Fact]] = field(default_factory=list)
+
+
+class FactIndex:
+    """Facts by predicate, with lazily built indexes on bound argument positions."""
+
+    def __init__(self) -> None:
+        self.by_predicate: dict[str, list[tuple[str, ...]]] = defaultdict(list)
+        self.members: set[Fact] = set()
+        self._indexes: dict[tuple[str, tuple[int, ...]], dict[tuple[str, ...], list]] = {}
+        self._indexes_by_predicate: dict[str, list[tuple[int, ...]]] = defaultdict(list)
+
+    def add(self, fact: Fact) -> bool:
+        if fact in self.members:
+            return False
+        self.members.add(fact)
+        predicate, args = fact[0], fact[1:]
+        self.by_predicate[predicate].append(args)
+        for positions in self._indexes_by_predicate[predicate]:
+            key = tuple(args[i] for i in positions)
+            self._indexes[(predicate, positions)].setdefault(key, []).append(args)
+        return True
+
+    def lookup(self, predicate: str, positions: tuple[int, ...], key: tuple[str, ...]
+               ) -> Sequence[tuple[str, ...]]:
+        if not positions:
+            return self.by_predicate.get(predicate, ())
+        index = self._indexes.get((predicate, positions))
+        if index is None:
+            index = {}
+            for args in self.by_predicate.get(predicate, ()):
+                index.setdefault(tuple(args[i] for i in positions), []).append(args)
+            self._indexes[(predicate, positions)] = index
+            self._indexes_by_predicate[predicate].append(positions)
+        return index.get(key, ())
+
+
+@dataclass(frozen=True)
+class _Step:
+    """Match one literal: ``bound`` positions are looked up, ``binds`` set new variables."""
+
+    predicate: str
+    positions: tuple[int, ...]
+    key_terms: tuple[str, ...]  # variable names or constants at bound positions
+    binds: tuple[tuple[int, str], ...]
+    checks: tuple[tuple[int, int], ...]  # repeated new variable within the literal
+
+
+def _compile_join(literals: Sequence[LiftedLiteral], bound: set[str]) -> list[_Step]:
+    """Order literals greedily (most bound first) and precompute lookups."""
+    remaining = list(literals)
+    bound = set(bound)
+    steps = []
+    while remaining:
+        def score(lit: LiftedLiteral) -> tuple[int, int]:
+            known = sum(1 for a in lit.args if not is_variable(a) or a in bound)
+            return (-(known == len(lit.args)), -known)
+
+        literal = min(remaining, key=score)
+        remaining.remove(literal)
+        positions, key_terms, binds, checks = [], [], [], []
+        first_seen: dict[str, int] = {}
+        for i, arg in enumerate(literal.args):
+            if not is_variable(arg) or arg in bound:
+                positions.append(i)
+                key_terms.append(arg)
+            elif arg in first_seen:
+                checks.append((first_seen[arg], i))
+            else:
+                first_seen[arg] = i
+                binds.append((i, arg))
+        bound.update(first_seen)
+        steps.append(_Step(literal.predicate, tuple(positions), tuple(key_terms), tuple(binds),
+                           tuple(checks)))
+    return steps
+
+
+def _run_join(steps: Sequence[_Step], index: FactIndex, binding: dict[str, str]
+              ) -> Iterator[dict[str, str]]:
+    if not steps:
+        yield binding
+        return
+    step, rest = steps[0], steps[1:]
+    key = tuple(binding.get(term, term) for term in step.key_terms)
+    for args in index.lookup(step.predicate, step.positions, key):
+        if any(args[a] != args[b] for a, b in step.checks):
+            continue
+        extended = dict(binding)
+        for position, variable in step.binds:
+            extended[variable] = args[position]
+        yield from _run_join(rest, index, extended)
+
+
+def join(literals: Sequence[LiftedLiteral], index: FactIndex,
+         binding: Mapping[str, str] | None = None) -> Iterator[dict[str, str]]:
+    """All bindings of the literals' variables such that every literal is in ``index``."""
+    start = dict(binding or {})
+    yield from _run_join(_compile_join(literals, set(start)), index, start)
+
+
+def _ground(args: Iterable[str], binding: Mapping[str, str]) -> tuple[str, ...]:
+    return tuple(binding.get(a, a) for a in args)
+
+
+def _match(literal: LiftedLiteral, args: tuple[str, ...]) -> dict[str, str] | None:
+    binding: dict[str, str] = {}
+    for term, value in zip(literal.args, args, strict=True):
+        if is_variable(term):
+            if binding.setdefault(term, value) != value:
+                return None
+        elif term != value:
+            return None
+    return binding
+
+
+@dataclass
+class _Rule:
+    kind: str  # "action" or "axiom"
+    source: NormalAction | NormalAxiom
+    positive: tuple[LiftedLiteral, ...]
+    negative: tuple[LiftedLiteral, ...]
+    equalities: tuple[LiftedLiteral, ...]
+    variables: tuple[str, ...]
+    joins: dict[int, list[_Step]] = field(default_factory=dict)
+
+    def produces(self) -> list[tuple[str, tuple[str, ...]]]:
+        if isinstance(self.source, NormalAxiom):
+            return [(self.source.predicate, self.source.head_args)]
+        return [(e.predicate, e.args) for e in self.source.effects if e.positive]
+
+
+def _make_rule(kind: str, source: NormalAction | NormalAxiom, clause: Clause) -> _Rule:
+    positive = tuple(lit for lit in clause if lit.positive and lit.predicate != EQUALITY)
+    negative = tuple(lit for lit in clause if not lit.positive and lit.predicate != EQUALITY)
+    equalities = tuple(lit for lit in clause if lit.predicate == EQUALITY)
+    variables = tuple(sorted({a for lit in clause for a in lit.args if is_variable(a)}))
+    return _Rule(kind, source, positive, negative, equalities, variables)
+
+
+def static_predicates(actions: Sequence[NormalAction], derived: Iterable[str]) -> frozenset[str]:
+    changed = {e.predicate for action in actions for e in action.effects}
+    return frozenset(changed | set(derived))
+
+
+def ground_task(
+    actions: Sequence[NormalAction],
+    axioms: Sequence[NormalAxiom],
+    init: Iterable[Fact],
+    function_values: Mapping[Fact, float],
+) -> Grounding:
+    """Instantiate every reachable action and axiom rule."""
+    derived = {axiom.predicate for axiom in axioms}
+    fluent = static_predicates(actions, derived)  # predicates that are *not* static
+    index = FactIndex()
+    init_facts = set(init)
+    for fact in init_facts:
+        index.add(fact)
+    rules = [_make_rule("action", a, a.precondition) for a in actions]
+    rules += [_make_rule("axiom", a, a.body) for a in axioms]
+    by_predicate: dict[str, list[tuple[_Rule, int]]] = defaultdict(list)
+    for rule in rules:
+        for position, literal in enumerate(rule.positive):
+            by_predicate[literal.predicate].append((rule, position))
+
+    seen: set[tuple[int, tuple[str, ...]]] = set()
+    result = Grounding([], [], index.members, frozenset())
+    delta: list[Fact] = list(init_facts)
+    for rule in rules:
+        if not rule.positive:  # e.g. a parameterless action with an empty precondition
+            _emit(rule, {}, index, init_facts, fluent, function_values, seen, result, delta)
+    while delta:
+        current, delta = delta, []
+        for fact in current:
+            for rule, position in by_predicate.get(fact[0], ()):
+                start = _match(rule.positive[position], fact[1:])
+                if start is None:
+                    continue
+                steps = rule.joins.get(position)
+                if steps is None:
+                    others = [lit for i, lit in enumerate(rule.positive) if i != position]
+                    steps = _compile_join(others, set(start))
+                    rule.joins[position] = steps
+                for binding in _run_join(steps, index, start):
+                    _emit(rule, binding, index, init_facts, fluent, function_values, seen,
+                          result, delta)
+    result.static_predicates = frozenset(
+        {fact[0] for fact in index.members} - fluent
+    )
+    return result
+
+
+def _emit(rule: _Rule, binding: dict[str, str], index: FactIndex, init: set[Fact],
+          fluent: frozenset[str], function_values: Mapping[Fact, float],
+          seen: set[tuple[int, tuple[str, ...]]], result: Grounding, delta: list[Fact]
+          ) -> None:
+    key = (id(rule), tuple(binding[v] for v in rule.variables))
+    if key in seen:
+        return
+    seen.add(key)
+    for literal in rule.equalities:
+        left, right = _ground(literal.args, binding)
+        if (left == right) != literal.positive:
+            return
+    negative: list[Fact] = []
+    blocking: Fact | None = None
+    for literal in rule.negative:
+        fact = (literal.predicate, *_ground(literal.args, binding))
+        if literal.predicate in fluent:
+            negative.append(fact)
+        elif fact in init:
+            blocking = fact
+            break
+    positive = [(lit.predicate, *_ground(lit.args, binding)) for lit in rule.positive]
+    dynamic_pos = tuple(f for f in positive if f[0] in fluent)
+    static_pos = tuple(f for f in positive if f[0] not in fluent and not f[0].startswith("type:"))
+    source = rule.source
+    if blocking is not None:
+        if isinstance(source, NormalAxiom):
+            head = (source.predicate, *_ground(source.head_args, binding))
+            result.blocked_axioms.append((head, dynamic_pos, blocking))
+        return
+    if isinstance(source, NormalAxiom):
+        head = (source.predicate, *_ground(source.head_args, binding))
+        result.axioms.append(GroundAxiom(head, dynamic_pos, tuple(negative), static_pos))
+        if index.add(head):
+            delta.append(head)
+        return
+    cost, cost_term = 0.0, None
+    if isinstance(source.cost, Number):
+        cost = source.cost.value
+    elif isinstance(source.cost, FunctionTerm):
+        cost_term = (source.cost.name, *_ground(source.cost.args, binding))
+        if cost_term not in function_values:
+            return  # undefined cost: the action is not applicable (as in PDDLStream)
+        cost = function_values[cost_term]
+    effects = []
+    for effect in source.effects:
+        cond_pos, cond_neg, possible = [], [], True
+        for literal in effect.condition:
+            if literal.predicate == EQUALITY:
+                left, right = _ground(literal.args, binding)
+                possible &= (left == right) == literal.positive
+                continue
+            fact = (literal.predicate, *_ground(literal.args, binding))
+            if literal.predicate in fluent:
+                (cond_pos if literal.positive else cond_neg).append(fact)
+            else:
+                possible &= (fact in init) == literal.positive
+        if not possible:
+            continue
+        fact = (effect.predicate, *_ground(effect.args, binding))
+        effects.append(GroundEffect(tuple(cond_pos), tuple(cond_neg), fact, effect.positive))
+        if effect.positive and index.add(fact):
+            delta.append(fact)
+    args = tuple(binding[p] for p in source.parameters)
+    result.actions.append(GroundAction(source.name, args, dynamic_pos, tuple(negative),
+                                       tuple(effects), cost, static_pos, cost_term))

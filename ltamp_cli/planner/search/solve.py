@@ -1,0 +1,80 @@
+"""One discrete planning call: normalise, ground, compile and search."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+
+from ltamp_cli.planner.pddl.syntax import OBJECT_TYPE, Domain, Formula
+from ltamp_cli.planner.search.engine import SearchOutcome, run_search
+from ltamp_cli.planner.search.ground import Fact, GroundAction, Grounding, ground_task
+from ltamp_cli.planner.search.normalize import Normalizer, type_predicate
+from ltamp_cli.planner.search.task import Task
+
+
+@dataclass
+class DiscreteResult:
+    actions: list[GroundAction] | None
+    cost: float
+    grounding: Grounding
+    task: Task | None
+    outcome: SearchOutcome | None
+    ground_time_s: float
+    search_time_s: float
+
+    @property
+    def solved(self) -> bool:
+        return self.actions is not None
+
+
+def type_closure(domain: Domain) -> dict[str, list[str]]:
+    """Each type's ancestors (itself included, and ``object``)."""
+    parents = domain.type_parents()
+    closure: dict[str, list[str]] = {}
+    for type_name in {OBJECT_TYPE, *parents, *parents.values()}:
+        chain, current = [], type_name
+        while current is not None and current not in chain:
+            chain.append(current)
+            current = parents.get(current)
+        if OBJECT_TYPE not in chain:
+            chain.append(OBJECT_TYPE)
+        closure[type_name] = chain
+    return closure
+
+
+def plan_discrete(
+    domain: Domain,
+    objects: Mapping[str, str],
+    init: Iterable[Fact],
+    function_values: Mapping[Fact, float],
+    goal: Formula,
+    deadline: float,
+    algorithm: str = "lazy-greedy",
+    unit_costs: bool = False,
+) -> DiscreteResult:
+    """Find a plan for the finite task given by ``objects`` (name → type) and ``init``."""
+    start = time.perf_counter()
+    closure = type_closure(domain)
+    objects_by_type: dict[str, list[str]] = {}
+    facts = set(init)
+    for name, type_name in objects.items():
+        for ancestor in closure.get(type_name, [type_name, OBJECT_TYPE]):
+            objects_by_type.setdefault(ancestor, []).append(name)
+            facts.add((type_predicate(ancestor), name))
+    normalizer = Normalizer(objects_by_type)
+    actions = [variant for action in domain.actions for variant in normalizer.action(action)]
+    axioms = [rule for axiom in domain.axioms for rule in normalizer.axiom(axiom)]
+    axioms += normalizer.goal(goal)
+    grounding = ground_task(actions, axioms, facts, function_values)
+    ground_time = time.perf_counter() - start
+    if ("%goal",) not in grounding.reachable:
+        return DiscreteResult(None, float("inf"), grounding, None, None, ground_time, 0.0)
+    task = Task(grounding, facts)
+    outcome = run_search(task, algorithm, deadline, unit_costs=unit_costs)
+    search_time = time.perf_counter() - start - ground_time
+    if outcome.plan is None:
+        return DiscreteResult(None, float("inf"), grounding, task, outcome, ground_time,
+                              search_time)
+    plan = [task.operators[i].action for i in outcome.plan]
+    return DiscreteResult(plan, outcome.cost, grounding, task, outcome, ground_time, search_time)

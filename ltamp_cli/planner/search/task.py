@@ -1,0 +1,187 @@
+"""A grounded task compiled to integer facts and flat numpy arrays for fast search.
+
+Fact 0 is always true and fact 1 always false; they pad empty precondition lists so that
+``np.minimum.reduceat``/``np.maximum.reduceat`` work on every operator.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ltamp_cli.errors import InputError
+from ltamp_cli.planner.search.ground import Fact, GroundAction, GroundAxiom, Grounding
+from ltamp_cli.planner.search.normalize import GOAL_PREDICATE
+
+TRUE_FACT, FALSE_FACT = 0, 1
+GOAL_FACT: Fact = (GOAL_PREDICATE,)
+
+
+def _flatten(lists: Sequence[Sequence[int]], pad: int) -> tuple[np.ndarray, np.ndarray]:
+    """Concatenate integer lists (empty ones padded with ``pad``) and their start offsets."""
+    starts = np.empty(len(lists), dtype=np.int64)
+    flat: list[int] = []
+    for i, items in enumerate(lists):
+        starts[i] = len(flat)
+        flat.extend(items if items else (pad,))
+    return np.asarray(flat, dtype=np.int64), starts
+
+
+@dataclass
+class ConditionalEffect:
+    condition_pos: tuple[int, ...]
+    condition_neg: tuple[int, ...]
+    fact: int
+    positive: bool
+
+
+@dataclass
+class Operator:
+    action: GroundAction
+    pre_pos: tuple[int, ...]
+    pre_neg: tuple[int, ...]
+    adds: tuple[int, ...]
+    deletes: tuple[int, ...]
+    conditional: tuple[ConditionalEffect, ...]
+    cost: float
+
+
+class Task:
+    """Integer-encoded planning task: operators, stratified axioms, initial state, goal."""
+
+    def __init__(self, grounding: Grounding, init: set[Fact]) -> None:
+        self.facts: list[Fact] = [("%true",), ("%false",)]
+        self.fact_ids: dict[Fact, int] = {}
+        derived = {axiom.head[0] for axiom in grounding.axioms} | {GOAL_PREDICATE}
+        self.derived_predicates = frozenset(derived)
+        self.operators = [self._operator(a) for a in grounding.actions]
+        self.axioms = grounding.axioms
+        self.goal = self.fact_id(GOAL_FACT)
+        axiom_heads = [self.fact_id(a.head) for a in grounding.axioms]
+        axiom_pos = [[self.fact_id(f) for f in a.body_pos] for a in grounding.axioms]
+        axiom_neg = [[self.fact_id(f) for f in a.body_neg] for a in grounding.axioms]
+        self.init = frozenset(self.fact_ids[f] for f in init if f in self.fact_ids)
+        self.num_facts = len(self.facts)
+        self.is_derived = np.zeros(self.num_facts, dtype=bool)
+        for fact, index in self.fact_ids.items():
+            self.is_derived[index] = fact[0] in derived
+        self._compile_operators()
+        self._compile_axioms(axiom_heads, axiom_pos, axiom_neg)
+
+    def fact_id(self, fact: Fact) -> int:
+        index = self.fact_ids.get(fact)
+        if index is None:
+            index = len(self.facts)
+            self.fact_ids[fact] = index
+            self.facts.append(fact)
+        return index
+
+    def _operator(self, action: GroundAction) -> Operator:
+        adds, deletes, conditional = [], [], []
+        for effect in action.effects:
+            fact = self.fact_id(effect.fact)
+            if effect.condition_pos or effect.condition_neg:
+                conditional.append(ConditionalEffect(
+                    tuple(self.fact_id(f) for f in effect.condition_pos),
+                    tuple(self.fact_id(f) for f in effect.condition_neg),
+                    fact, effect.positive))
+            elif effect.positive:
+                adds.append(fact)
+            else:
+                deletes.append(fact)
+        return Operator(
+            action,
+            tuple(self.fact_id(f) for f in action.pre_pos),
+            tuple(self.fact_id(f) for f in action.pre_neg),
+            tuple(dict.fromkeys(adds)),
+            tuple(dict.fromkeys(d for d in deletes if d not in adds)),
+            tuple(conditional),
+            action.cost,
+        )
+
+    def _compile_operators(self) -> None:
+        self.pre_pos_flat, self.pre_pos_starts = _flatten(
+            [op.pre_pos for op in self.operators], TRUE_FACT)
+        self.pre_neg_flat, self.pre_neg_starts = _flatten(
+            [op.pre_neg for op in self.operators], FALSE_FACT)
+        self.costs = np.array([op.cost for op in self.operators], dtype=float)
+
+    def _compile_axioms(self, heads: list[int], positive: list[list[int]],
+                        negative: list[list[int]]) -> None:
+        strata = _stratify(self.axioms)
+        self.axiom_layers = []
+        for stratum in sorted(set(strata)):
+            members = [i for i, s in enumerate(strata) if s == stratum]
+            pos_flat, pos_starts = _flatten([positive[i] for i in members], TRUE_FACT)
+            neg_flat, neg_starts = _flatten([negative[i] for i in members], FALSE_FACT)
+            self.axiom_layers.append(
+                (pos_flat, pos_starts, neg_flat, neg_starts,
+                 np.array([heads[i] for i in members], dtype=np.int64)))
+        self.axiom_heads = heads
+        self.axiom_positive = positive
+
+    def state_vector(self, state: frozenset[int]) -> np.ndarray:
+        """Truth vector of a basic state, extended with its derived facts."""
+        vector = np.zeros(self.num_facts, dtype=np.uint8)
+        vector[TRUE_FACT] = 1
+        if state:
+            vector[np.fromiter(state, dtype=np.int64, count=len(state))] = 1
+        for pos_flat, pos_starts, neg_flat, neg_starts, heads in self.axiom_layers:
+            if not len(heads):
+                continue
+            blocked = np.maximum.reduceat(vector[neg_flat], neg_starts) > 0
+            while True:
+                ready = (np.minimum.reduceat(vector[pos_flat], pos_starts) > 0) & ~blocked
+                new = heads[ready]
+                new = new[vector[new] == 0]
+                if not len(new):
+                    break
+                vector[new] = 1
+        return vector
+
+    def applicable(self, vector: np.ndarray) -> np.ndarray:
+        """Indices of operators applicable in the state whose truth vector is given."""
+        if not self.operators:
+            return np.empty(0, dtype=np.int64)
+        ok = np.minimum.reduceat(vector[self.pre_pos_flat], self.pre_pos_starts) > 0
+        ok &= np.maximum.reduceat(vector[self.pre_neg_flat], self.pre_neg_starts) == 0
+        return np.flatnonzero(ok)
+
+    def successor(self, state: frozenset[int], vector: np.ndarray, op_index: int
+                  ) -> frozenset[int]:
+        op = self.operators[op_index]
+        adds, deletes = set(op.adds), set(op.deletes)
+        for effect in op.conditional:
+            if all(vector[f] for f in effect.condition_pos) and not any(
+                    vector[f] for f in effect.condition_neg):
+                (adds if effect.positive else deletes).add(effect.fact)
+        return frozenset((state - deletes) | adds)
+
+    def is_goal(self, vector: np.ndarray) -> bool:
+        return bool(vector[self.goal])
+
+
+def _stratify(axioms: Sequence[GroundAxiom]) -> list[int]:
+    """Stratum per axiom: negated derived predicates must be computed in a lower stratum."""
+    predicates = {a.head[0] for a in axioms}
+    level = dict.fromkeys(predicates, 0)
+    edges = set()
+    for axiom in axioms:
+        for fact in axiom.body_pos:
+            if fact[0] in predicates:
+                edges.add((fact[0], axiom.head[0], 0))
+        for fact in axiom.body_neg:
+            if fact[0] in predicates:
+                edges.add((fact[0], axiom.head[0], 1))
+    for _ in range(len(predicates) + 1):
+        changed = False
+        for source, target, strict in edges:
+            if level[target] < level[source] + strict:
+                level[target] = level[source] + strict
+                changed = True
+        if not changed:
+            return [level[a.head[0]] for a in axioms]
+    raise InputError("derived predicates are not stratified: a derived predicate depends "
+                     "negatively on itself")

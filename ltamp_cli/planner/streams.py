@@ -1,0 +1,186 @@
+"""Binding stream declarations to Python, and the run-time state of stream instances.
+
+A binding module provides a factory::
+
+    def make_streams(world: Mapping[str, Any], rng: numpy.random.Generator
+                     ) -> Mapping[str, Callable | Binding]
+
+mapping every name of the stream file (streams, ``:function`` and ``:predicate``) to Python.
+The declaration decides how a plain callable is used:
+
+* a stream with outputs: ``fn(*inputs)`` returns a generator/iterable (each ``next()`` gives
+  one output tuple, or a list of output tuples — possibly empty, meaning "nothing this call"),
+  or a single output tuple / ``None`` (a single-shot function);
+* a stream without outputs (a test) and a ``:predicate``: ``fn(*inputs) -> bool``;
+* a ``:function``: ``fn(*inputs) -> float`` (an action cost).
+
+Wrap a callable in :class:`Binding` to give per-stream :class:`StreamInfo`.
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ltamp_cli.errors import InputError
+from ltamp_cli.planner.objects import ObjectTable
+from ltamp_cli.planner.pddl.syntax import (
+    ExternalPredicate,
+    Stream,
+    StreamFile,
+    StreamFunction,
+)
+
+
+@dataclass(frozen=True)
+class StreamInfo:
+    """Planner hints for a stream (PDDLStream's ``StreamInfo``).
+
+    ``p_success``: prior probability a call yields a usable output; ``overhead``: expected
+    seconds per call (both order stream plans); ``eager``: call as soon as inputs exist
+    (cheap tests); ``opt_cost``: optimistic lower bound of a ``:function``.
+    """
+
+    p_success: float = 1.0
+    overhead: float = 1.0
+    eager: bool = False
+    opt_cost: float = 0.0
+
+
+@dataclass(frozen=True)
+class Binding:
+    function: Callable[..., Any]
+    info: StreamInfo = field(default_factory=StreamInfo)
+
+
+External = Stream | StreamFunction | ExternalPredicate
+
+
+def resolve_bindings(stream_file: StreamFile, provided: Mapping[str, Any], source: str
+                     ) -> dict[str, Binding]:
+    """Check that every declared stream has a binding; normalise to :class:`Binding`."""
+    bindings: dict[str, Binding] = {}
+    for name in stream_file.external_names():
+        if name not in provided:
+            raise InputError(
+                f"stream {name!r} has no Python binding: {source} provides "
+                f"{', '.join(sorted(provided)) or 'nothing'}"
+            )
+        value = provided[name]
+        if isinstance(value, Binding):
+            bindings[name] = value
+        elif callable(value):
+            bindings[name] = Binding(value)
+        else:
+            raise InputError(f"the binding of stream {name!r} in {source} is not callable")
+    return bindings
+
+
+@dataclass
+class StreamStats:
+    calls: int = 0
+    successes: int = 0
+    outputs: int = 0
+    time_s: float = 0.0
+
+    def as_dict(self) -> dict[str, float]:
+        return {"calls": self.calls, "successes": self.successes, "outputs": self.outputs,
+                "time_s": round(self.time_s, 6)}
+
+
+class StreamInstance:
+    """A stream applied to concrete input objects; called repeatedly for more outputs."""
+
+    def __init__(self, external: External, binding: Binding, inputs: tuple[str, ...]) -> None:
+        self.external = external
+        self.binding = binding
+        self.inputs = inputs
+        self.num_calls = 0
+        self.exhausted = False
+        self.disabled = False
+        self.results: list[tuple[str, ...]] = []  # output object names, one tuple per output
+        self._iterator: Iterator[Any] | None = None
+        self.value: Any = None  # test / predicate truth or function value once evaluated
+
+    @property
+    def name(self) -> str:
+        return self.external.name
+
+    @property
+    def is_test(self) -> bool:
+        return not isinstance(self.external, Stream) or self.external.is_test
+
+    def call(self, objects: ObjectTable, stats: StreamStats) -> list[tuple[str, ...]]:
+        """Call once more; returns the *new* output tuples (object names)."""
+        import time
+
+        if self.exhausted:
+            return []
+        values = [objects.value(name) for name in self.inputs]
+        start = time.perf_counter()
+        self.num_calls += 1
+        stats.calls += 1
+        try:
+            new = self._next(values, objects)
+        finally:
+            stats.time_s += time.perf_counter() - start
+        if new or (self.is_test and self.value):
+            stats.successes += 1
+        stats.outputs += len(new)
+        self.results.extend(new)
+        return new
+
+    def _next(self, values: list[Any], objects: ObjectTable) -> list[tuple[str, ...]]:
+        external = self.external
+        if not isinstance(external, Stream) or external.is_test:
+            self.value = self.binding.function(*values)
+            self.exhausted = True
+            if isinstance(external, StreamFunction):
+                self.value = float(self.value)
+            else:
+                self.value = bool(self.value)
+            return []
+        if self._iterator is None:
+            produced = self.binding.function(*values)
+            if produced is None:
+                self.exhausted = True
+                return []
+            if isinstance(produced, tuple) or not (
+                inspect.isgenerator(produced) or isinstance(produced, Iterator)
+                or (isinstance(produced, Sequence) and not isinstance(produced, str))
+            ):
+                self.exhausted = True
+                return self._outputs([produced], objects)
+            self._iterator = iter(produced)
+        try:
+            item = next(self._iterator)
+        except StopIteration:
+            self.exhausted = True
+            return []
+        batch = item if isinstance(item, list) else [item]
+        return self._outputs(batch, objects)
+
+    def _outputs(self, batch: list[Any], objects: ObjectTable) -> list[tuple[str, ...]]:
+        assert isinstance(self.external, Stream)
+        arity = len(self.external.outputs)
+        outputs = []
+        for output in batch:
+            if output is None:
+                continue
+            if not isinstance(output, tuple) or len(output) != arity:
+                raise InputError(
+                    f"stream {self.name!r} must produce tuples of {arity} value(s) "
+                    f"(one per output {' '.join(self.external.outputs)}), got {output!r:.80}"
+                )
+            outputs.append(tuple(
+                objects.intern(value, variable[1:])
+                for value, variable in zip(output, self.external.outputs, strict=True)))
+        return outputs
+
+
+def seeded_rng(seed: int | None) -> np.random.Generator:
+    return np.random.default_rng(seed)

@@ -1,0 +1,80 @@
+"""YAML files that remember where each value came from, for ``file:line:column`` errors."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from ltamp_cli.errors import InputError, SourceLocation
+
+
+class YamlDocument:
+    """A parsed YAML document plus the source position of every node."""
+
+    def __init__(self, path: str | Path, text: str | None = None) -> None:
+        self.path = str(path)
+        if text is None:
+            try:
+                text = Path(path).read_text()
+            except FileNotFoundError:
+                raise InputError("file not found", SourceLocation(self.path)) from None
+            except (OSError, UnicodeDecodeError) as error:
+                raise InputError(f"cannot read file: {error}", SourceLocation(self.path)) from None
+        try:
+            self.root = yaml.compose(text, Loader=yaml.SafeLoader)
+            self.data = yaml.load(text, Loader=yaml.SafeLoader)
+        except yaml.MarkedYAMLError as error:
+            mark = error.problem_mark or error.context_mark
+            line, column = (mark.line + 1, mark.column + 1) if mark else (0, 0)
+            problem = error.problem or "malformed YAML"
+            raise InputError(f"invalid YAML: {problem}", SourceLocation(self.path, line, column)
+                             ) from None
+        except yaml.YAMLError as error:
+            raise InputError(f"invalid YAML: {error}", SourceLocation(self.path)) from None
+
+    def node(self, *keys: str | int) -> yaml.Node | None:
+        node = self.root
+        for key in keys:
+            if isinstance(node, yaml.MappingNode):
+                node = next((v for k, v in node.value if k.value == key), None)
+            elif isinstance(node, yaml.SequenceNode) and isinstance(key, int):
+                node = node.value[key] if 0 <= key < len(node.value) else None
+            else:
+                return None
+            if node is None:
+                return None
+        return node
+
+    def location(self, *keys: str | int) -> SourceLocation:
+        """Where the value at ``keys`` starts (or its nearest existing parent)."""
+        for depth in range(len(keys), -1, -1):
+            node = self.node(*keys[:depth])
+            if node is not None:
+                return SourceLocation(self.path, node.start_mark.line + 1,
+                                      node.start_mark.column + 1)
+        return SourceLocation(self.path, 1, 1)
+
+    def text_origin(self, *keys: str | int) -> tuple[int, int]:
+        """(line offset, column offset) to report positions inside a scalar string."""
+        node = self.node(*keys)
+        if node is None:
+            return 0, 0
+        quoted = isinstance(node, yaml.ScalarNode) and node.style in ("'", '"')
+        if isinstance(node, yaml.ScalarNode) and node.style in ("|", ">"):
+            return node.start_mark.line + 1, node.start_mark.column
+        return node.start_mark.line, node.start_mark.column + (1 if quoted else 0)
+
+    def error(self, message: str, *keys: str | int) -> InputError:
+        return InputError(message, self.location(*keys))
+
+    def get(self, *keys: str | int, default: Any = None) -> Any:
+        data = self.data
+        for key in keys:
+            in_list = isinstance(data, list) and isinstance(key, int) and 0 <= key < len(data)
+            if in_list or (isinstance(data, dict) and key in data):
+                data = data[key]
+            else:
+                return default
+        return data
