@@ -1,0 +1,221 @@
+"""Backend-agnostic, resumable, parallel trial collection.
+
+Trial ``i`` of a job with base seed ``s`` draws everything from
+``np.random.SeedSequence(s, spawn_key=(i,))``: its context (``backend.sample_context``), its
+control (uniform in the control box, optionally re-drawn until valid) and the seed passed
+to ``run_trial``. So trial ``i`` is the same whether it runs first time, after a resume, or
+in any worker. Finished trials are appended to the :class:`TrialDataset` one by one as they
+arrive; a resumed job skips the indices already in the file, so a killed job loses at most
+the trials that were running and never duplicates one.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing as mp
+import queue
+import signal
+import time
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from tqdm import tqdm
+
+from ltamp_cli.backends import load_backend
+from ltamp_cli.backends.protocol import SkillBackend, skill_spec
+from ltamp_cli.errors import InputError
+from ltamp_cli.trials.record import TrialDataset, TrialRecord
+
+VALID_DRAW_BATCH = 256
+VALID_DRAW_ROUNDS = 40
+
+
+@dataclass(frozen=True)
+class TrialInput:
+    """What trial ``index`` runs: context ``(d_context,)``, control ``(d_control,)``, seed."""
+
+    index: int
+    context: np.ndarray
+    control: np.ndarray
+    seed: int
+
+
+@dataclass(frozen=True)
+class CollectJob:
+    """A collection job: ``n`` trials of ``skill`` on backend ``backend`` (with options)."""
+
+    skill: str
+    backend: str
+    n: int
+    seed: int = 0
+    valid_only: bool = False
+    backend_options: Mapping[str, Any] | None = None
+
+
+def trial_seed(base_seed: int, index: int) -> int:
+    """The seed ``run_trial`` gets for trial ``index`` (a 32-bit int)."""
+    sequence = np.random.SeedSequence(base_seed, spawn_key=(index,))
+    return int(sequence.generate_state(1, dtype=np.uint32)[0])
+
+
+def trial_input(
+    backend: SkillBackend, skill: str, base_seed: int, index: int, valid_only: bool = False
+) -> TrialInput:
+    """Context, control and seed of trial ``index`` (pure function of its arguments)."""
+    spec = skill_spec(backend, skill)
+    rng = np.random.default_rng(np.random.SeedSequence(base_seed, spawn_key=(index, 1)))
+    context = np.asarray(backend.sample_context(skill, rng), dtype=float)
+    control = spec.control.sample_uniform(rng, 1)[0]
+    if valid_only:
+        for _ in range(VALID_DRAW_ROUNDS):
+            batch = spec.control.sample_uniform(rng, VALID_DRAW_BATCH)
+            ok = np.flatnonzero(backend.is_valid(skill, context, batch))
+            if ok.size:
+                control = batch[ok[0]]
+                break
+    return TrialInput(index, context, control, trial_seed(base_seed, index))
+
+
+def run_one(backend: SkillBackend, job: CollectJob, index: int) -> TrialRecord:
+    """Run trial ``index`` of ``job`` on ``backend`` and make its record."""
+    item = trial_input(backend, job.skill, job.seed, index, job.valid_only)
+    start = time.perf_counter()
+    result = backend.run_trial(job.skill, item.context, item.control, item.seed)
+    return TrialRecord(
+        skill=job.skill,
+        context=tuple(float(v) for v in item.context),
+        control=tuple(float(v) for v in item.control),
+        score=float(result.score),
+        valid=bool(result.valid),
+        seed=item.seed,
+        backend=job.backend,
+        wall_time_s=time.perf_counter() - start,
+        index=index,
+        info=dict(result.info),
+    )
+
+
+def pending_indices(dataset: TrialDataset, job: CollectJob) -> list[int]:
+    """Indices of ``job`` not yet in ``dataset``; refuses a file from a different job."""
+    done: set[int] = set()
+    for record in dataset.iter_records():
+        if record.skill != job.skill or record.backend != job.backend:
+            raise InputError(
+                f"{dataset.path}: holds {record.backend}/{record.skill} trials, not "
+                f"{job.backend}/{job.skill}; use another --out file"
+            )
+        if 0 <= record.index < job.n and record.seed != trial_seed(job.seed, record.index):
+            raise InputError(
+                f"{dataset.path}: trial {record.index} was collected with a different "
+                "--seed; resume with the original seed or use another --out file"
+            )
+        done.add(record.index)
+    return [i for i in range(job.n) if i not in done]
+
+
+def _worker(job: CollectJob, tasks: Any, results: Any) -> None:
+    # Ctrl-C goes to the whole process group: the parent decides what happens.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    backend = load_backend(job.backend, **dict(job.backend_options or {}))
+    try:
+        while (index := tasks.get()) is not None:
+            try:
+                results.put(("ok", run_one(backend, job, index).to_json()))
+            except Exception as error:  # report, don't hang the parent
+                results.put(("error", f"trial {index}: {type(error).__name__}: {error}"))
+    finally:
+        backend.close()
+
+
+def _serial(job: CollectJob, indices: list[int]) -> Iterator[TrialRecord]:
+    backend = load_backend(job.backend, **dict(job.backend_options or {}))
+    try:
+        for index in indices:
+            yield run_one(backend, job, index)
+    finally:
+        backend.close()
+
+
+def _parallel(job: CollectJob, indices: list[int], workers: int) -> Iterator[TrialRecord]:
+    # Fork (where there is one): spawned children would re-run an unguarded ``__main__``
+    # such as ``python -m ltamp_cli``; nothing here holds threads or locks when forking.
+    methods = mp.get_all_start_methods()
+    context = mp.get_context("fork" if "fork" in methods else "spawn")
+    tasks, results = context.Queue(), context.Queue()
+    for index in indices:
+        tasks.put(index)
+    for _ in range(workers):
+        tasks.put(None)
+    processes = [
+        context.Process(target=_worker, args=(job, tasks, results), daemon=True)
+        for _ in range(workers)
+    ]
+    for process in processes:
+        process.start()
+    try:
+        for _ in indices:
+            while True:
+                try:
+                    kind, payload = results.get(timeout=1.0)
+                    break
+                except queue.Empty:
+                    if not any(p.is_alive() for p in processes):
+                        raise RuntimeError("all collection workers died") from None
+            if kind == "error":
+                raise RuntimeError(payload)
+            yield TrialRecord.from_dict(json.loads(payload))
+    finally:
+        for process in processes:
+            if process.is_alive():
+                process.terminate()
+        for process in processes:
+            process.join(timeout=5)
+
+
+def collect(
+    job: CollectJob,
+    out: str | Path,
+    *,
+    workers: int = 1,
+    progress: bool = True,
+) -> int:
+    """Run the trials of ``job`` missing from ``out``; returns how many were added.
+
+    Records are appended as they finish (possibly out of index order). Interrupting
+    (Ctrl-C, kill) keeps every trial already appended; run again to resume.
+    """
+    if job.n < 0:
+        raise InputError(f"-n must be >= 0, got {job.n}")
+    if workers < 1:
+        raise InputError(f"--workers must be >= 1, got {workers}")
+    dataset = TrialDataset(out)
+    backend_check = load_backend(job.backend, **dict(job.backend_options or {}))
+    try:
+        skill_spec(backend_check, job.skill)
+    except KeyError as error:
+        raise InputError(str(error).strip("'\"")) from None
+    finally:
+        backend_check.close()
+    indices = pending_indices(dataset, job)
+    stream = (
+        _serial(job, indices)
+        if workers == 1 or len(indices) <= 1
+        else _parallel(job, indices, min(workers, len(indices)))
+    )
+    added = 0
+    with tqdm(
+        total=job.n,
+        initial=job.n - len(indices),
+        desc=f"{job.backend}/{job.skill}",
+        unit="trial",
+        disable=not progress,
+        dynamic_ncols=True,
+    ) as bar:
+        for record in stream:
+            dataset.append(record)
+            added += 1
+            bar.update(1)
+    return added
