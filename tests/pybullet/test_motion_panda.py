@@ -1,0 +1,108 @@
+"""RRT-Connect for the Panda with pybullet collision checks, re-checked densely."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import numpy as np
+import pybullet
+import pytest
+
+from ltamp_cli.backends.pybullet.robot import (
+    ArmCollisionChecker,
+    KitchenScene,
+    Pose,
+    add_box,
+    build_kitchen_scene,
+    plan_arm_motion,
+    solve_ik,
+)
+from ltamp_cli.backends.pybullet.robot.collision import (
+    PANDA_SELF_COLLISION_PAIRS,
+    sample_self_collision_pairs,
+)
+from ltamp_cli.motion import RRTConnectConfig, densify_path, is_path_valid
+
+
+@pytest.fixture(scope="module")
+def scene_with_wall() -> Iterator[tuple[KitchenScene, int]]:
+    client = pybullet.connect(pybullet.DIRECT)
+    try:
+        scene = build_kitchen_scene(client, n_arms=1)
+        wall = add_box(
+            client, (0.03, 0.2, 0.12), Pose(scene.table_centre + np.array([-0.05, 0.0, 0.12]))
+        )
+        yield scene, wall
+    finally:
+        pybullet.disconnect(physicsClientId=client)
+
+
+def _down(scene: KitchenScene, offset: list[float]) -> Pose:
+    return Pose.from_euler(scene.table_centre + np.asarray(offset), roll=np.pi)
+
+
+def test_plan_around_a_wall_is_collision_free_when_rechecked_densely(
+    scene_with_wall: tuple[KitchenScene, int],
+) -> None:
+    scene, wall = scene_with_wall
+    arm = scene.arms[0]
+    checker = ArmCollisionChecker(arm, scene.obstacles_for(0, [wall]))
+    rng = np.random.default_rng(0)
+    start = solve_ik(arm, _down(scene, [-0.2, -0.1, 0.1]), rng, is_valid=checker)
+    goal = solve_ik(arm, _down(scene, [0.1, 0.1, 0.1]), rng, is_valid=checker)
+    assert start is not None and goal is not None
+    # The wall matters: the straight joint-space line between them collides.
+    assert not is_path_valid(np.stack([start, goal]), checker, 0.01)
+
+    plan = plan_arm_motion(arm, start, goal, checker, RRTConnectConfig(seed=1, time_limit=10.0))
+    assert plan.success and plan.path is not None
+    assert np.allclose(plan.path[0], start) and np.allclose(plan.path[-1], goal)
+    # Re-check four times finer than the planner's resolution, with a fresh checker.
+    fresh = ArmCollisionChecker(arm, scene.obstacles_for(0, [wall]))
+    dense = densify_path(plan.path, 0.005)
+    assert all(fresh(q) for q in dense)
+
+
+def test_checker_detects_table_and_self_collisions(
+    scene_with_wall: tuple[KitchenScene, int],
+) -> None:
+    scene, wall = scene_with_wall
+    arm = scene.arms[0]
+    checker = ArmCollisionChecker(arm, scene.obstacles_for(0, [wall]))
+    assert checker(np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]))
+    # Shoulder pitched far forward: the forearm goes through the table top.
+    assert not checker(np.array([0.0, 1.7, 0.0, -0.2, 0.0, 1.5, 0.0]))
+
+
+def test_self_collision_check_matches_brute_force(
+    scene_with_wall: tuple[KitchenScene, int],
+) -> None:
+    scene, _ = scene_with_wall
+    arm = scene.arms[0]
+    only_self = ArmCollisionChecker(arm, ())
+    robot, client = arm.body_id, arm.client_id
+
+    def touching_pairs() -> set[tuple[int, int]]:
+        points = pybullet.getClosestPoints(robot, robot, 0.0, physicsClientId=client)
+        return {(min(p[3], p[4]), max(p[3], p[4])) for p in points if p[3] != p[4] and p[8] < -1e-4}
+
+    arm.set_configuration(np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785]))
+    adjacent = touching_pairs()
+    rng = np.random.default_rng(5)
+    n_colliding = 0
+    for _ in range(150):
+        q = arm.sample_configuration(rng)
+        arm.set_configuration(q)
+        colliding = bool(touching_pairs() - adjacent)
+        n_colliding += colliding
+        assert only_self(q) == (not colliding)
+    assert n_colliding >= 5
+
+
+def test_self_collision_pairs_cover_sampled_contacts(
+    scene_with_wall: tuple[KitchenScene, int],
+) -> None:
+    scene, _ = scene_with_wall
+    seen = sample_self_collision_pairs(scene.arms[0], np.random.default_rng(11), 300)
+    assert seen, "random configurations do self-collide sometimes"
+    assert seen <= set(PANDA_SELF_COLLISION_PAIRS)
