@@ -156,14 +156,20 @@ class Gripper:
         self.held = body
         return True
 
-    def release(self) -> b2.body | None:
-        """Let go: the held body becomes dynamic again and keeps its current velocity."""
+    def release(self, open_fingers: bool = True) -> b2.body | None:
+        """Let go: the held body becomes dynamic again and keeps its current velocity.
+
+        With ``open_fingers`` the fingers then open fully (stepping the world), since
+        closed fingers would otherwise keep holding the body by friction.
+        """
         body, self.held = self.held, None
         if body is not None:
             velocity, spin = b2.vec2(body.linearVelocity), body.angularVelocity
             body.type = b2.dynamicBody
             body.linearVelocity, body.angularVelocity = velocity, spin
             body.awake = True
+        if open_fingers:
+            self.move(self._target, opening=self.spec.max_opening)
         return body
 
     def close(self, speed: float = 2.0, max_time: float = 3.0) -> b2.body | None:

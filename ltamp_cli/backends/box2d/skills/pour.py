@@ -140,21 +140,23 @@ def run(
         gripper.command((gx, gy, angle))
         kitchen.step()
 
-    # Hold until nothing is in flight. Particles inside the target cup may creep forever
-    # (they are frictionless), so they count as resolved; spilled particles lying on the
-    # table are frozen so they cost nothing more.
+    # Hold until no particle can still change the score: a particle is resolved once it is
+    # inside the target cup below its rim, or outside the target's span below its rim (it
+    # can no longer get in), or at rest. Spill lying on the table is frozen (made static)
+    # so it costs nothing while the rest settles.
     elapsed = 0.0
     half = target_spec.width / 2
     inner = target_spec.inner_width / 2
+    rim = target_spec.height - 3 * r
     while elapsed < config.max_time:
         gripper.hold(config.check_every * kitchen.config.dt)
         elapsed += config.check_every * kitchen.config.dt
         pos = kitchen.particle_positions()
         on_table = (pos[:, 1] < top + 2.5 * r) & (np.abs(pos[:, 0] - target.position[0]) > half + r)
         freeze(particles, on_table | (pos[:, 1] < top - 1.0))
-        resolved = inside_box(
-            pos, target, -inner, inner, target_spec.wall, target_spec.height - 3 * r
-        )
+        resolved = inside_box(pos, target, -inner, inner, target_spec.wall, rim)
+        outside = ~inside_box(pos, target, -half, half, -math.inf, rim)
+        resolved |= outside & (pos[:, 1] < top + rim)
         resolved |= kitchen.particle_speeds() < config.rest_speed
         if resolved.all():
             break
