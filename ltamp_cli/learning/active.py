@@ -1,0 +1,362 @@
+"""Learning loops: active level-set estimation (Algorithm 1) and the baselines' data collection.
+
+Strategies (``LearningConfig.strategy``):
+
+* ``lse`` — GP; each query maximises the straddle ψ over control *and* context;
+* ``lse2`` — GP; the context is drawn from the skill's context distribution, the control
+  maximises ψ for it;
+* ``gp`` — GP on uniformly random trials (no active learning);
+* ``random`` — uniformly random trials, no model (:class:`~.baselines.RandomModel`);
+* ``nn-c``, ``nn-r``, ``rf-c``, ``rf-r`` — scikit-learn baselines on uniformly random trials.
+
+The first ``init`` trials are always random; ``budget`` counts all trials. After every trial the
+GP is conditioned on the new data; its hyperparameters are re-optimised (warm-started) after
+every trial up to ``dense_refit`` trials and every ``refit_every`` trials after that, and fully
+(with random restarts) at the end. Online learning runs live trials through a
+:class:`~ltamp_cli.backends.protocol.SkillBackend`, appending each to a
+:class:`~ltamp_cli.trials.TrialDataset` so that an interrupted run resumes; *pool* learning
+replays a dataset of pre-collected trials, picking each next trial without replacement (the
+paper's discrete active learning, section 6.2).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from tqdm import tqdm
+
+from ltamp_cli.backends.protocol import SkillBackend, SkillSpec
+from ltamp_cli.learning.acquisition import evaluate, maximize, straddle
+from ltamp_cli.learning.baselines import SKLEARN_KINDS, RandomModel, SklearnModel
+from ltamp_cli.learning.gp import fit_gp
+from ltamp_cli.learning.kernels import KERNEL_NAMES
+from ltamp_cli.learning.metrics import Evaluation, SkillEvaluator
+from ltamp_cli.learning.model import LevelSetModel, SkillModel
+from ltamp_cli.trials.record import TrialDataset, TrialRecord
+
+STRATEGIES = ("lse", "lse2", "gp", "random", *SKLEARN_KINDS)
+ACTIVE_STRATEGIES = ("lse", "lse2")
+GP_STRATEGIES = ("lse", "lse2", "gp")
+
+
+@dataclass(frozen=True)
+class LearningConfig:
+    """How to learn. ``budget`` is the total number of trials, ``init`` of them random."""
+
+    strategy: str = "lse2"
+    kernel: str = "matern52"
+    budget: int = 50
+    init: int = 10
+    seed: int = 0
+    mean: str = "constant"
+    n_candidates: int = 10_000
+    acquisition_restarts: int = 3
+    gp_restarts: int = 2
+    dense_refit: int = 40
+    refit_every: int = 5
+    pool_neighbourhood: float = 0.02
+
+    def __post_init__(self) -> None:
+        if self.strategy not in STRATEGIES:
+            raise ValueError(
+                f"unknown strategy {self.strategy!r}: expected one of {', '.join(STRATEGIES)}"
+            )
+        if self.kernel not in KERNEL_NAMES:
+            raise ValueError(
+                f"unknown kernel {self.kernel!r}: expected one of {', '.join(KERNEL_NAMES)}"
+            )
+        if self.budget < 1 or self.init < 1:
+            raise ValueError(f"budget and init must be >= 1, got {self.budget} and {self.init}")
+        if self.refit_every < 1:
+            raise ValueError(f"refit_every must be >= 1, got {self.refit_every}")
+
+
+@dataclass
+class LearningResult:
+    """The final model, every trial it was trained on, and the learning curve (if evaluated)."""
+
+    model: SkillModel
+    records: list[TrialRecord]
+    curve: list[Evaluation] = field(default_factory=list)
+
+
+def fit_model(
+    spec: SkillSpec,
+    config: LearningConfig,
+    x: np.ndarray,
+    y: np.ndarray,
+    previous: SkillModel | None = None,
+    final: bool = False,
+    rng: np.random.Generator | None = None,
+) -> SkillModel:
+    """The strategy's model on normalised ``x (n, d)`` and scores ``y (n,)``.
+
+    For GP strategies ``previous`` (the last model) gives the warm start; hyperparameters are
+    re-optimised only when the refit schedule says so (always when ``final``).
+    """
+    rng = rng if rng is not None else np.random.default_rng(config.seed)
+    if config.strategy in GP_STRATEGIES:
+        warm = previous.gp if isinstance(previous, LevelSetModel) else None
+        n = len(y)
+        if warm is not None and not final and n > config.dense_refit and n % config.refit_every:
+            return LevelSetModel(spec, warm.with_data(x, y))
+        restarts = config.gp_restarts if final or warm is None else 0
+        gp = fit_gp(
+            x, y, config.kernel, mean=config.mean, restarts=restarts, rng=rng, warm_start=warm
+        )
+        return LevelSetModel(spec, gp)
+    if config.strategy == "random":
+        return RandomModel.fit(spec, x, y)
+    return SklearnModel.fit(spec, config.strategy, x, y, seed=config.seed)
+
+
+def _trial_seed(seed: int, index: int) -> int:
+    return int(np.random.SeedSequence([seed, index]).generate_state(1)[0] & 0x7FFFFFFF)
+
+
+def _training_score(spec: SkillSpec, score: float) -> float:
+    return score if math.isfinite(score) else spec.invalid_score
+
+
+def _checkpoint(n: int, config: LearningConfig, eval_every: int) -> bool:
+    return n == config.budget or (eval_every > 0 and n >= config.init and n % eval_every == 0)
+
+
+class _Curve:
+    def __init__(self, evaluator: SkillEvaluator | None, eval_every: int, success: bool) -> None:
+        self.evaluator = evaluator
+        self.eval_every = eval_every
+        self.success = success
+        self.points: list[Evaluation] = []
+
+    def maybe(self, n: int, config: LearningConfig, model_for: object) -> None:
+        if self.evaluator is not None and _checkpoint(n, config, self.eval_every):
+            self.points.append(self.evaluator.evaluate(model_for(), n, self.success))  # type: ignore[operator]
+
+
+def learn_online(
+    backend: SkillBackend,
+    skill: str,
+    config: LearningConfig,
+    dataset: TrialDataset | None = None,
+    evaluator: SkillEvaluator | None = None,
+    eval_every: int = 0,
+    progress: bool = False,
+    evaluate_success: bool = True,
+) -> LearningResult:
+    """Run up to ``config.budget`` live trials of ``skill`` and return the trained model.
+
+    Trials already in ``dataset`` (same skill) count toward the budget: a rerun resumes.
+    ``evaluator`` with ``eval_every > 0`` records a learning curve every ``eval_every`` trials.
+    """
+    spec = backend.skills()[skill]
+    records = [r for r in dataset.read()] if dataset is not None and dataset.exists() else []
+    strangers = [r for r in records if r.skill != skill]
+    if strangers:
+        raise ValueError(
+            f"{dataset.path if dataset else ''} holds trials of skill "
+            f"{strangers[0].skill!r}, not {skill!r}"
+        )
+    rng = np.random.default_rng([config.seed, len(records)])
+    template = RandomModel(spec, 0.0)  # coordinates and validity only
+    x = [template.to_unit(r.context, r.control)[0] for r in records]
+    y = [_training_score(spec, r.score) for r in records]
+    curve = _Curve(evaluator, eval_every, evaluate_success)
+    model: SkillModel | None = None
+
+    def current() -> SkillModel:
+        nonlocal model
+        if model is None or (config.strategy not in GP_STRATEGIES and len(y) != _fitted_on[0]):
+            model = fit_model(spec, config, np.array(x), np.array(y), model, rng=rng)
+            _fitted_on[0] = len(y)
+        return model
+
+    _fitted_on = [-1]
+
+    def is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
+        return backend.is_valid(skill, context, controls)
+
+    bar = tqdm(
+        total=config.budget,
+        initial=min(len(records), config.budget),
+        disable=not progress,
+        file=sys.stderr,
+        desc=f"{config.strategy} {skill}",
+        unit="trial",
+    )
+    with bar:
+        while len(records) < config.budget:
+            context, control = _propose(
+                backend, skill, spec, config, rng, model, len(records), is_valid
+            )
+            index = len(records)
+            seed = _trial_seed(config.seed, index)
+            start = time.perf_counter()
+            result = backend.run_trial(skill, context, control, seed)
+            record = TrialRecord(
+                skill=skill,
+                context=tuple(float(v) for v in context),
+                control=tuple(float(v) for v in control),
+                score=float(result.score),
+                valid=bool(result.valid),
+                seed=seed,
+                backend=backend.name,
+                wall_time_s=time.perf_counter() - start,
+                index=index,
+                info={"strategy": config.strategy, **dict(result.info)},
+            )
+            if dataset is not None:
+                dataset.append(record)
+            records.append(record)
+            x.append(template.to_unit(context, control)[0])
+            y.append(_training_score(spec, record.score))
+            if config.strategy in GP_STRATEGIES and len(records) >= config.init:
+                model = fit_model(spec, config, np.array(x), np.array(y), model, rng=rng)
+            curve.maybe(len(records), config, current)
+            bar.update(1)
+    final = fit_model(spec, config, np.array(x), np.array(y), model, final=True, rng=rng)
+    return LearningResult(final, records, curve.points)
+
+
+def _propose(
+    backend: SkillBackend,
+    skill: str,
+    spec: SkillSpec,
+    config: LearningConfig,
+    rng: np.random.Generator,
+    model: SkillModel | None,
+    n_done: int,
+    is_valid: object,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Next ``(context (dα,), control (dθ,))`` in physical units."""
+    active = config.strategy in ACTIVE_STRATEGIES and n_done >= config.init
+    if not active or not isinstance(model, LevelSetModel):
+        context = np.asarray(backend.sample_context(skill, rng), dtype=float).reshape(
+            spec.context.dim
+        )
+        return context, spec.control.sample_uniform(rng, 1)[0]
+    test = model.validity_test(is_valid)  # type: ignore[arg-type]
+    if config.strategy == "lse":
+        best = maximize(
+            model.gp,
+            straddle,
+            rng,
+            n_candidates=config.n_candidates,
+            n_restarts=config.acquisition_restarts,
+            is_valid=test,
+        )
+        if best is not None:
+            contexts, controls = model.from_unit(best.x)
+            return contexts[0], controls[0]
+        context = np.asarray(backend.sample_context(skill, rng), dtype=float).reshape(
+            spec.context.dim
+        )
+    else:
+        context = np.asarray(backend.sample_context(skill, rng), dtype=float).reshape(
+            spec.context.dim
+        )
+        fixed = np.zeros(model.dim)
+        fixed[spec.control.dim :] = model._context_unit(context)
+        free = np.arange(model.dim) < spec.control.dim
+        best = maximize(
+            model.gp,
+            straddle,
+            rng,
+            fixed=fixed,
+            free=free,
+            n_candidates=config.n_candidates,
+            n_restarts=config.acquisition_restarts,
+            is_valid=test,
+        )
+        if best is not None:
+            return context, model.from_unit(best.x)[1][0]
+    return context, spec.control.sample_uniform(rng, 1)[0]
+
+
+def learn_from_pool(
+    spec: SkillSpec,
+    pool: Sequence[TrialRecord],
+    config: LearningConfig,
+    evaluator: SkillEvaluator | None = None,
+    eval_every: int = 0,
+    progress: bool = False,
+    evaluate_success: bool = True,
+) -> LearningResult:
+    """Learn from pre-collected trials, choosing each next one from the pool without replacement.
+
+    Active strategies pick the remaining trial with the largest straddle ψ (``lse``: over the
+    whole pool; ``lse2``: among the ``pool_neighbourhood`` fraction of remaining trials whose
+    contexts are nearest to that of a uniformly drawn remaining trial); the others take the
+    pool in a random order. At most ``min(budget, len(pool))`` trials are used.
+    """
+    pool = [r for r in pool if r.skill == spec.name]
+    if not pool:
+        raise ValueError(f"the pool has no trials of skill {spec.name!r}")
+    rng = np.random.default_rng(config.seed)
+    template = RandomModel(spec, 0.0)
+    x_pool = np.array([template.to_unit(r.context, r.control)[0] for r in pool]).reshape(
+        len(pool), -1
+    )
+    y_pool = np.array([_training_score(spec, r.score) for r in pool])
+    budget = min(config.budget, len(pool))
+    order = rng.permutation(len(pool))
+    available = np.ones(len(pool), dtype=bool)
+    chosen: list[int] = []
+    model: SkillModel | None = None
+    curve = _Curve(evaluator, eval_every, evaluate_success)
+    fitted_on = [-1]
+
+    def current() -> SkillModel:
+        nonlocal model
+        if model is None or (config.strategy not in GP_STRATEGIES and fitted_on[0] != len(chosen)):
+            model = fit_model(spec, config, x_pool[chosen], y_pool[chosen], model, rng=rng)
+            fitted_on[0] = len(chosen)
+        return model
+
+    cursor = 0
+    with tqdm(
+        total=budget,
+        disable=not progress,
+        file=sys.stderr,
+        desc=f"{config.strategy} {spec.name} (pool)",
+        unit="trial",
+    ) as bar:
+        while len(chosen) < budget:
+            active = config.strategy in ACTIVE_STRATEGIES and len(chosen) >= config.init
+            if active and isinstance(model, LevelSetModel):
+                index = _pool_pick(model, config, spec, x_pool, available, rng)
+            else:
+                while not available[order[cursor]]:
+                    cursor += 1
+                index = int(order[cursor])
+            available[index] = False
+            chosen.append(index)
+            if config.strategy in GP_STRATEGIES and len(chosen) >= config.init:
+                model = fit_model(spec, config, x_pool[chosen], y_pool[chosen], model, rng=rng)
+            curve.maybe(len(chosen), config, current)
+            bar.update(1)
+    final = fit_model(spec, config, x_pool[chosen], y_pool[chosen], model, final=True, rng=rng)
+    return LearningResult(final, [pool[i] for i in chosen], curve.points)
+
+
+def _pool_pick(
+    model: LevelSetModel,
+    config: LearningConfig,
+    spec: SkillSpec,
+    x_pool: np.ndarray,
+    available: np.ndarray,
+    rng: np.random.Generator,
+) -> int:
+    remaining = np.flatnonzero(available)
+    if config.strategy == "lse2" and spec.context.dim > 0:
+        anchor = x_pool[rng.choice(remaining), spec.control.dim :]
+        distance = np.linalg.norm(x_pool[remaining, spec.control.dim :] - anchor, axis=1)
+        size = max(1, min(len(remaining), math.ceil(config.pool_neighbourhood * len(x_pool))))
+        remaining = remaining[np.argsort(distance, kind="stable")[:size]]
+    values = evaluate(model.gp, straddle, x_pool[remaining])
+    return int(remaining[int(np.argmax(values))])

@@ -1,0 +1,49 @@
+"""Confidence thresholds on ``φ = μ/σ`` (section 4.2 of the paper).
+
+* :func:`beta_star` — Corollary 1: with ``β*_i = sqrt(2 log(π_i / (2δ)))`` and
+  ``Σ_i 1/π_i ≤ 1``, if every one of ``T`` samples has ``φ > β*_i`` then all succeed with
+  probability ``≥ 1 − δ``.
+* :func:`relaxed_beta` — ``β = Φ⁻¹(λ Φ(φ(θ*)))``, the relaxation used when the
+  high-probability set ``{θ : φ > β*}`` is empty; ``λ ∈ [0.95, 0.999]``.
+
+The most confident control ``θ* = argmax μ/σ`` itself is
+:meth:`ltamp_cli.learning.model.LevelSetModel.most_confident_control`.
+"""
+
+from __future__ import annotations
+
+import math
+
+from scipy.stats import norm
+
+LAMBDA_RANGE = (0.95, 0.999)
+
+
+def beta_star(delta: float, index: int | None = None, count: int | None = None) -> float:
+    """Corollary 1's threshold for sample ``index`` (1-based) or for each of ``count`` samples.
+
+    With ``count=T`` the uniform choice ``π_i = T`` gives ``sqrt(2 log(T / (2δ)))``; with
+    ``index=i`` (an unbounded stream) ``π_i = π² i² / 6`` (``Σ 1/π_i = 1``).
+    """
+    if not 0.0 < delta < 1.0:
+        raise ValueError(f"delta must be in (0, 1), got {delta}")
+    if (index is None) == (count is None):
+        raise ValueError("give exactly one of index (stream) or count (fixed number of samples)")
+    if count is not None:
+        if count < 1:
+            raise ValueError(f"count must be >= 1, got {count}")
+        pi_i = float(count)
+    else:
+        assert index is not None
+        if index < 1:
+            raise ValueError(f"index is 1-based, got {index}")
+        pi_i = math.pi**2 * index**2 / 6.0
+    return math.sqrt(max(2.0 * math.log(pi_i / (2.0 * delta)), 0.0))
+
+
+def relaxed_beta(phi_star: float, lam: float = 0.95) -> float:
+    """``Φ⁻¹(λ Φ(φ*))`` where ``φ*`` is ``μ/σ`` at the most confident control."""
+    if not LAMBDA_RANGE[0] <= lam <= LAMBDA_RANGE[1]:
+        raise ValueError(f"lambda must be in [{LAMBDA_RANGE[0]}, {LAMBDA_RANGE[1]}], got {lam}")
+    # logcdf keeps precision when Φ(φ*) is within rounding of 1 (large φ*).
+    return float(norm.ppf(math.exp(math.log(lam) + float(norm.logcdf(phi_star)))))

@@ -1,0 +1,154 @@
+"""The saved-model directory: ``model.json`` (metadata) + weights; reloads without retraining.
+
+Layout of ``DIR/``:
+
+* ``model.json`` — ``format`` (``"ltamp-skill-model"``), ``version``, ``kind`` (``gp``,
+  ``nn-c``, ``nn-r``, ``rf-c``, ``rf-r``, ``random``), ``skill`` (the full
+  :class:`~ltamp_cli.backends.protocol.SkillSpec`), ``input_order`` (GP input names, controls
+  first), ``normalization`` (physical box mapped to ``[-1, 1]``), ``kernel`` and
+  ``hyperparameters`` (GP), plus whatever the trainer adds (``backend``, ``strategy``,
+  ``training`` — trial counts and the trials file —, ``beta`` …).
+* ``weights.npz`` — GP: training inputs ``x`` (normalised) and scores ``y``, log
+  hyperparameters ``theta``, score scale (no pickle); ``random``: the mean score.
+* ``weights.pkl`` — scikit-learn baselines (pickled estimator: load only trusted files).
+* ``trials.jsonl`` — the trials the model was trained on, when the trainer ran them.
+"""
+
+from __future__ import annotations
+
+import json
+import pickle
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ltamp_cli import __version__
+from ltamp_cli.backends.protocol import ParamSpace, SkillSpec
+from ltamp_cli.errors import InputError, location_in
+from ltamp_cli.learning.baselines import RandomModel, SklearnModel
+from ltamp_cli.learning.gp import GaussianProcess
+from ltamp_cli.learning.model import LevelSetModel, SkillModel
+from ltamp_cli.learning.normalize import joint_space
+
+FORMAT = "ltamp-skill-model"
+VERSION = 1
+METADATA_FILE = "model.json"
+
+
+def space_to_json(space: ParamSpace) -> dict[str, Any]:
+    return {"names": list(space.names), "lows": list(space.lows), "highs": list(space.highs)}
+
+
+def space_from_json(data: dict[str, Any]) -> ParamSpace:
+    return ParamSpace(
+        tuple(map(str, data["names"])),
+        tuple(map(float, data["lows"])),
+        tuple(map(float, data["highs"])),
+    )
+
+
+def spec_to_json(spec: SkillSpec) -> dict[str, Any]:
+    return {
+        "name": spec.name,
+        "description": spec.description,
+        "invalid_score": spec.invalid_score,
+        "context": space_to_json(spec.context),
+        "control": space_to_json(spec.control),
+    }
+
+
+def spec_from_json(data: dict[str, Any]) -> SkillSpec:
+    return SkillSpec(
+        name=str(data["name"]),
+        context=space_from_json(data["context"]),
+        control=space_from_json(data["control"]),
+        description=str(data.get("description", "")),
+        invalid_score=float(data.get("invalid_score", -1.0)),
+    )
+
+
+@dataclass(frozen=True)
+class LoadedModel:
+    model: SkillModel
+    metadata: dict[str, Any]
+
+
+def save_model(model: SkillModel, directory: str | Path, **metadata: Any) -> Path:
+    """Write ``model`` and ``metadata`` (JSON-able) into ``directory`` (created if needed)."""
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    record: dict[str, Any] = {
+        "format": FORMAT,
+        "version": VERSION,
+        "ltamp_version": __version__,
+        "saved_at": datetime.now(UTC).isoformat(timespec="seconds"),
+        "kind": model.kind,
+        "skill": spec_to_json(model.spec),
+        "input_order": list(joint_space(model.spec).names),
+        "normalization": model.normalizer.to_json(),
+    }
+    if isinstance(model, LevelSetModel):
+        record["kernel"] = model.kernel
+        record["hyperparameters"] = model.gp.hyperparameters()
+        record["n_train"] = model.gp.n
+        np.savez(directory / "weights.npz", **model.gp.state())
+    elif isinstance(model, SklearnModel):
+        record["constant"] = model.constant
+        with (directory / "weights.pkl").open("wb") as handle:
+            pickle.dump(model.estimator, handle)
+    elif isinstance(model, RandomModel):
+        np.savez(directory / "weights.npz", mean_score=np.array(model.mean_score))
+    else:
+        raise TypeError(f"cannot save a {type(model).__name__}")
+    record.update(metadata)
+    temporary = directory / (METADATA_FILE + ".tmp")
+    temporary.write_text(json.dumps(record, indent=2, sort_keys=True, allow_nan=False) + "\n")
+    temporary.replace(directory / METADATA_FILE)
+    return directory
+
+
+def load_model(directory: str | Path) -> LoadedModel:
+    """Read a model directory written by :func:`save_model`; bad input raises ``InputError``."""
+    directory = Path(directory)
+    path = directory / METADATA_FILE
+    if not path.is_file():
+        raise InputError(
+            f"no {METADATA_FILE} here: not an ltamp model directory", location_in(directory)
+        )
+    try:
+        metadata = json.loads(path.read_text())
+    except ValueError as error:
+        raise InputError(f"invalid JSON: {error}", location_in(path)) from None
+    if not isinstance(metadata, dict) or metadata.get("format") != FORMAT:
+        raise InputError(f"not an ltamp model (expected format {FORMAT!r})", location_in(path))
+    if metadata.get("version") != VERSION:
+        raise InputError(
+            f"unsupported model version {metadata.get('version')!r}", location_in(path)
+        )
+    try:
+        spec = spec_from_json(metadata["skill"])
+        kind = metadata["kind"]
+        if kind == "gp":
+            with np.load(directory / "weights.npz") as weights:
+                state = {name: weights[name] for name in weights.files}
+            mean_mode = metadata["hyperparameters"].get("mean_mode", "constant")
+            model: SkillModel = LevelSetModel(
+                spec, GaussianProcess.from_state(metadata["kernel"], mean_mode, state)
+            )
+        elif kind in ("nn-c", "nn-r", "rf-c", "rf-r"):
+            with (directory / "weights.pkl").open("rb") as handle:
+                estimator = pickle.load(handle)
+            model = SklearnModel(spec, kind, estimator, float(metadata.get("constant", 0.0)))
+        elif kind == "random":
+            with np.load(directory / "weights.npz") as weights:
+                model = RandomModel(spec, float(weights["mean_score"]))
+        else:
+            raise InputError(f"unknown model kind {kind!r}", location_in(path))
+    except (KeyError, TypeError, ValueError, OSError) as error:
+        raise InputError(
+            f"incomplete model directory ({type(error).__name__}: {error})", location_in(path)
+        ) from None
+    return LoadedModel(model, metadata)
