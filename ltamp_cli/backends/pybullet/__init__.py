@@ -1,0 +1,24 @@
+"""PyBullet Kitchen3D backend: procedural kitchenware, beads, pour and scoop trials.
+
+Importing this package is cheap; :func:`make_backend` imports the simulation modules.
+Submodules: :mod:`.world` (one physics client per world), :mod:`.kitchenware` (bodies from
+:mod:`ltamp_cli.backends.kitchenware_geometry`), :mod:`.particles`, :mod:`.skills`,
+:mod:`.render`, :mod:`.backend`; :mod:`.robot` holds the arm side.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from ltamp_cli.backends.pybullet.backend import Kitchen3DBackend
+
+
+def make_backend(**options: Any) -> Kitchen3DBackend:
+    """Create the Kitchen3D backend; see :class:`~.backend.Kitchen3DBackend` for options."""
+    from ltamp_cli.backends.pybullet.backend import Kitchen3DBackend
+
+    return Kitchen3DBackend(**options)
+
+
+__all__ = ["make_backend"]

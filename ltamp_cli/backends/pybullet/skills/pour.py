@@ -1,0 +1,282 @@
+"""Pour: tilt a cup of beads about a pivot so the beads land in a bowl.
+
+Frames: the bowl's base centre is the world origin (on the table, ``z = 0``); the cup comes
+from the ``+x`` side and pours towards ``-x``.
+
+Context (6, metres): bowl top diameter, bowl height, bowl base diameter, cup top diameter,
+cup height, cup base diameter.
+
+Control (5):
+
+* ``pitch`` (rad, in ``[-π, -π/2]``): final rotation of the cup about the world ``y`` axis;
+* ``cup_pivot_x``, ``cup_pivot_z`` (fractions of cup diameter / height, ``[-0.75, 0.75]``):
+  the pivot relative to the centre of the upright cup's bounding box;
+* ``bowl_pivot_x`` (fraction of bowl diameter, ``[-0.25, 0.75]``) and ``bowl_pivot_z``
+  (metres above the bowl's rim, ``[0, 0.15]``): where the pivot is relative to the bowl.
+
+The cup starts upright with its pivot at the bowl pivot and rotates about it in ``π/16``
+waypoints up to ``pitch``. A control whose cup path touches the bowl or the table is invalid
+and is not simulated. Score: ``g(x; τ = 0.9)`` with ``x`` = beads in the bowl at the end /
+beads in the cup after settling; trials with fewer than 10 beads in the cup are rejected.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ltamp_cli.backends.kitchenware_geometry import VesselDims, vessel_geometry
+from ltamp_cli.backends.protocol import ParamSpace, SkillSpec, TrialResult
+from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial, create_kitchenware
+from ltamp_cli.backends.pybullet.particles import (
+    BeadSpec,
+    bead_positions,
+    contained_mask,
+    spawn_beads_in,
+)
+from ltamp_cli.backends.pybullet.paths import PosePath, rotation_about_axis, timed_poses
+from ltamp_cli.backends.pybullet.skills.common import (
+    CHECK_SPACING_M,
+    StepCallback,
+    check_tool_path,
+    follow_path,
+    hold,
+    truncated_normal,
+)
+from ltamp_cli.backends.pybullet.skills.scoring import piecewise_linear_score
+from ltamp_cli.backends.pybullet.world import PhysicsWorld
+
+POUR_TAU = 0.9
+MIN_BEADS_IN_CUP = 10
+PITCH_STEP_RAD = math.pi / 16
+
+#: Nominal measured-style dimensions (metres), scaled per context.
+NOMINAL_BOWL = VesselDims(base_diameter=0.12, top_diameter=0.20, height=0.08)
+NOMINAL_CUP = VesselDims(base_diameter=0.068, top_diameter=0.08, height=0.10)
+SCALE_RANGE = (0.8, 1.25)
+BOWL_BASE_RATIO = (0.5, 0.75)
+CUP_BASE_RATIO = (0.7, 1.0)
+
+POUR_CONTEXT = ParamSpace(
+    names=(
+        "bowl_diameter",
+        "bowl_height",
+        "bowl_base_diameter",
+        "cup_diameter",
+        "cup_height",
+        "cup_base_diameter",
+    ),
+    lows=(0.16, 0.064, 0.08, 0.064, 0.08, 0.0448),
+    highs=(0.25, 0.10, 0.1875, 0.10, 0.125, 0.10),
+)
+POUR_CONTROL = ParamSpace(
+    names=("pitch", "cup_pivot_x", "cup_pivot_z", "bowl_pivot_x", "bowl_pivot_z"),
+    lows=(-math.pi, -0.75, -0.75, -0.25, 0.0),
+    highs=(-math.pi / 2, 0.75, 0.75, 0.75, 0.15),
+)
+POUR_SPEC = SkillSpec(
+    name="pour",
+    context=POUR_CONTEXT,
+    control=POUR_CONTROL,
+    description="tilt a cup of beads about a pivot to pour them into a bowl (Kitchen3D)",
+)
+
+
+@dataclass(frozen=True)
+class PourSettings:
+    """Simulation timing: settle/hold in seconds, tilt speed in rad/s."""
+
+    settle_s: float = 0.3
+    hold_s: float = 0.8
+    angular_speed: float = 2.0
+    bead_count_mean: float = 100.0
+
+
+@dataclass(frozen=True)
+class PourContext:
+    """The bowl and the cup of one pour context."""
+
+    bowl: VesselDims
+    cup: VesselDims
+
+    @staticmethod
+    def from_array(context: np.ndarray) -> PourContext:
+        c = np.asarray(context, dtype=float).reshape(-1)
+        if c.shape != (6,):
+            raise ValueError(f"a pour context has 6 values, got {c.shape[0]}")
+        return PourContext(
+            bowl=VesselDims(base_diameter=c[2], top_diameter=c[0], height=c[1]),
+            cup=VesselDims(base_diameter=c[5], top_diameter=c[3], height=c[4]),
+        )
+
+    def to_array(self) -> np.ndarray:
+        b, c = self.bowl, self.cup
+        return np.array(
+            [b.top_diameter, b.height, b.base_diameter, c.top_diameter, c.height, c.base_diameter]
+        )
+
+
+def sample_pour_context(rng: np.random.Generator) -> np.ndarray:
+    """Randomly scaled bowl and cup (diameter and height independently), shape ``(6,)``."""
+    bowl = NOMINAL_BOWL.scaled(rng.uniform(*SCALE_RANGE), rng.uniform(*SCALE_RANGE))
+    bowl = VesselDims(
+        bowl.top_diameter * rng.uniform(*BOWL_BASE_RATIO), bowl.top_diameter, bowl.height
+    )
+    cup = NOMINAL_CUP.scaled(rng.uniform(*SCALE_RANGE), rng.uniform(*SCALE_RANGE))
+    cup = VesselDims(cup.top_diameter * rng.uniform(*CUP_BASE_RATIO), cup.top_diameter, cup.height)
+    return PourContext(bowl, cup).to_array()
+
+
+def pour_pivot(context: PourContext, control: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World pivot ``(3,)`` and the upright cup's base position ``(3,)`` for a control."""
+    _, cup_x, cup_z, bowl_x, bowl_z = np.asarray(control, dtype=float)
+    bowl, cup = context.bowl, context.cup
+    pivot = np.array([bowl_x * bowl.top_diameter, 0.0, bowl.height + bowl_z])
+    offset = np.array([cup_x * cup.max_radius * 2.0, 0.0, cup.height / 2.0 + cup_z * cup.height])
+    return pivot, pivot - offset
+
+
+def pour_path(context: PourContext, control: np.ndarray) -> PosePath:
+    """Cup poses (base frame) from upright to ``pitch`` in ``π/16`` waypoints about the pivot."""
+    pitch = float(control[0])
+    pivot, base = pour_pivot(context, control)
+    n = max(1, math.ceil(abs(pitch) / PITCH_STEP_RAD - 1e-9))
+    angles = np.linspace(0.0, pitch, n + 1)
+    positions, quaternions = [], []
+    for angle in angles:
+        c, s = math.cos(angle), math.sin(angle)
+        rotation = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+        positions.append(pivot + rotation @ (base - pivot))
+        quaternions.append(rotation_about_axis("y", angle))
+    return PosePath(np.array(positions), np.array(quaternions))
+
+
+def pour_is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
+    """Geometric pre-check for a batch ``controls (n, 5)``: bool ``(n,)``."""
+    scene = PourContext.from_array(context)
+    cup = vessel_geometry(scene.cup, "cup")
+    points = cup.surface_points(CHECK_SPACING_M)
+    batch = np.asarray(controls, dtype=float).reshape(-1, 5)
+    return np.array(
+        [
+            check_tool_path(cup, pour_path(scene, c), scene.bowl, tool_points=points).valid
+            for c in batch
+        ],
+        dtype=bool,
+    )
+
+
+@dataclass(frozen=True)
+class PourLatents:
+    """Per-trial physical randomisation (drawn from the trial seed)."""
+
+    beads: BeadSpec
+    bowl_material: BodyMaterial
+    cup_material: BodyMaterial
+
+
+def sample_pour_latents(rng: np.random.Generator, settings: PourSettings) -> PourLatents:
+    radius = truncated_normal(rng, 0.006, 0.0005, 0.005, 0.007)
+    density = truncated_normal(rng, 1000.0, 150.0, 700.0, 1300.0)
+    count = round(truncated_normal(rng, settings.bead_count_mean, 10.0, 70.0, 130.0))
+    beads = BeadSpec(
+        count=count,
+        radius=radius,
+        mass=density * 4.0 / 3.0 * math.pi * radius**3,
+        lateral_friction=truncated_normal(rng, 0.5, 0.1, 0.2, 0.8),
+        restitution=truncated_normal(rng, 0.7, 0.1, 0.4, 0.9),
+    )
+    bowl = BodyMaterial(
+        mass=0.0,
+        lateral_friction=truncated_normal(rng, 0.5, 0.1, 0.2, 0.8),
+        restitution=truncated_normal(rng, 0.1, 0.05, 0.0, 0.2),
+        rgba=(0.85, 0.85, 0.8, 1.0),
+    )
+    cup = BodyMaterial(
+        mass=truncated_normal(rng, 0.15, 0.03, 0.08, 0.25),
+        lateral_friction=truncated_normal(rng, 0.5, 0.1, 0.2, 0.8),
+        restitution=truncated_normal(rng, 0.1, 0.05, 0.0, 0.2),
+        rgba=(0.9, 0.5, 0.2, 1.0),
+    )
+    return PourLatents(beads, bowl, cup)
+
+
+def run_pour(
+    world: PhysicsWorld,
+    context: np.ndarray,
+    control: np.ndarray,
+    seed: int,
+    settings: PourSettings | None = None,
+    on_step: StepCallback | None = None,
+    check: bool = True,
+) -> TrialResult:
+    """Simulate one pour in ``world`` (reset first); deterministic given ``seed``."""
+    settings = settings or PourSettings()
+    scene = PourContext.from_array(context)
+    control = np.asarray(control, dtype=float).reshape(5)
+    path = pour_path(scene, control)
+    cup_geometry = vessel_geometry(scene.cup, "cup")
+    if check:
+        verdict = check_tool_path(cup_geometry, path, scene.bowl)
+        if not verdict.valid:
+            return TrialResult(POUR_SPEC.invalid_score, False, {"reason": verdict.reason})
+    rng = np.random.default_rng(seed)
+    latents = sample_pour_latents(rng, settings)
+    world.reset()
+    bowl = create_kitchenware(
+        world.client, vessel_geometry(scene.bowl, "bowl"), material=latents.bowl_material
+    )
+    cup = create_kitchenware(
+        world.client,
+        cup_geometry,
+        path.positions[0],
+        path.quaternions[0],
+        material=latents.cup_material,
+    )
+    beads = spawn_beads_in(cup, latents.beads, rng)
+    steps = hold(
+        world,
+        cup,
+        path.positions[0],
+        path.quaternions[0],
+        world.steps_for(settings.settle_s),
+        on_step,
+    )
+    start = bead_positions(world.client, beads)
+    started_in_cup = contained_mask(cup, start)
+    in_cup = int(started_in_cup.sum())
+    info: dict[str, object] = {
+        "beads_total": len(beads),
+        "beads_in_cup_start": in_cup,
+        "bead_radius_m": latents.beads.radius,
+    }
+    if in_cup < MIN_BEADS_IN_CUP:
+        info["reason"] = f"only {in_cup} beads in the cup at the start (need {MIN_BEADS_IN_CUP})"
+        return TrialResult(POUR_SPEC.invalid_score, False, info)
+    timed = timed_poses(
+        path, speed=0.2, angular_speed=settings.angular_speed, dt=world.config.time_step
+    )
+    steps += follow_path(world, cup, timed, on_step, steps)
+    steps += hold(
+        world,
+        cup,
+        path.positions[-1],
+        path.quaternions[-1],
+        world.steps_for(settings.hold_s),
+        on_step,
+        steps,
+    )
+    end = bead_positions(world.client, beads)
+    in_bowl = contained_mask(bowl, end) & ~contained_mask(cup, end) & started_in_cup
+    fraction = float(in_bowl.sum()) / in_cup
+    info.update(
+        {
+            "beads_in_bowl_end": int(in_bowl.sum()),
+            "beads_in_cup_end": int(contained_mask(cup, end).sum()),
+            "fraction_in_bowl": fraction,
+            "sim_steps": steps,
+        }
+    )
+    return TrialResult(piecewise_linear_score(fraction, POUR_TAU), True, info)
