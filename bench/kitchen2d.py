@@ -65,8 +65,12 @@ def main() -> None:
         )
     pour = next((r for r in rows if r["skill"] == "pour"), None)
     if pour is not None:
-        verdict = "meets" if pour["wall_median_s"] <= POUR_TARGET_S else "MISSES"
-        print(f"pour median {pour['wall_median_s']:.3f} s {verdict} the {POUR_TARGET_S} s target")
+        # CPU time is the one-core figure; wall time also counts waiting on a shared machine.
+        verdict = "meets" if pour["cpu_median_s"] <= POUR_TARGET_S else "MISSES"
+        print(
+            f"pour: one-core (CPU) median {pour['cpu_median_s']:.3f} s {verdict} the "
+            f"{POUR_TARGET_S} s target (wall median {pour['wall_median_s']:.3f} s)"
+        )
     args.out.parent.mkdir(parents=True, exist_ok=True)
     payload = {
         "benchmark": "kitchen2d",

@@ -77,6 +77,7 @@ class Kitchen:
         self._hooks: list[StepHook] = []
         self.observers: list[Observer] = []
         self.table: b2.body | None = None
+        self.coaster: b2.body | None = None
         if furniture:
             self._build_furniture()
 
@@ -90,6 +91,13 @@ class Kitchen:
             friction=lay.table_friction,
         )
         self.table.userData = {"name": "table", "color": (150, 111, 51)}
+        # The coaster is where a finished drink is served (goal region for planning).
+        self.coaster = self.world.CreateStaticBody(position=(lay.coaster_x, lay.table_top))
+        self.coaster.CreatePolygonFixture(
+            box=(lay.coaster_width / 2, lay.coaster_height / 2, (0, lay.coaster_height / 2), 0),
+            friction=lay.table_friction,
+        )
+        self.coaster.userData = {"name": "coaster", "color": (60, 170, 80)}
 
     def add_hook(self, hook: StepHook) -> None:
         self._hooks.append(hook)
