@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from itertools import pairwise
 
 import numpy as np
 
@@ -79,50 +80,55 @@ def grasp_height(config: ScoopConfig, ratio: float) -> float:
 
 
 def waypoints(context: np.ndarray, control: np.ndarray, config: ScoopConfig) -> np.ndarray:
-    """Spoon-origin waypoints in the world for a control, shape ``(5, 2)``.
-
-    Entry above waypoint 1, the three waypoints, exit above waypoint 3.
+    """Spoon-origin waypoints in the world: entry above waypoint 1, the three waypoints,
+    exit above waypoint 3. ``control`` ``(7,)`` gives ``(5, 2)``; ``(n, 7)`` gives ``(n, 5, 2)``.
     """
+    controls = np.atleast_2d(control)
     cup = CupSpec(float(context[0]), float(context[1]), config.wall)
     top = config.layout.table_top
     reach = cup.inner_width / 2 - config.spoon.bowl_width / 2 - config.margin
     # Keep a particle's diameter under the bowl: crushing grains against the cup's floor
     # with an unstoppable (kinematic) spoon makes Box2D eject them.
     low, high = cup.wall + 2.5 * config.particle.radius, cup.height
-    xs = control[1::2] * reach
-    ys = top + low + control[2::2] * (high - low)
-    above = top + cup.height + 0.5
-    points = [(xs[0], above), *zip(xs, ys, strict=True), (xs[2], above + 0.5)]
-    return np.array(points, dtype=float)
+    xs = controls[:, 1::2] * reach
+    ys = top + low + controls[:, 2::2] * (high - low)
+    above = np.full(len(controls), top + cup.height + 0.5)
+    px = np.stack([xs[:, 0], xs[:, 0], xs[:, 1], xs[:, 2], xs[:, 2]], axis=1)
+    py = np.stack([above, ys[:, 0], ys[:, 1], ys[:, 2], above + 0.5], axis=1)
+    points = np.stack([px, py], axis=-1)
+    return points[0] if np.ndim(control) == 1 else points
 
 
 def valid_mask(context: np.ndarray, controls: np.ndarray, config: ScoopConfig) -> np.ndarray:
     """Swept-box collision test of the whole path for a batch ``(n, 7)``; ``(n,)`` bools."""
     cup = CupSpec(float(context[0]), float(context[1]), config.wall)
-    top = config.layout.table_top
     lay = config.layout
-    out = np.ones(len(controls), dtype=bool)
+    top = lay.table_top
+    n = len(controls)
     fixed = np.concatenate(
         [
-            aabbs(cup.boxes(), np.zeros(1), np.full(1, top)),
-            np.array([[[lay.table_x0, top - lay.table_thickness, lay.table_x1, top]]]),
+            aabbs(cup.boxes(), np.zeros(n), np.full(n, top)),
+            np.tile([[[lay.table_x0, top - lay.table_thickness, lay.table_x1, top]]], (n, 1, 1)),
         ],
         axis=1,
     )
-    for i, control in enumerate(controls):
-        path = waypoints(context, control, config)
-        gh = grasp_height(config, float(control[0]))
-        hx = config.spoon.handle_x
-        boxes = np.concatenate(
-            [
-                aabbs(config.spoon.boxes(), path[:, 0], path[:, 1]),
-                aabbs(config.gripper.boxes(config.spoon.wall), path[:, 0] + hx, path[:, 1] + gh),
-            ],
-            axis=1,
+    path = waypoints(context, controls, config)  # (n, 5, 2)
+    gh = np.array([grasp_height(config, float(c)) for c in controls[:, 0]])
+    hx = config.spoon.handle_x
+    swept = []
+    for k in range(path.shape[1]):
+        x, y = path[:, k, 0], path[:, k, 1]
+        swept.append(
+            np.concatenate(
+                [
+                    aabbs(config.spoon.boxes(), x, y),
+                    aabbs(config.gripper.boxes(config.spoon.wall), x + hx, y + gh),
+                ],
+                axis=1,
+            )
         )
-        swept = sweep(boxes[:-1], boxes[1:]).reshape(1, -1, 4)
-        out[i] = not any_overlap(swept, fixed, margin=0.01)[0]
-    return out
+    segments = [sweep(a, b) for a, b in pairwise(swept)]
+    return ~any_overlap(np.concatenate(segments, axis=1), fixed, margin=0.01)
 
 
 def fill_count(cup: CupSpec, config: ScoopConfig) -> int:
