@@ -20,12 +20,12 @@ import json
 import pickle
 from dataclasses import dataclass
 from datetime import UTC, datetime
+from importlib import metadata as package_metadata
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ltamp_cli import __version__
 from ltamp_cli.backends.protocol import ParamSpace, SkillSpec
 from ltamp_cli.errors import InputError, location_in
 from ltamp_cli.learning.baselines import RandomModel, SklearnModel
@@ -70,6 +70,13 @@ def spec_from_json(data: dict[str, Any]) -> SkillSpec:
     )
 
 
+def _package_version() -> str:
+    try:
+        return package_metadata.version("ltamp")
+    except package_metadata.PackageNotFoundError:
+        return "unknown"
+
+
 @dataclass(frozen=True)
 class LoadedModel:
     model: SkillModel
@@ -83,7 +90,7 @@ def save_model(model: SkillModel, directory: str | Path, **metadata: Any) -> Pat
     record: dict[str, Any] = {
         "format": FORMAT,
         "version": VERSION,
-        "ltamp_version": __version__,
+        "ltamp_version": _package_version(),
         "saved_at": datetime.now(UTC).isoformat(timespec="seconds"),
         "kind": model.kind,
         "skill": spec_to_json(model.spec),

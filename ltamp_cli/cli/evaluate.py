@@ -1,0 +1,120 @@
+"""``ltamp evaluate``: F1 on held-out trials and success rate of the most confident control."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import numpy as np
+import typer
+from tqdm import tqdm
+
+from ltamp_cli.errors import InputError
+
+if TYPE_CHECKING:
+    from ltamp_cli.backends.protocol import SkillBackend
+    from ltamp_cli.learning.model import SkillModel
+
+
+def register(app: typer.Typer) -> None:
+    app.command(name="evaluate")(evaluate_command)
+
+
+def evaluate_command(
+    model_dir: Annotated[Path, typer.Argument(help="Directory written by `ltamp train`.")],
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
+    data: Annotated[
+        Path | None, typer.Option("--data", help="Held-out trials (JSONL) for F1.")
+    ] = None,
+    trials: Annotated[
+        int, typer.Option("--trials", help="Contexts whose θ* is scored (success rate).")
+    ] = 50,
+    n_test: Annotated[
+        int, typer.Option("--n-test", help="Synthetic backends: held-out points for F1.")
+    ] = 2000,
+    seed: Annotated[int, typer.Option("--seed", help="Seed for contexts and candidates.")] = 0,
+) -> None:
+    """Report F1 (positive ⇔ predicted score > 0) and the success rate of θ*.
+
+    On the synthetic backend both use the true score function; on a physical backend F1 needs
+    --data and the success rate runs one live trial of θ* per sampled context.
+    """
+    import torch
+
+    from ltamp_cli.backends import load_backend
+    from ltamp_cli.cli.train import heldout_from_records, read_records
+    from ltamp_cli.learning.metrics import SkillEvaluator
+    from ltamp_cli.learning.model_dir import load_model
+
+    torch.set_num_threads(1)
+    if trials < 0 or n_test < 1:
+        raise InputError(f"--trials must be >= 0 and --n-test >= 1, got {trials} and {n_test}")
+    loaded = load_model(model_dir)
+    model, metadata = loaded.model, loaded.metadata
+    skill = model.spec.name
+    backend_name = str(metadata.get("backend", "synthetic"))
+    physics = load_backend(backend_name)
+    try:
+        if skill not in physics.skills():
+            raise InputError(f"backend {backend_name!r} has no skill {skill!r}")
+        report: dict[str, object] = {
+            "model": str(model_dir),
+            "kind": model.kind,
+            "skill": skill,
+            "backend": backend_name,
+        }
+        if hasattr(physics, "true_score"):
+            evaluator = SkillEvaluator.synthetic(
+                physics, skill, n_test, max(trials, 0), seed + 12345
+            )
+            if data is not None:
+                evaluator.heldout = heldout_from_records(read_records(data, "--data"), skill)
+            result = evaluator.evaluate(model, int(metadata.get("training", {}).get("n_trials", 0)))
+            report.update(
+                f1=result.f1,
+                success_rate=result.success_rate,
+                n_contexts=trials,
+                n_test=len(evaluator.heldout.scores) if evaluator.heldout else 0,
+            )
+        else:
+            f1 = None
+            if data is not None:
+                heldout = heldout_from_records(read_records(data, "--data"), skill)
+                f1 = heldout.f1(model)
+                report["n_test"] = len(heldout.scores)
+            report["f1"] = f1
+            report["success_rate"] = _live_success_rate(physics, skill, model, trials, seed)
+            report["n_contexts"] = trials
+    finally:
+        physics.close()
+    if as_json:
+        typer.echo(json.dumps(report, indent=2))
+        return
+    for key, value in report.items():
+        shown = f"{value:.3f}" if isinstance(value, float) else value
+        typer.echo(f"{key}: {shown}")
+
+
+def _live_success_rate(
+    physics: SkillBackend, skill: str, model: SkillModel, trials: int, seed: int
+) -> float | None:
+    if trials == 0:
+        return None
+    rng = np.random.default_rng(seed)
+    successes = 0
+    for index in tqdm(
+        range(trials),
+        disable=not sys.stderr.isatty(),
+        file=sys.stderr,
+        desc=f"θ* trials {skill}",
+        unit="trial",
+    ):
+        context = physics.sample_context(skill, rng)
+        control, _ = model.most_confident_control(
+            context, rng, lambda c, u: physics.is_valid(skill, c, u)
+        )
+        result = physics.run_trial(skill, context, control, seed=seed * 100_003 + index)
+        successes += bool(result.valid and result.score > 0)
+    return successes / trials

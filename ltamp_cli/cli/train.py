@@ -1,0 +1,161 @@
+"""``ltamp train``: learn a skill model from live trials (or a pool of recorded trials)."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Annotated, Any
+
+import numpy as np
+import typer
+
+from ltamp_cli.errors import InputError
+
+
+def register(app: typer.Typer) -> None:
+    app.command(name="train")(train_command)
+
+
+def heldout_from_records(records: list[Any], skill: str) -> Any:
+    """A :class:`~ltamp_cli.learning.metrics.HeldOutSet` from the trial records of ``skill``."""
+    from ltamp_cli.learning.metrics import HeldOutSet
+    from ltamp_cli.trials.record import records_to_arrays
+
+    records = [r for r in records if r.skill == skill]
+    if not records:
+        raise InputError(f"the held-out data has no trials of skill {skill!r}")
+    contexts, controls, scores, _valid = records_to_arrays(records)
+    return HeldOutSet(contexts, controls, np.nan_to_num(scores, nan=-1.0))
+
+
+def read_records(path: Path, option: str) -> list[Any]:
+    from ltamp_cli.trials.record import TrialDataset
+
+    if not path.is_file():
+        raise InputError(f"{option}: no such file {path}")
+    records = TrialDataset(path).read()
+    if not records:
+        raise InputError(f"{option}: {path} holds no trial records")
+    return records
+
+
+def train_command(
+    skill: Annotated[str, typer.Argument(help="Skill to learn (see `ltamp skills`).")],
+    out: Annotated[Path, typer.Option("--out", help="Model directory to write (resumes).")],
+    backend: Annotated[
+        str, typer.Option("--backend", help="Backend that runs trials.")
+    ] = "synthetic",
+    strategy: Annotated[
+        str, typer.Option("--strategy", help="lse, lse2, random, gp, nn-c, nn-r, rf-c or rf-r.")
+    ] = "lse2",
+    budget: Annotated[int, typer.Option("--budget", help="Total number of trials.")] = 50,
+    init: Annotated[int, typer.Option("--init", help="Random trials before active ones.")] = 10,
+    kernel: Annotated[str, typer.Option("--kernel", help="rbf, matern52 or mlp.")] = "matern52",
+    seed: Annotated[int, typer.Option("--seed", help="Seed of every random choice.")] = 0,
+    data: Annotated[
+        Path | None, typer.Option("--data", help="Pool mode: choose trials from this JSONL.")
+    ] = None,
+    test_data: Annotated[
+        Path | None, typer.Option("--test-data", help="Held-out JSONL for F1 on the curve.")
+    ] = None,
+    eval_every: Annotated[
+        int, typer.Option("--eval-every", help="Evaluate every K trials (learning curve).")
+    ] = 0,
+    curve: Annotated[
+        Path | None, typer.Option("--curve", help="Write the learning curve to this PNG.")
+    ] = None,
+) -> None:
+    """Learn SKILL's success constraint and save the model to --out.
+
+    Live mode runs trials on --backend and appends them to OUT/trials.jsonl (a rerun resumes);
+    pool mode (--data) picks trials from recorded ones instead.
+    """
+    import torch
+
+    from ltamp_cli.backends import load_backend
+    from ltamp_cli.learning.active import LearningConfig, learn_from_pool, learn_online
+    from ltamp_cli.learning.confidence import beta_star
+    from ltamp_cli.learning.curves import plot_curves
+    from ltamp_cli.learning.metrics import SkillEvaluator
+    from ltamp_cli.trials.record import TrialDataset
+
+    torch.set_num_threads(1)
+    try:
+        config = LearningConfig(
+            strategy=strategy, kernel=kernel, budget=budget, init=init, seed=seed
+        )
+    except ValueError as error:
+        raise InputError(str(error)) from None
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out: {out} exists and is not a directory")
+    if eval_every < 0:
+        raise InputError(f"--eval-every: expected a number >= 0, got {eval_every}")
+    if curve is not None and eval_every == 0:
+        eval_every = max(1, budget // 10)
+
+    physics = load_backend(backend)
+    try:
+        specs = physics.skills()
+        if skill not in specs:
+            raise InputError(
+                f"backend {backend!r} has no skill {skill!r} (known: {', '.join(sorted(specs))})"
+            )
+        spec = specs[skill]
+        evaluator = None
+        if eval_every > 0:
+            if test_data is not None:
+                heldout = heldout_from_records(read_records(test_data, "--test-data"), skill)
+                evaluator = SkillEvaluator(spec, heldout)
+            elif hasattr(physics, "true_score"):
+                evaluator = SkillEvaluator.synthetic(physics, skill, seed=seed + 12345)
+            else:
+                raise InputError("--curve/--eval-every on a physical backend needs --test-data")
+        progress = sys.stderr.isatty()
+        if data is not None:
+            pool = read_records(data, "--data")
+            try:
+                result = learn_from_pool(spec, pool, config, evaluator, eval_every, progress)
+            except ValueError as error:
+                raise InputError(f"--data: {error}") from None
+            trials_file = str(data.resolve())
+        else:
+            out.mkdir(parents=True, exist_ok=True)
+            dataset = TrialDataset(out / "trials.jsonl")
+            try:
+                result = learn_online(
+                    physics, skill, config, dataset, evaluator, eval_every, progress
+                )
+            except ValueError as error:
+                raise InputError(str(error)) from None
+            trials_file = "trials.jsonl"
+    finally:
+        physics.close()
+
+    curve_rows = [
+        {"learner": strategy, "n_trials": p.n_trials, "f1": p.f1, "success_rate": p.success_rate}
+        for p in result.curve
+    ]
+    result.model.save(
+        str(out),
+        backend=backend,
+        strategy=strategy,
+        training={
+            "mode": "pool" if data is not None else "online",
+            "n_trials": len(result.records),
+            "n_valid": sum(r.valid for r in result.records),
+            "n_success": sum(r.score > 0 for r in result.records),
+            "budget": budget,
+            "init": init,
+            "seed": seed,
+            "trials_file": trials_file,
+        },
+        beta={"lambda": 0.95, "delta": 0.05, "beta_star_50": beta_star(0.05, count=50)},
+        curve=curve_rows,
+    )
+    if curve is not None and curve_rows:
+        plot_curves(curve_rows, curve, title=f"{backend}/{skill}: {strategy}")
+    summary = {"model": str(out), "kind": result.model.kind, "n_trials": len(result.records)}
+    if curve_rows:
+        summary.update({k: curve_rows[-1][k] for k in ("f1", "success_rate")})
+    typer.echo(json.dumps(summary))
