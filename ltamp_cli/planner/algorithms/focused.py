@@ -177,6 +177,19 @@ def process_stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
     return True
 
 
+def evaluate_eager_tests(state: PlannerState) -> None:
+    """Call every eager test (``StreamInfo.eager``) on all real inputs it was not called on."""
+    for external in state.externals.values():
+        if not state.bindings[external.name].info.eager:
+            continue
+        if isinstance(external, Stream) and external.outputs:
+            continue
+        for inputs in list(state.bindings_of(external, state.facts)):
+            instance = state.instance(external.name, inputs)
+            if instance.num_calls == 0:
+                state.call(instance)
+
+
 def solve_focused(state: PlannerState) -> PlanResult:
     from ltamp_cli.planner.search.engine import SearchTimeout
 
@@ -185,6 +198,7 @@ def solve_focused(state: PlannerState) -> PlanResult:
     try:
         while not state.timed_out():
             state.iterations += 1
+            evaluate_eager_tests(state)
             evaluation = optimistic_evaluation(state, complexity, placeholders)
             discrete = state.search(evaluation.index.members, evaluation.object_types,
                                     evaluation.function_values)

@@ -12,7 +12,13 @@ from collections import defaultdict
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 
-from ltamp_cli.planner.pddl.syntax import EQUALITY, FunctionTerm, Number, is_variable
+from ltamp_cli.planner.pddl.syntax import (
+    EQUALITY,
+    OBJECT_TYPE,
+    FunctionTerm,
+    Number,
+    is_variable,
+)
 from ltamp_cli.planner.search.normalize import (
     Clause,
     LiftedLiteral,
@@ -21,6 +27,7 @@ from ltamp_cli.planner.search.normalize import (
 )
 
 Fact = tuple[str, ...]  # (predicate, *args)
+OBJECT_TYPE_PREDICATE = f"type:{OBJECT_TYPE}"
 
 
 @dataclass(frozen=True)
@@ -60,6 +67,7 @@ class Grounding:
     axioms: list[GroundAxiom]
     reachable: set[Fact]
     static_predicates: frozenset[str]
+    derived_predicates: frozenset[str] = frozenset()
     # Axiom instances discarded because a static negative literal held: (head, the
     # non-static positive body, the blocking static fact). Needed to explain *why* a
     # negated derived fact is false (e.g. which collision-free certificates a plan uses).
@@ -195,11 +203,22 @@ class _Rule:
 
 
 def _make_rule(kind: str, source: NormalAction | NormalAxiom, clause: Clause) -> _Rule:
-    positive = tuple(lit for lit in clause if lit.positive and lit.predicate != EQUALITY)
+    positive = _without_redundant_object_types(
+        [lit for lit in clause if lit.positive and lit.predicate != EQUALITY])
     negative = tuple(lit for lit in clause if not lit.positive and lit.predicate != EQUALITY)
     equalities = tuple(lit for lit in clause if lit.predicate == EQUALITY)
     variables = tuple(sorted({a for lit in clause for a in lit.args if is_variable(a)}))
     return _Rule(kind, source, positive, negative, equalities, variables)
+
+
+def _without_redundant_object_types(literals: list[LiftedLiteral]) -> tuple[LiftedLiteral, ...]:
+    """Drop ``type:object(?x)`` when ``?x`` occurs in another positive literal: every name in
+    a fact is an object, so the literal only multiplies join work."""
+    bound_elsewhere = {
+        arg for lit in literals if lit.predicate != OBJECT_TYPE_PREDICATE for arg in lit.args}
+    return tuple(
+        lit for lit in literals
+        if not (lit.predicate == OBJECT_TYPE_PREDICATE and lit.args[0] in bound_elsewhere))
 
 
 def static_predicates(actions: Sequence[NormalAction], derived: Iterable[str]) -> frozenset[str]:
@@ -228,7 +247,7 @@ def ground_task(
             by_predicate[literal.predicate].append((rule, position))
 
     seen: set[tuple[int, tuple[str, ...]]] = set()
-    result = Grounding([], [], index.members, frozenset())
+    result = Grounding([], [], index.members, frozenset(), frozenset(derived))
     delta: list[Fact] = list(init_facts)
     for rule in rules:
         if not rule.positive:  # e.g. a parameterless action with an empty precondition

@@ -54,7 +54,7 @@ class Task:
     def __init__(self, grounding: Grounding, init: set[Fact]) -> None:
         self.facts: list[Fact] = [("%true",), ("%false",)]
         self.fact_ids: dict[Fact, int] = {}
-        derived = {axiom.head[0] for axiom in grounding.axioms} | {GOAL_PREDICATE}
+        derived = set(grounding.derived_predicates) | {GOAL_PREDICATE}
         self.derived_predicates = frozenset(derived)
         self.operators = [self._operator(a) for a in grounding.actions]
         self.axioms = grounding.axioms

@@ -1,0 +1,76 @@
+"""Python bindings of the tamp2d streams: real 2D samplers, kinematics and collision tests.
+
+Values: a pose is the block centre's x on the table (float); a grasp is the gripper's offset
+from the block centre ``(dx, dy)``; a configuration is the gripper position ``(x, y)``; a
+trajectory is a tuple of configurations (up, across at the transit height, down).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Mapping
+from typing import Any
+
+import numpy as np
+
+from ltamp_cli.planner.streams import Binding, StreamInfo
+
+Conf = tuple[float, float]
+
+
+def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str, Callable]:
+    regions: dict[str, tuple[float, float]] = {
+        name: (float(lo), float(hi)) for name, (lo, hi) in world["regions"].items()}
+    blocks: dict[str, dict[str, float]] = world["blocks"]
+    reach = float(world.get("reach", 20.0))
+    transit_height = float(world.get("transit_height", 5.0))
+
+    def width(block: str) -> float:
+        return float(blocks[block]["width"])
+
+    def height(block: str) -> float:
+        return float(blocks[block].get("height", 1.0))
+
+    def sample_pose(block: str, region: str) -> Iterator[tuple[float]]:
+        low, high = regions[region]
+        half = width(block) / 2.0
+        if high - low < 2 * half:
+            return
+        while True:
+            yield (round(float(rng.uniform(low + half, high - half)), 4),)
+
+    def sample_grasp(block: str) -> Iterator[tuple[tuple[float, float]]]:
+        # The gripper closes on the block from above, centred: one grasp per block keeps the
+        # number of configurations (and of motions between them) small.
+        yield ((0.0, height(block)),)
+
+    def inverse_kinematics(block: str, pose: float, grasp: tuple[float, float]
+                           ) -> tuple[Conf] | None:
+        conf = (round(pose + grasp[0], 4), round(grasp[1], 4))
+        if abs(conf[0]) > reach:
+            return None  # out of the gripper's reach
+        return (conf,)
+
+    def plan_motion(start: Conf, goal: Conf) -> tuple[tuple[Conf, ...]] | None:
+        if start == goal:
+            return None
+        above_start = (start[0], transit_height)
+        above_goal = (goal[0], transit_height)
+        return ((start, above_start, above_goal, goal),)
+
+    def test_cfree(block1: str, pose1: float, block2: str, pose2: float) -> bool:
+        return abs(pose1 - pose2) >= (width(block1) + width(block2)) / 2.0
+
+    def distance(q1: Conf, q2: Conf) -> float:
+        # Path length of the transit motion: up, across, down.
+        return round((transit_height - q1[1]) + abs(q1[0] - q2[0]) + (transit_height - q2[1])
+                     + 1.0, 4)
+
+    return {
+        "sample-pose": sample_pose,
+        "sample-grasp": sample_grasp,
+        "inverse-kinematics": inverse_kinematics,
+        "plan-motion": plan_motion,
+        # Cheap and decisive: evaluate as soon as its inputs exist (PDDLStream's eager).
+        "test-cfree": Binding(test_cfree, StreamInfo(eager=True)),
+        "distance": distance,
+    }
