@@ -53,8 +53,17 @@ class StreamInfo:
 
 @dataclass(frozen=True)
 class Binding:
+    """A stream's Python function plus planner hints.
+
+    ``on_unusable(inputs, outputs)``, if given, is called with the input values and one
+    output tuple of this stream when the planner found that output could not be extended
+    to a plan (a stream that consumed it failed). Learned samplers use it to steer later
+    samples away (the diverse sampler's kernel learning).
+    """
+
     function: Callable[..., Any]
     info: StreamInfo = field(default_factory=StreamInfo)
+    on_unusable: Callable[[tuple[Any, ...], tuple[Any, ...]], None] | None = None
 
 
 External = Stream | StreamFunction | ExternalPredicate

@@ -148,8 +148,13 @@ def stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
 
 def process_stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
                         plan: list[InstanceKey]) -> bool:
-    """Call the stream plan in order; True when every instance succeeded."""
+    """Call the stream plan in order; True when every instance succeeded.
+
+    When an instance fails, every output this stream plan produced that the failed
+    instance consumed is reported unusable to its stream (``Binding.on_unusable``).
+    """
     binding: dict[str, str] = {}
+    made_by: dict[str, tuple[StreamInstance, tuple[str, ...]]] = {}
     for name, inputs in plan:
         if state.timed_out():
             return False
@@ -162,19 +167,36 @@ def process_stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
         if instance.is_test:
             if instance.num_calls == 0:
                 state.call(instance)
-            if isinstance(instance.external, StreamFunction):
+            if isinstance(instance.external, StreamFunction) or instance.value:
                 continue
-            if not instance.value:
-                instance.disabled = True
-                return False
-            continue
+            instance.disabled = True
+            _report_unusable(state, real_inputs, made_by)
+            return False
         outputs = state.call(instance)
         if not outputs:
             instance.disabled = True
+            _report_unusable(state, real_inputs, made_by)
             return False
         placeholders = evaluation.outputs.get((name, inputs), ())
         binding.update(zip(placeholders, outputs[0], strict=True))
+        for output in outputs[0]:
+            made_by[output] = (instance, outputs[0])
     return True
+
+
+def _report_unusable(state: PlannerState, consumed: tuple[str, ...],
+                     made_by: dict[str, tuple[StreamInstance, tuple[str, ...]]]) -> None:
+    reported: set[int] = set()
+    for name in consumed:
+        if name not in made_by:
+            continue
+        producer, outputs = made_by[name]
+        callback = producer.binding.on_unusable
+        if callback is None or id(outputs) in reported:
+            continue
+        reported.add(id(outputs))
+        inputs = tuple(state.objects.value(x) for x in producer.inputs)
+        callback(inputs, tuple(state.objects.value(x) for x in outputs))
 
 
 def evaluate_eager_tests(state: PlannerState) -> None:
