@@ -177,8 +177,6 @@ def revolved_shell_pieces(
         [_ring(dims.base_radius, 0.0, angles), _ring(dims.base_radius, t, angles)]
     )
     pieces = [base]
-    # Scale the sector chord outward so the polygonal wall fully covers the circle's arc.
-    cover = 1.0 / math.cos(math.pi / segments)
     edges = np.linspace(0.0, 2.0 * math.pi, segments + 1)
     for a0, a1 in itertools.pairwise(edges):
         pair = np.array([a0, a1])
@@ -187,7 +185,7 @@ def revolved_shell_pieces(
             (dims.base_radius, 0.0),
             (dims.top_radius, dims.height),
         ):
-            corners.append(_ring(radius * cover, z, pair))
+            corners.append(_ring(radius, z, pair))
             corners.append(_ring(radius - t, z, pair))
         pieces.append(np.concatenate(corners))
     return tuple(pieces)

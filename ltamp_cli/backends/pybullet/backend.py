@@ -17,6 +17,7 @@ from ltamp_cli.backends.pybullet.skills.common import StepCallback
 from ltamp_cli.backends.pybullet.skills.pour import (
     POUR_SPEC,
     PourSettings,
+    check_pour,
     pour_is_valid,
     run_pour,
     sample_pour_context,
@@ -24,6 +25,7 @@ from ltamp_cli.backends.pybullet.skills.pour import (
 from ltamp_cli.backends.pybullet.skills.scoop import (
     SCOOP_SPEC,
     ScoopSettings,
+    check_scoop,
     run_scoop,
     sample_scoop_context,
     scoop_is_valid,
@@ -118,12 +120,16 @@ class Kitchen3DBackend:
                 f"{skill}: expected context of {spec.context.dim} and control of "
                 f"{spec.control.dim} values, got {context.size} and {control.size}"
             )
+        # Checked before touching the world: invalid controls never create or step it.
+        verdict = (check_pour if skill == "pour" else check_scoop)(context, control)
+        if not verdict.valid:
+            return TrialResult(spec.invalid_score, False, {"reason": verdict.reason})
         run: Callable[..., TrialResult]
         if skill == "pour":
             run, settings = run_pour, self.pour_settings
         else:
             run, settings = run_scoop, self.scoop_settings
-        return run(self.world, context, control, int(seed), settings, on_step)
+        return run(self.world, context, control, int(seed), settings, on_step, check=False)
 
     def close(self) -> None:
         if self._world is not None:

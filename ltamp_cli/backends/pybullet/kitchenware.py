@@ -120,12 +120,12 @@ def create_kitchenware(
     # Inertial frames at each piece's own centroid keep the fixed-link dynamics well posed.
     centroids = [np.asarray(piece).mean(axis=0).tolist() for piece in geometry.pieces]
     com_offset = tuple(centroids[0]) if material.mass > 0 else (0.0, 0.0, 0.0)
-    com = np.asarray(position, dtype=float) + _matrix(orientation) @ np.asarray(com_offset)
     body = p.createMultiBody(
         baseMass=float(masses[0]),
         baseCollisionShapeIndex=collision[0],
         baseVisualShapeIndex=visuals[0],
-        basePosition=com.tolist(),
+        # createMultiBody takes the link frame; get/resetBasePosition use the centre of mass.
+        basePosition=list(position),
         baseOrientation=list(orientation),
         baseInertialFramePosition=list(com_offset),
         linkMasses=[float(m) for m in masses[1:]],

@@ -127,6 +127,11 @@ def contained_mask(container: KitchenwareBody, positions_world: np.ndarray) -> n
     return prism.contains(world_to_object(positions_world, position, orientation))
 
 
+def count_lost(positions_world: np.ndarray, floor_z: float = -0.01) -> int:
+    """Beads that went below the table (tunnelled through it): should always be 0."""
+    return int((np.asarray(positions_world).reshape(-1, 3)[:, 2] < floor_z).sum())
+
+
 def count_contained(
     containers: dict[str, KitchenwareBody], positions_world: np.ndarray
 ) -> dict[str, int]:

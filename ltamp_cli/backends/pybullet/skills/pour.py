@@ -34,11 +34,13 @@ from ltamp_cli.backends.pybullet.particles import (
     BeadSpec,
     bead_positions,
     contained_mask,
+    count_lost,
     spawn_beads_in,
 )
 from ltamp_cli.backends.pybullet.paths import PosePath, rotation_about_axis, timed_poses
 from ltamp_cli.backends.pybullet.skills.common import (
     CHECK_SPACING_M,
+    PathCheck,
     StepCallback,
     check_tool_path,
     follow_path,
@@ -151,6 +153,13 @@ def pour_path(context: PourContext, control: np.ndarray) -> PosePath:
         positions.append(pivot + rotation @ (base - pivot))
         quaternions.append(rotation_about_axis("y", angle))
     return PosePath(np.array(positions), np.array(quaternions))
+
+
+def check_pour(context: np.ndarray, control: np.ndarray) -> PathCheck:
+    """The geometric pre-check of one control, with the reason when it fails."""
+    scene = PourContext.from_array(context)
+    control = np.asarray(control, dtype=float).reshape(5)
+    return check_tool_path(vessel_geometry(scene.cup, "cup"), pour_path(scene, control), scene.bowl)
 
 
 def pour_is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
@@ -275,6 +284,7 @@ def run_pour(
         {
             "beads_in_bowl_end": int(in_bowl.sum()),
             "beads_in_cup_end": int(contained_mask(cup, end).sum()),
+            "beads_lost": count_lost(end),
             "fraction_in_bowl": fraction,
             "sim_steps": steps,
         }

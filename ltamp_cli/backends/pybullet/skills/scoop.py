@@ -40,11 +40,13 @@ from ltamp_cli.backends.pybullet.particles import (
     BeadSpec,
     bead_positions,
     contained_mask,
+    count_lost,
     spawn_beads_in,
 )
 from ltamp_cli.backends.pybullet.paths import PosePath, rotation_about_axis, timed_poses
 from ltamp_cli.backends.pybullet.skills.common import (
     CHECK_SPACING_M,
+    PathCheck,
     StepCallback,
     check_tool_path,
     follow_path,
@@ -155,6 +157,13 @@ def scoop_path(context: ScoopContext, control: np.ndarray) -> PosePath:
         ]
     )
     return PosePath(positions, np.stack([tilted, tilted, tilted, upright]))
+
+
+def check_scoop(context: np.ndarray, control: np.ndarray) -> PathCheck:
+    """The geometric pre-check of one control, with the reason when it fails."""
+    scene = ScoopContext.from_array(context)
+    control = np.asarray(control, dtype=float).reshape(5)
+    return check_tool_path(spoon_geometry(scene.spoon), scoop_path(scene, control), scene.bowl)
 
 
 def scoop_is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
@@ -268,6 +277,7 @@ def run_scoop(
         "beads_total": len(beads),
         "beads_in_bowl_start": in_bowl_start,
         "beads_in_spoon_end": in_spoon,
+        "beads_lost": count_lost(end),
         "spoon_capacity": capacity,
         "fraction_of_capacity": fraction,
         "bead_radius_m": latents.beads.radius,
