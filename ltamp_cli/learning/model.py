@@ -68,6 +68,12 @@ class SkillModel(ABC):
 
         return test
 
+    def save(self, directory: str, **metadata: object) -> None:
+        """Write the model directory (see :mod:`.model_dir`); ``metadata`` must be JSON-able."""
+        from ltamp_cli.learning.model_dir import save_model
+
+        save_model(self, directory, **metadata)
+
     # ---- predictions -------------------------------------------------------------------------
     @abstractmethod
     def decision_normalized(self, x: np.ndarray) -> np.ndarray:
@@ -199,12 +205,6 @@ class LevelSetModel(SkillModel):
     ) -> float:
         """Relaxed threshold ``β = Φ⁻¹(λ Φ(μ/σ at θ*))`` for ``context`` (λ ∈ [0.95, 0.999])."""
         return relaxed_beta(self.most_confident_control(context, rng, is_valid)[1], lam)
-
-    def save(self, directory: str, **metadata: object) -> None:
-        """Write the model directory (see :mod:`.model_dir`)."""
-        from ltamp_cli.learning.model_dir import save_model
-
-        save_model(self, directory, **metadata)
 
     @staticmethod
     def load(directory: str) -> LevelSetModel:
