@@ -119,6 +119,8 @@ class KitchenwareGeometry:
     cavity: ContainmentPrism | None = None
     vessel: VesselDims | None = None
     extra: dict[str, float] = field(default_factory=dict)
+    #: Index of the first piece that is not part of the revolved vessel (0: none).
+    extra_pieces_start: int = 0
 
     def hulls(self) -> list[trimesh.Trimesh]:
         """The pieces as trimesh convex hulls (for mass properties, rendering, export)."""
@@ -155,6 +157,46 @@ class KitchenwareGeometry:
             chunks.append(np.asarray(points, dtype=float))
             chunks.append(np.asarray(hull.vertices, dtype=float))
         return np.concatenate(chunks, axis=0)
+
+
+def vessel_mid_surface_points(dims: VesselDims, spacing: float) -> np.ndarray:
+    """Points ``(n, 3)`` about ``spacing`` apart on the mid-surface of a vessel's base and
+    wall (half a thickness inside the material). Far fewer than surface samples of the
+    pieces, for the same collision pre-check once ``thickness / 2`` is added to the margin.
+    """
+    half = dims.thickness / 2.0
+    rz = [(0.0, half)]
+    n_base = max(1, math.ceil((dims.base_radius - half) / spacing))
+    rz += [(r, half) for r in np.linspace(0.0, dims.base_radius - half, n_base + 1)[1:]]
+    wall_length = math.hypot(dims.top_radius - dims.base_radius, dims.height)
+    n_wall = max(1, math.ceil(wall_length / spacing))
+    for t in np.linspace(0.0, 1.0, n_wall + 1):
+        r = dims.base_radius - half + t * (dims.top_radius - dims.base_radius)
+        rz.append((r, t * dims.height))
+    rings = []
+    for r, z in rz:
+        count = max(1, math.ceil(2.0 * math.pi * r / spacing))
+        angles = np.linspace(0.0, 2.0 * math.pi, count, endpoint=False)
+        rings.append(_ring(r, z, angles))
+    return np.concatenate(rings)
+
+
+def check_points(geometry: KitchenwareGeometry, spacing: float) -> tuple[np.ndarray, float]:
+    """Points ``(n, 3)`` representing ``geometry`` for collision pre-checks and the extra
+    margin (metres) they need: mid-surface rings for the revolved part, surface samples
+    (margin 0) for the other pieces. Pieces are ordered base, wall sectors, then extras.
+    """
+    if geometry.vessel is None:
+        return geometry.surface_points(spacing), 0.0
+    dims = geometry.vessel
+    points = [vessel_mid_surface_points(dims, spacing)]
+    extras = geometry.pieces[geometry.extra_pieces_start :] if geometry.extra_pieces_start else ()
+    for index, piece in enumerate(extras):
+        hull = trimesh.convex.convex_hull(piece)
+        count = max(8, math.ceil(hull.area / (spacing * spacing)))
+        sampled, _ = trimesh.sample.sample_surface(hull, count, seed=index)
+        points.append(np.asarray(sampled, dtype=float))
+    return np.concatenate(points), dims.thickness / 2.0
 
 
 def _ring(radius: float, z: float, angles: np.ndarray) -> np.ndarray:
@@ -247,7 +289,9 @@ def spoon_geometry(dims: SpoonDims, segments: int = 12) -> KitchenwareGeometry:
     pieces.append(box_piece(center, np.array([0.006, handle_length / 2.0, 0.002]), rotation))
     r = head.top_radius
     cavity = ContainmentPrism((-r, -r, head.thickness), (r, r, head.height))
-    return KitchenwareGeometry("spoon", tuple(pieces), cavity, head, {"length": dims.length})
+    return KitchenwareGeometry(
+        "spoon", tuple(pieces), cavity, head, {"length": dims.length}, len(pieces) - 1
+    )
 
 
 def stirrer_geometry(length: float = 0.2, radius: float = 0.004) -> KitchenwareGeometry:
@@ -321,10 +365,12 @@ __all__ = [
     "VesselDims",
     "block_geometry",
     "box_piece",
+    "check_points",
     "faucet_geometry",
     "points_in_vessel_wall",
     "revolved_shell_pieces",
     "spoon_geometry",
     "stirrer_geometry",
     "vessel_geometry",
+    "vessel_mid_surface_points",
 ]

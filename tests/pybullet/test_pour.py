@@ -25,8 +25,8 @@ from ltamp_cli.backends.pybullet.world import PhysicsWorld
 CONTEXT = PourContext(NOMINAL_BOWL, NOMINAL_CUP).to_array()
 # Pivot on the cup's lip over the inside of the bowl, tilted to 135°.
 GOOD = np.array([-3 * math.pi / 4, -0.5, 0.5, 0.15, 0.12])
-# Same lip pivot but far outside the bowl, barely tilted: beads fall on the table.
-BAD = np.array([-math.pi / 2, 0.5, 0.5, 0.75, 0.12])
+# Same lip pivot but beyond the bowl's rim, only tilted to 90°: most beads miss the bowl.
+BAD = np.array([-math.pi / 2, -0.5, 0.5, 0.75, 0.12])
 # Cup starts inside the bowl's wall.
 COLLIDING = np.array([-3 * math.pi / 4, -0.5, 0.5, 0.5, 0.0])
 

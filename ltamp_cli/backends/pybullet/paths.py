@@ -36,13 +36,22 @@ class PosePath:
         metres between consecutive poses (interpolating linearly and by slerp)."""
         if len(self) < 2:
             return self
-        radius = float(np.linalg.norm(points_object, axis=1).max())
+        # |T1 p - T0 p| is convex in p, so its maximum over the points is attained at a
+        # corner of their bounding box.
+        low, high = points_object.min(axis=0), points_object.max(axis=0)
+        corners = np.array(
+            [
+                [x, y, z]
+                for x in (low[0], high[0])
+                for y in (low[1], high[1])
+                for z in (low[2], high[2])
+            ]
+        )
+        placed = self.transform(corners)  # (k, 8, 3)
         positions, quaternions = [self.positions[:1]], [self.quaternions[:1]]
-        rotations = self.rotations()
         for i in range(len(self) - 1):
-            shift = float(np.linalg.norm(self.positions[i + 1] - self.positions[i]))
-            turn = float((rotations[i].inv() * rotations[i + 1]).magnitude())
-            n = max(1, math.ceil((shift + turn * radius) / max_move))
+            move = float(np.linalg.norm(placed[i + 1] - placed[i], axis=1).max())
+            n = max(1, math.ceil(move / max_move))
             t = np.linspace(0.0, 1.0, n + 1)[1:]
             segment = interpolate(self, i, t)
             positions.append(segment.positions)

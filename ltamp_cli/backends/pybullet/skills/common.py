@@ -11,6 +11,7 @@ import numpy as np
 from ltamp_cli.backends.kitchenware_geometry import (
     KitchenwareGeometry,
     VesselDims,
+    check_points,
     points_in_vessel_wall,
 )
 from ltamp_cli.backends.pybullet.kitchenware import KitchenwareBody
@@ -48,15 +49,16 @@ def check_tool_path(
     path: PosePath,
     bowl: VesselDims,
     spacing: float = CHECK_SPACING_M,
-    tool_points: np.ndarray | None = None,
+    tool_points: tuple[np.ndarray, float] | None = None,
 ) -> PathCheck:
     """Does ``tool`` moved along ``path`` stay clear of ``bowl`` (at the origin) and the table?
 
-    Conservative: surface points of the tool, about ``spacing`` apart and resampled so no
-    point moves more than ``spacing`` between poses, must stay ``spacing`` away from the
-    bowl's material and above ``z = 0``.
+    Conservative: points of the tool (:func:`check_points`, about ``spacing`` apart), on
+    poses resampled so no point moves more than ``spacing`` between them, must stay
+    ``spacing`` (plus the points' own margin) away from the bowl's material and above the
+    table. ``tool_points`` caches ``check_points(tool, spacing)`` across a batch.
     """
-    points = tool.surface_points(spacing) if tool_points is None else tool_points
+    points, own_margin = check_points(tool, spacing) if tool_points is None else tool_points
     dense = path.densify(points, max_move=spacing)
     chunk = max(1, 200_000 // max(len(points), 1))
     for start in range(0, len(dense), chunk):
@@ -64,8 +66,8 @@ def check_tool_path(
             dense.positions[start : start + chunk], dense.quaternions[start : start + chunk]
         )
         world = part.transform(points)  # (k, m, 3)
-        below = (world[..., 2] < 0.0).any(axis=1)
-        hits = points_in_vessel_wall(world.reshape(-1, 3), bowl, margin=spacing)
+        below = (world[..., 2] < own_margin).any(axis=1)
+        hits = points_in_vessel_wall(world.reshape(-1, 3), bowl, margin=spacing + own_margin)
         hits = hits.reshape(world.shape[:2]).any(axis=1)
         bad = np.flatnonzero(below | hits)
         if bad.size:

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ltamp_cli.backends.kitchenware_geometry import VesselDims, vessel_geometry
+from ltamp_cli.backends.kitchenware_geometry import VesselDims, check_points, vessel_geometry
 from ltamp_cli.backends.protocol import ParamSpace, SkillSpec, TrialResult
 from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial, create_kitchenware
 from ltamp_cli.backends.pybullet.particles import (
@@ -166,7 +166,7 @@ def pour_is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
     """Geometric pre-check for a batch ``controls (n, 5)``: bool ``(n,)``."""
     scene = PourContext.from_array(context)
     cup = vessel_geometry(scene.cup, "cup")
-    points = cup.surface_points(CHECK_SPACING_M)
+    points = check_points(cup, CHECK_SPACING_M)
     batch = np.asarray(controls, dtype=float).reshape(-1, 5)
     return np.array(
         [
@@ -287,6 +287,7 @@ def run_pour(
             "beads_lost": count_lost(end),
             "fraction_in_bowl": fraction,
             "sim_steps": steps,
+            "sim_time_s": steps * world.config.time_step,
         }
     )
     return TrialResult(piecewise_linear_score(fraction, POUR_TAU), True, info)

@@ -31,6 +31,7 @@ import numpy as np
 from ltamp_cli.backends.kitchenware_geometry import (
     SpoonDims,
     VesselDims,
+    check_points,
     spoon_geometry,
     vessel_geometry,
 )
@@ -170,7 +171,7 @@ def scoop_is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
     """Geometric pre-check for a batch ``controls (n, 5)``: bool ``(n,)``."""
     scene = ScoopContext.from_array(context)
     spoon = spoon_geometry(scene.spoon)
-    points = spoon.surface_points(CHECK_SPACING_M)
+    points = check_points(spoon, CHECK_SPACING_M)
     batch = np.asarray(controls, dtype=float).reshape(-1, 5)
     return np.array(
         [
@@ -282,5 +283,6 @@ def run_scoop(
         "fraction_of_capacity": fraction,
         "bead_radius_m": latents.beads.radius,
         "sim_steps": steps,
+        "sim_time_s": steps * world.config.time_step,
     }
     return TrialResult(piecewise_linear_score(fraction, SCOOP_TAU), True, info)
