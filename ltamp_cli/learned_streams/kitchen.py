@@ -1,0 +1,61 @@
+"""``GoodPour`` and ``GoodScoop``: learned streams for the Kitchen2D pour and scoop skills.
+
+Contexts follow the skills' specs: pour ``(cup_width, cup_height, target_width,
+target_height)``, scoop ``(cup_width, cup_height)``. By default the outputs are
+``(control tuple, path)`` where the path is the object's waypoints relative to the target
+cup's rim centre: pour ``((rel_x, rel_y, 0), (rel_x, rel_y, dangle))`` (x, y, tilt);
+scoop the three spoon waypoints ``(x_i, y_i)`` scaled by the cup's width/height. A domain with
+its own geometry passes its own ``to_outputs``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from ltamp_cli.learned_streams.stream import LearnedStream, LearnedStreamConfig, ModelCache
+from ltamp_cli.sampling.superlevel import PhysicalValidity
+
+Size = Sequence[float]  # (width, height) of a cup in world units
+
+
+def _pour_context(source: Size, target: Size) -> np.ndarray:
+    return np.array([source[0], source[1], target[0], target[1]], dtype=float)
+
+
+def _pour_outputs(control: np.ndarray, source: Size, target: Size) -> tuple[Any, ...]:
+    _grasp, rel_x, rel_y, dangle = (float(v) for v in control)
+    path = ((rel_x, rel_y, 0.0), (rel_x, rel_y, dangle))
+    return (tuple(float(v) for v in control), path)
+
+
+def _scoop_context(cup: Size) -> np.ndarray:
+    return np.array([cup[0], cup[1]], dtype=float)
+
+
+def _scoop_outputs(control: np.ndarray, cup: Size) -> tuple[Any, ...]:
+    points = np.asarray(control[1:], dtype=float).reshape(3, 2) * [cup[0] / 2.0, cup[1]]
+    path = tuple((float(x), float(y)) for x, y in points)
+    return (tuple(float(v) for v in control), path)
+
+
+class GoodPour(LearnedStream):
+    """Inputs ``(source size, target size)`` -> outputs ``(control, pour path)``."""
+
+    def __init__(self, config: LearnedStreamConfig, rng: np.random.Generator,
+                 to_outputs: Callable[..., tuple[Any, ...] | None] = _pour_outputs,
+                 is_valid: PhysicalValidity | None = None,
+                 models: ModelCache | None = None) -> None:
+        super().__init__(config, _pour_context, to_outputs, rng, is_valid, models)
+
+
+class GoodScoop(LearnedStream):
+    """Inputs ``(cup size,)`` -> outputs ``(control, spoon path)``."""
+
+    def __init__(self, config: LearnedStreamConfig, rng: np.random.Generator,
+                 to_outputs: Callable[..., tuple[Any, ...] | None] = _scoop_outputs,
+                 is_valid: PhysicalValidity | None = None,
+                 models: ModelCache | None = None) -> None:
+        super().__init__(config, _scoop_context, to_outputs, rng, is_valid, models)

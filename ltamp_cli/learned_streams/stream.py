@@ -1,0 +1,218 @@
+"""A learned stream: planner inputs -> context -> sampled controls -> stream outputs.
+
+A problem YAML configures each learned stream under ``world.learned_streams.<stream name>``::
+
+    learned_streams:
+      sample-good-control:
+        model: model            # model directory (relative paths: see from_mapping's base)
+        sampler: diverse-lk     # rejection | adaptive | diverse | diverse-lk
+        lambda: 0.95            # relaxed-β λ (optional), or beta: 1.5 (optional)
+        kernel_file: null       # diverse-lk only; default <model>/diversity_kernel.json
+
+The model is loaded once per :class:`LearnedStream` (pass a shared :class:`ModelCache` to load
+a directory once for several streams) and never retrained. Each call of the stream (one input
+tuple) gets its own sampler; every output is remembered with the control that made it so that
+:meth:`LearnedStream.on_unusable` can report that control to its sampler (``diverse-lk``
+learns its diversity kernel from it and the kernel is saved to ``kernel_file``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Hashable, Iterator, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ltamp_cli.backends.protocol import SkillSpec
+from ltamp_cli.errors import InputError
+from ltamp_cli.learning.model import LevelSetModel
+from ltamp_cli.learning.model_dir import load_model
+from ltamp_cli.planner.streams import Binding, StreamInfo
+from ltamp_cli.sampling.base import SetSampler
+from ltamp_cli.sampling.factory import SAMPLER_NAMES, make_sampler
+from ltamp_cli.sampling.kernel_learning import DiversityKernel, load_kernel, save_kernel
+from ltamp_cli.sampling.superlevel import DEFAULT_LAMBDA, PhysicalValidity
+
+KERNEL_FILE = "diversity_kernel.json"
+_FIELDS = ("model", "sampler", "lambda", "beta", "kernel_file")
+
+
+@dataclass(frozen=True)
+class LearnedStreamConfig:
+    """Which model and sampler a learned stream uses. Paths are absolute or cwd-relative."""
+
+    model_dir: Path
+    sampler: str = "adaptive"
+    lam: float = DEFAULT_LAMBDA
+    beta: float | None = None
+    kernel_file: Path | None = None
+
+    def __post_init__(self) -> None:
+        if self.sampler not in SAMPLER_NAMES:
+            raise InputError(
+                f"unknown sampler {self.sampler!r}: expected one of {', '.join(SAMPLER_NAMES)}"
+            )
+
+    @property
+    def kernel_path(self) -> Path:
+        """Where ``diverse-lk`` keeps its learned kernel."""
+        return self.kernel_file if self.kernel_file is not None else self.model_dir / KERNEL_FILE
+
+    @staticmethod
+    def from_mapping(data: Any, base: Path, where: str) -> LearnedStreamConfig:
+        """Parse one ``learned_streams`` entry; relative paths are resolved against ``base``.
+
+        ``where`` names the entry in error messages (e.g. ``world.learned_streams.s``).
+        """
+        if not isinstance(data, Mapping):
+            raise InputError(f"{where}: expected a mapping with 'model' and 'sampler'")
+        unknown = sorted(set(map(str, data)) - set(_FIELDS))
+        if unknown:
+            raise InputError(f"{where}: unknown field {unknown[0]!r}: expected one of "
+                             f"{', '.join(_FIELDS)}")
+        if not isinstance(data.get("model"), str):
+            raise InputError(f"{where}.model: expected the path of a model directory")
+
+        def number(key: str) -> float | None:
+            value = data.get(key)
+            if value is None:
+                return None
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise InputError(f"{where}.{key}: expected a number, got {value!r}")
+            return float(value)
+
+        kernel_file = data.get("kernel_file")
+        if kernel_file is not None and not isinstance(kernel_file, str):
+            raise InputError(f"{where}.kernel_file: expected a path")
+        lam = number("lambda")
+        try:
+            return LearnedStreamConfig(
+                model_dir=(base / data["model"]).resolve(),
+                sampler=str(data.get("sampler", "adaptive")),
+                lam=DEFAULT_LAMBDA if lam is None else lam,
+                beta=number("beta"),
+                kernel_file=None if kernel_file is None else (base / kernel_file).resolve(),
+            )
+        except InputError as error:
+            raise InputError(f"{where}.sampler: {error.message}") from None
+
+
+class ModelCache:
+    """Loads each model directory once (per cache, not per process)."""
+
+    def __init__(self) -> None:
+        self._models: dict[Path, LevelSetModel] = {}
+
+    def get(self, model_dir: Path) -> LevelSetModel:
+        key = Path(model_dir).resolve()
+        if key not in self._models:
+            model = load_model(key).model
+            if not isinstance(model, LevelSetModel):
+                raise InputError(f"{key}: learned streams need a GP model, this one is "
+                                 f"{model.kind!r}")
+            self._models[key] = model
+        return self._models[key]
+
+
+def _freeze(value: Any) -> Hashable:
+    """A hashable stand-in for a stream value (arrays and sequences become tuples)."""
+    if isinstance(value, np.ndarray):
+        return ("array", tuple(np.asarray(value, dtype=float).ravel().tolist()), value.shape)
+    if isinstance(value, list | tuple):
+        return tuple(_freeze(v) for v in value)
+    if isinstance(value, dict):
+        return tuple(sorted((str(k), _freeze(v)) for k, v in value.items()))
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+class LearnedStream:
+    """A planner stream drawing controls of a learned skill.
+
+    ``to_context(*inputs) -> (dα,)`` physical context; ``to_outputs(control, *inputs)`` ->
+    output tuple (or ``None`` to skip a control the stream cannot use);
+    ``is_valid(context, controls)`` an optional hard test applied inside the sampler.
+    """
+
+    def __init__(
+        self,
+        config: LearnedStreamConfig,
+        to_context: Callable[..., np.ndarray],
+        to_outputs: Callable[..., tuple[Any, ...] | None],
+        rng: np.random.Generator,
+        is_valid: PhysicalValidity | None = None,
+        models: ModelCache | None = None,
+    ) -> None:
+        self.config = config
+        self.to_context = to_context
+        self.to_outputs = to_outputs
+        self.rng = rng
+        self.is_valid = is_valid
+        self.model = (models or ModelCache()).get(config.model_dir)
+        self.kernel: DiversityKernel | None = None
+        if config.sampler == "diverse-lk":
+            self.kernel = load_kernel(config.kernel_path, self.model.spec)
+        self._issued: dict[Hashable, tuple[SetSampler, np.ndarray]] = {}
+        self.n_samples = 0
+        self.n_unusable = 0
+
+    @property
+    def spec(self) -> SkillSpec:
+        return self.model.spec
+
+    def sampler_for(self, *inputs: Any) -> SetSampler:
+        """A fresh sampler for the context of ``inputs``."""
+        context = np.asarray(self.to_context(*inputs), dtype=float).reshape(
+            self.model.spec.context.dim
+        )
+        return make_sampler(
+            self.config.sampler, self.model, context, self.rng, beta=self.config.beta,
+            is_valid=self.is_valid, lam=self.config.lam, kernel=self.kernel,
+        )
+
+    def __call__(self, *inputs: Any) -> Iterator[tuple[Any, ...]]:
+        """The planner's generator for one input tuple: one output tuple per ``next()``."""
+        sampler: SetSampler | None = None
+        frozen_inputs = _freeze(inputs)
+        while True:
+            if sampler is None:
+                sampler = self.sampler_for(*inputs)
+            control = next(sampler, None)
+            if control is None:
+                return
+            outputs = self.to_outputs(control, *inputs)
+            if outputs is None:
+                continue
+            outputs = tuple(outputs)
+            self.n_samples += 1
+            self._issued[(frozen_inputs, _freeze(outputs))] = (sampler, control)
+            yield outputs
+
+    def on_unusable(self, inputs: tuple[Any, ...], outputs: tuple[Any, ...]) -> None:
+        """Planner feedback: ``outputs`` (made for ``inputs``) failed downstream."""
+        entry = self._issued.get((_freeze(tuple(inputs)), _freeze(tuple(outputs))))
+        if entry is None:
+            return
+        self.n_unusable += 1
+        sampler, control = entry
+        if sampler.report_unusable(control) is not None and self.kernel is not None:
+            save_kernel(self.kernel, self.config.kernel_path, self.model.spec)
+
+    def binding(self, info: StreamInfo | None = None) -> Binding:
+        """The planner :class:`Binding`, with :meth:`on_unusable` wired as its feedback."""
+        return Binding(self, info or StreamInfo(), on_unusable=self.on_unusable)
+
+
+def learned_stream_configs(world: Mapping[str, Any], base: Path
+                           ) -> dict[str, LearnedStreamConfig]:
+    """Every ``world.learned_streams`` entry, parsed (relative paths against ``base``)."""
+    entries = world.get("learned_streams", {}) or {}
+    if not isinstance(entries, Mapping):
+        raise InputError("world.learned_streams: expected a mapping of stream name to settings")
+    return {
+        str(name): LearnedStreamConfig.from_mapping(entry, base, f"world.learned_streams.{name}")
+        for name, entry in entries.items()
+    }
