@@ -49,7 +49,8 @@ def test_every_sample_is_in_the_set_and_valid(synthetic, skill8d_model, name: st
         mean, std = skill8d_model.predict(context, controls)
         assert np.all(mean / std > sampler.beta)
         assert np.all(synthetic.is_valid("skill8d", context, controls))
-        lows, highs = skill8d_model.spec.control.low_array(), skill8d_model.spec.control.high_array()
+        space = skill8d_model.spec.control
+        lows, highs = space.low_array(), space.high_array()
         assert np.all((controls >= lows) & (controls <= highs))
         assert len(np.unique(controls, axis=0)) == len(controls)
 
