@@ -27,9 +27,9 @@ def build_app() -> typer.Typer:
     # A callback keeps `ltamp COMMAND` form even while only one command is registered.
     app.callback()(lambda: None)
     # Command modules are imported here, not at module import, to keep start-up cheap.
-    from ltamp_cli.cli import collect, evaluate, skills, solve, train
+    from ltamp_cli.cli import collect, evaluate, sample, skills, solve, train
 
-    for module in (solve, collect, skills, train, evaluate):
+    for module in (solve, collect, skills, train, evaluate, sample):
         module.register(app)
     return app
 
