@@ -84,21 +84,32 @@ def _unpack(theta: torch.Tensor, k: int) -> tuple[torch.Tensor, ...]:
     return theta[:k].exp(), theta[k].exp(), theta[k + 1].exp(), theta[k + 2]
 
 
-def _neg_log_likelihood(
-    theta: torch.Tensor, kernel: str, x: torch.Tensor, y: torch.Tensor
-) -> torch.Tensor:
-    """Negative log marginal likelihood per data point."""
-    k = theta.numel() - 3
-    params, outputscale, noise, mean = _unpack(theta, k)
+def _neg_log_likelihood_and_gradient(
+    theta: np.ndarray, kernel: str, x: torch.Tensor, y: torch.Tensor
+) -> tuple[float, np.ndarray]:
+    """Negative log marginal likelihood per data point and its gradient in ``theta``.
+
+    The gradient uses ``∂/∂K = ½ (K⁻¹ − ααᵀ)`` and backpropagates only through the kernel:
+    autograd through the Cholesky factorisation costs several times more.
+    """
+    k = theta.size - 3
+    theta_t = torch.tensor(theta, dtype=DTYPE, requires_grad=True)
+    params, outputscale, noise, mean = _unpack(theta_t, k)
     n = x.shape[0]
     covariance = outputscale * unit_kernel(kernel, x, x, params)
     covariance = covariance + noise * torch.eye(n, dtype=x.dtype)
-    factor = robust_cholesky(covariance)
-    residual = (y - mean).unsqueeze(-1)
-    alpha = torch.cholesky_solve(residual, factor)
-    fit = 0.5 * (residual * alpha).sum()
-    complexity = factor.diagonal().log().sum()
-    return (fit + complexity) / n + 0.5 * math.log(2.0 * math.pi)
+    with torch.no_grad():
+        factor = robust_cholesky(covariance)
+        residual = y - mean
+        alpha = torch.cholesky_solve(residual.unsqueeze(-1), factor).squeeze(-1)
+        value = (0.5 * residual @ alpha + factor.diagonal().log().sum()) / n
+        inverse = torch.cholesky_inverse(factor)
+        upstream = 0.5 * (inverse - torch.outer(alpha, alpha)) / n
+    covariance.backward(upstream)
+    assert theta_t.grad is not None
+    gradient = theta_t.grad.numpy().copy()
+    gradient[k + 2] = -float(alpha.sum()) / n
+    return float(value) + 0.5 * math.log(2.0 * math.pi), gradient
 
 
 class GaussianProcess:
@@ -196,12 +207,15 @@ class GaussianProcess:
     # ---- prediction --------------------------------------------------------------------------
     def posterior_torch(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """Differentiable latent ``(mean (m,), variance (m,))`` (scaled units) at ``x (m, d)``."""
-        cross = self._outputscale * unit_kernel(self.kernel, x, self._x, self._params)
-        mean = self._mean + cross @ self._alpha
+        # The outputscale s is folded into scalars: k = s·u, so μ = m + s·uᵀα and
+        # σ² = s·u(x, x) − s²‖L⁻¹u‖² — no full-size rescaled copy of the cross-covariance.
+        scale = self._outputscale
+        cross = unit_kernel(self.kernel, x, self._x, self._params)
+        mean = self._mean + scale * (cross @ self._alpha)
         solved = torch.linalg.solve_triangular(self._factor, cross.T, upper=False)
-        prior = self._outputscale * unit_kernel(self.kernel, x, x, self._params, diag=True)
-        variance = (prior - (solved * solved).sum(0)).clamp_min(1e-12 * self._outputscale)
-        return mean, variance
+        prior = unit_kernel(self.kernel, x, x, self._params, diag=True)
+        variance = scale * prior - (scale * scale) * solved.square().sum(0)
+        return mean, variance.clamp_min(1e-12 * scale)
 
     def predict(self, x: np.ndarray, chunk: int = PREDICT_CHUNK) -> tuple[np.ndarray, np.ndarray]:
         """Latent posterior ``(mean (m,), std (m,))`` in score units for ``x (m, d)`` normalised."""
@@ -294,13 +308,10 @@ def fit_gp(
     y_t = torch.as_tensor(y / scale, dtype=DTYPE)
 
     def objective(theta: np.ndarray) -> tuple[float, np.ndarray]:
-        theta_t = torch.tensor(theta, dtype=DTYPE, requires_grad=True)
         try:
-            value = _neg_log_likelihood(theta_t, kernel, x_t, y_t)
+            return _neg_log_likelihood_and_gradient(theta, kernel, x_t, y_t)
         except CholeskyError:
             return 1e10, np.zeros_like(theta)
-        (gradient,) = torch.autograd.grad(value, theta_t)
-        return float(value.detach()), gradient.numpy().copy()
 
     starts: list[np.ndarray] = []
     if warm_start is not None and warm_start.kernel == kernel and warm_start.dim == dim:

@@ -25,8 +25,9 @@ _ASIN_LIMIT = 1.0 - 1e-12
 def _scaled_sqdist(x1: torch.Tensor, x2: torch.Tensor, lengthscales: torch.Tensor) -> torch.Tensor:
     z1 = x1 / lengthscales
     z2 = x2 / lengthscales
-    sq = (z1 * z1).sum(-1, keepdim=True) - 2.0 * z1 @ z2.T + (z2 * z2).sum(-1)
-    return sq.clamp_min(0.0)
+    # ‖a‖² + ‖b‖² − 2a·b in one GEMM; a contiguous right operand is several times faster.
+    sq = torch.addmm((z2 * z2).sum(-1), z1, z2.T.contiguous(), alpha=-2.0)
+    return sq.add_((z1 * z1).sum(-1, keepdim=True)).clamp_min_(0.0)
 
 
 def rbf(
@@ -45,9 +46,8 @@ def matern52(
     if diag:
         return torch.ones(x1.shape[0], dtype=x1.dtype)
     # The clamp keeps the gradient of sqrt finite on the diagonal (r = 0).
-    r = torch.sqrt(_scaled_sqdist(x1, x2, lengthscales).clamp_min(1e-30))
-    s5r = math.sqrt(5.0) * r
-    return (1.0 + s5r + s5r * s5r / 3.0) * torch.exp(-s5r)
+    s5r = _scaled_sqdist(x1, x2, lengthscales).clamp_min_(1e-30).mul_(5.0).sqrt_()
+    return (s5r * s5r).div_(3.0).add_(s5r).add_(1.0) * torch.exp(-s5r)
 
 
 def arcsine(
