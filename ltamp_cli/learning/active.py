@@ -36,7 +36,7 @@ from ltamp_cli.learning.baselines import SKLEARN_KINDS, RandomModel, SklearnMode
 from ltamp_cli.learning.gp import fit_gp
 from ltamp_cli.learning.kernels import KERNEL_NAMES
 from ltamp_cli.learning.metrics import Evaluation, SkillEvaluator
-from ltamp_cli.learning.model import LevelSetModel, SkillModel
+from ltamp_cli.learning.model import LevelSetModel, PhysicalValidity, SkillModel
 from ltamp_cli.trials.record import TrialDataset, TrialRecord
 
 STRATEGIES = ("lse", "lse2", "gp", "random", *SKLEARN_KINDS)
@@ -127,6 +127,35 @@ def _checkpoint(n: int, config: LearningConfig, eval_every: int) -> bool:
     return n == config.budget or (eval_every > 0 and n >= config.init and n % eval_every == 0)
 
 
+class _Learner:
+    """Training data so far and the model on it, refitted lazily (eagerly for active ones)."""
+
+    def __init__(self, spec: SkillSpec, config: LearningConfig, rng: np.random.Generator) -> None:
+        self.spec = spec
+        self.config = config
+        self.rng = rng
+        self.x: list[np.ndarray] = []
+        self.y: list[float] = []
+        self.model: SkillModel | None = None
+        self._fitted_on = -1
+
+    def add(self, x: np.ndarray, score: float) -> None:
+        self.x.append(np.asarray(x, dtype=float))
+        self.y.append(_training_score(self.spec, score))
+
+    def current(self) -> SkillModel:
+        if self.model is None or self._fitted_on != len(self.y):
+            self.model = fit_model(
+                self.spec, self.config, np.array(self.x), np.array(self.y), self.model, rng=self.rng
+            )
+            self._fitted_on = len(self.y)
+        return self.model
+
+    def final(self) -> SkillModel:
+        x, y = np.array(self.x), np.array(self.y)
+        return fit_model(self.spec, self.config, x, y, self.model, final=True, rng=self.rng)
+
+
 class _Curve:
     def __init__(self, evaluator: SkillEvaluator | None, eval_every: int, success: bool) -> None:
         self.evaluator = evaluator
@@ -134,9 +163,10 @@ class _Curve:
         self.success = success
         self.points: list[Evaluation] = []
 
-    def maybe(self, n: int, config: LearningConfig, model_for: object) -> None:
-        if self.evaluator is not None and _checkpoint(n, config, self.eval_every):
-            self.points.append(self.evaluator.evaluate(model_for(), n, self.success))  # type: ignore[operator]
+    def maybe(self, learner: _Learner) -> None:
+        n = len(learner.y)
+        if self.evaluator is not None and _checkpoint(n, learner.config, self.eval_every):
+            self.points.append(self.evaluator.evaluate(learner.current(), n, self.success))
 
 
 def learn_online(
@@ -155,7 +185,7 @@ def learn_online(
     ``evaluator`` with ``eval_every > 0`` records a learning curve every ``eval_every`` trials.
     """
     spec = backend.skills()[skill]
-    records = [r for r in dataset.read()] if dataset is not None and dataset.exists() else []
+    records = dataset.read() if dataset is not None and dataset.exists() else []
     strangers = [r for r in records if r.skill != skill]
     if strangers:
         raise ValueError(
@@ -163,20 +193,12 @@ def learn_online(
             f"{strangers[0].skill!r}, not {skill!r}"
         )
     rng = np.random.default_rng([config.seed, len(records)])
+    learner = _Learner(spec, config, rng)
     template = RandomModel(spec, 0.0)  # coordinates and validity only
-    x = [template.to_unit(r.context, r.control)[0] for r in records]
-    y = [_training_score(spec, r.score) for r in records]
+    for record in records:
+        learner.x.append(template.to_unit(record.context, record.control)[0])
+        learner.y.append(_training_score(spec, record.score))
     curve = _Curve(evaluator, eval_every, evaluate_success)
-    model: SkillModel | None = None
-
-    def current() -> SkillModel:
-        nonlocal model
-        if model is None or (config.strategy not in GP_STRATEGIES and len(y) != _fitted_on[0]):
-            model = fit_model(spec, config, np.array(x), np.array(y), model, rng=rng)
-            _fitted_on[0] = len(y)
-        return model
-
-    _fitted_on = [-1]
 
     def is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
         return backend.is_valid(skill, context, controls)
@@ -191,9 +213,9 @@ def learn_online(
     )
     with bar:
         while len(records) < config.budget:
-            context, control = _propose(
-                backend, skill, spec, config, rng, model, len(records), is_valid
-            )
+            active = config.strategy in ACTIVE_STRATEGIES and len(records) >= config.init
+            model = learner.current() if active else None
+            context, control = _propose(backend, skill, spec, config, rng, model, is_valid)
             index = len(records)
             seed = _trial_seed(config.seed, index)
             start = time.perf_counter()
@@ -213,14 +235,10 @@ def learn_online(
             if dataset is not None:
                 dataset.append(record)
             records.append(record)
-            x.append(template.to_unit(context, control)[0])
-            y.append(_training_score(spec, record.score))
-            if config.strategy in GP_STRATEGIES and len(records) >= config.init:
-                model = fit_model(spec, config, np.array(x), np.array(y), model, rng=rng)
-            curve.maybe(len(records), config, current)
+            learner.add(template.to_unit(context, control)[0], record.score)
+            curve.maybe(learner)
             bar.update(1)
-    final = fit_model(spec, config, np.array(x), np.array(y), model, final=True, rng=rng)
-    return LearningResult(final, records, curve.points)
+    return LearningResult(learner.final(), records, curve.points)
 
 
 def _propose(
@@ -230,17 +248,15 @@ def _propose(
     config: LearningConfig,
     rng: np.random.Generator,
     model: SkillModel | None,
-    n_done: int,
-    is_valid: object,
+    is_valid: PhysicalValidity,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Next ``(context (dα,), control (dθ,))`` in physical units."""
-    active = config.strategy in ACTIVE_STRATEGIES and n_done >= config.init
-    if not active or not isinstance(model, LevelSetModel):
+    """Next ``(context (dα,), control (dθ,))`` in physical units; random without a GP."""
+    if not isinstance(model, LevelSetModel):
         context = np.asarray(backend.sample_context(skill, rng), dtype=float).reshape(
             spec.context.dim
         )
         return context, spec.control.sample_uniform(rng, 1)[0]
-    test = model.validity_test(is_valid)  # type: ignore[arg-type]
+    test = model.validity_test(is_valid)
     if config.strategy == "lse":
         best = maximize(
             model.gp,
@@ -307,28 +323,21 @@ def learn_from_pool(
     order = rng.permutation(len(pool))
     available = np.ones(len(pool), dtype=bool)
     chosen: list[int] = []
-    model: SkillModel | None = None
+    learner = _Learner(spec, config, rng)
     curve = _Curve(evaluator, eval_every, evaluate_success)
-    fitted_on = [-1]
-
-    def current() -> SkillModel:
-        nonlocal model
-        if model is None or (config.strategy not in GP_STRATEGIES and fitted_on[0] != len(chosen)):
-            model = fit_model(spec, config, x_pool[chosen], y_pool[chosen], model, rng=rng)
-            fitted_on[0] = len(chosen)
-        return model
-
     cursor = 0
-    with tqdm(
+    bar = tqdm(
         total=budget,
         disable=not progress,
         file=sys.stderr,
         desc=f"{config.strategy} {spec.name} (pool)",
         unit="trial",
-    ) as bar:
+    )
+    with bar:
         while len(chosen) < budget:
             active = config.strategy in ACTIVE_STRATEGIES and len(chosen) >= config.init
-            if active and isinstance(model, LevelSetModel):
+            model = learner.current() if active else None
+            if isinstance(model, LevelSetModel):
                 index = _pool_pick(model, config, spec, x_pool, available, rng)
             else:
                 while not available[order[cursor]]:
@@ -336,12 +345,10 @@ def learn_from_pool(
                 index = int(order[cursor])
             available[index] = False
             chosen.append(index)
-            if config.strategy in GP_STRATEGIES and len(chosen) >= config.init:
-                model = fit_model(spec, config, x_pool[chosen], y_pool[chosen], model, rng=rng)
-            curve.maybe(len(chosen), config, current)
+            learner.add(x_pool[index], y_pool[index])
+            curve.maybe(learner)
             bar.update(1)
-    final = fit_model(spec, config, x_pool[chosen], y_pool[chosen], model, final=True, rng=rng)
-    return LearningResult(final, [pool[i] for i in chosen], curve.points)
+    return LearningResult(learner.final(), [pool[i] for i in chosen], curve.points)
 
 
 def _pool_pick(
