@@ -21,7 +21,7 @@ import numpy as np
 from ltamp_cli.backends.protocol import SkillSpec
 from ltamp_cli.learning.acquisition import ValidityTest, confidence_ratio, maximize
 from ltamp_cli.learning.confidence import relaxed_beta
-from ltamp_cli.learning.gp import GaussianProcess
+from ltamp_cli.learning.gp import GaussianProcess, fit_gp
 from ltamp_cli.learning.normalize import BoxNormalizer, join_inputs, joint_space, split_inputs
 
 # physical validity test for one context: (context (dα,), controls (n, dθ)) -> bool (n,)
@@ -140,6 +140,23 @@ class LevelSetModel(SkillModel):
         if gp.dim != self.dim:
             raise ValueError(f"GP has {gp.dim} inputs but skill {spec.name!r} has {self.dim}")
         self.gp = gp
+
+    @staticmethod
+    def fit(
+        spec: SkillSpec,
+        contexts: np.ndarray,
+        controls: np.ndarray,
+        scores: np.ndarray,
+        kernel: str = "matern52",
+        seed: int = 0,
+        restarts: int = 2,
+    ) -> LevelSetModel:
+        """Fit a GP to physical ``contexts (n, dα)``, ``controls (n, dθ)`` and ``scores (n,)``."""
+        x = BoxNormalizer.for_space(joint_space(spec)).to_unit(
+            join_inputs(spec, contexts, controls)
+        )
+        gp = fit_gp(x, scores, kernel, restarts=restarts, rng=np.random.default_rng(seed))
+        return LevelSetModel(spec, gp)
 
     @property
     def kernel(self) -> str:

@@ -86,8 +86,10 @@ def test_most_confident_control_lies_in_the_true_level_set(synthetic):
     contexts = spec.context.sample_uniform(rng, 150)
     controls = spec.control.sample_uniform(rng, 150)
     scores = synthetic.true_score("moving2d", contexts, controls)
+    model = LevelSetModel.fit(spec, contexts, controls, scores, "matern52", seed=3)
+    # Inputs are [control..., context...] normalised to [-1, 1].
     x = np.c_[(controls - [2.0, 0.0]) / [2.0, 1.0], contexts * 2 - 1]
-    model = LevelSetModel(spec, fit_gp(x, scores, "matern52", rng=rng))
+    np.testing.assert_allclose(model.gp.x_np, x)
     for phase in (0.1, 0.5, 0.9):
         theta, phi = model.most_confident_control(np.array([phase]), rng)
         assert synthetic.true_score("moving2d", [phase], theta[None, :])[0] > 0
