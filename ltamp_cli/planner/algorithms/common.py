@@ -52,7 +52,7 @@ class PlannerConfig:
     algorithm: str = "focused"
     max_time: float = 60.0
     seed: int = 0
-    search: str = "lazy-greedy"
+    search: str = "ff"
     unit_costs: bool = False
     initial_complexity: int = 0
     max_complexity: int = 20

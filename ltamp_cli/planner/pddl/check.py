@@ -15,6 +15,7 @@ from ltamp_cli.planner.pddl.syntax import (
     Atom,
     Domain,
     Effect,
+    ForAllEffect,
     FunctionTerm,
     IncreaseCost,
     Problem,
@@ -74,7 +75,7 @@ def _quantified_variables(formula: object) -> set[str]:
     stack = [formula]
     while stack:
         node = stack.pop()
-        if isinstance(node, _Exists | _ForAll):
+        if isinstance(node, _Exists | _ForAll | ForAllEffect):
             found.update(p.name for p in node.parameters)
         for value in getattr(node, "__dict__", {}).values():
             if isinstance(value, tuple):

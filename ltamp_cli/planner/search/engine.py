@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from ltamp_cli.planner.search.heuristic import INFINITY, FFHeuristic
 from ltamp_cli.planner.search.task import Task
 
-SEARCH_ALGORITHMS = ("lazy-greedy", "wastar")
+SEARCH_ALGORITHMS = ("ff", "lazy-greedy", "wastar")
 
 
 @dataclass
@@ -144,8 +144,77 @@ def weighted_astar(task: Task, deadline: float, weight: float = 2.0) -> SearchOu
     return SearchOutcome(None, INFINITY, expanded, evaluated, time.perf_counter() - start_time)
 
 
+def enforced_hill_climbing(task: Task, deadline: float, unit_costs: bool = False
+                           ) -> SearchOutcome | None:
+    """FF's enforced hill-climbing over helpful actions; ``None`` when it gets stuck.
+
+    From the current state, breadth-first search (helpful actions only) for a state with a
+    strictly better heuristic value, commit to it, repeat until the goal holds.
+    """
+    from collections import deque
+
+    start_time = time.perf_counter()
+    heuristic = FFHeuristic(task, unit_costs=unit_costs)
+    expanded = evaluated = 0
+    state = task.init
+    vector = task.state_vector(state)
+    result = heuristic(vector)
+    evaluated += 1
+    if result.value == INFINITY:
+        return None
+    path_ops: list[int] = []
+    path_states = [state]
+    seen = {state}
+    while not task.is_goal(vector):
+        best = result.value
+        queue = deque([(state, vector, result.preferred, [])])
+        found = None
+        while queue and found is None:
+            if time.perf_counter() > deadline:
+                raise SearchTimeout
+            parent, parent_vector, helpful, ops = queue.popleft()
+            expanded += 1
+            # Relaxed plans ignore negative preconditions: keep only really applicable ones.
+            applicable = set(task.applicable(parent_vector).tolist())
+            for op in (op for op in helpful if op in applicable):
+                child = task.successor(parent, parent_vector, op)
+                if child in seen:
+                    continue
+                seen.add(child)
+                child_vector = task.state_vector(child)
+                if task.is_goal(child_vector):
+                    found = (child, child_vector, None, [*ops, op])
+                    break
+                child_result = heuristic(child_vector)
+                evaluated += 1
+                if child_result.value == INFINITY:
+                    continue
+                if child_result.value < best:
+                    found = (child, child_vector, child_result, [*ops, op])
+                    break
+                queue.append((child, child_vector, child_result.preferred, [*ops, op]))
+        if found is None:
+            return None
+        state, vector, next_result, ops = found
+        for op in ops:
+            path_states.append(task.successor(path_states[-1], task.state_vector(path_states[-1]),
+                                              op))
+        path_ops.extend(ops)
+        if next_result is None:
+            break
+        result = next_result
+    cost = float(sum(task.operators[i].cost for i in path_ops))
+    return SearchOutcome(path_ops, cost, expanded, evaluated, time.perf_counter() - start_time,
+                         path_states)
+
+
 def run_search(task: Task, algorithm: str, deadline: float, unit_costs: bool = False
                ) -> SearchOutcome:
+    if algorithm == "ff":
+        outcome = enforced_hill_climbing(task, deadline, unit_costs=unit_costs)
+        if outcome is not None:
+            return outcome
+        return lazy_greedy(task, deadline, unit_costs=unit_costs)
     if algorithm == "lazy-greedy":
         return lazy_greedy(task, deadline, unit_costs=unit_costs)
     if algorithm == "wastar":

@@ -22,8 +22,17 @@ class HeuristicResult:
     preferred: list[int]  # indices of task operators in the relaxed plan
 
 
+MAX_NEGATION_RULES = 64
+
+
 class FFHeuristic:
-    """h_FF with costs ``cost + cost_bias`` (``cost_bias=1`` is FD's plusone guidance)."""
+    """h_FF with costs ``cost + cost_bias`` (``cost_bias=1`` is FD's plusone guidance).
+
+    A negated derived condition ``not D`` gets its own relaxed fact ``¬D``, achieved when
+    every rule of ``D`` is blocked by a fact that its negative body literals name (as Fast
+    Downward compiles negated axioms); without it, goals such as ``forall m: (Contains cup
+    m)`` — compiled to ``not aux`` — would look satisfied to the relaxation.
+    """
 
     def __init__(self, task: Task, cost_bias: float = 1.0, unit_costs: bool = False) -> None:
         self.task = task
@@ -31,23 +40,48 @@ class FFHeuristic:
         self.effects: list[list[int]] = []
         costs: list[float] = []
         self.origin: list[int] = []  # task operator index, or -1 for an axiom
+        negation, derived_rules, deleters = self._negations(task)
+
+        def relaxed(positive: tuple[int, ...], negative: tuple[int, ...]) -> list[int]:
+            return list(positive) + [negation[f] for f in negative if f in negation]
+
         for index, op in enumerate(task.operators):
             cost = (1.0 if unit_costs else op.cost + cost_bias)
-            preconditions.append(list(op.pre_pos))
+            base = relaxed(op.pre_pos, op.pre_neg)
+            preconditions.append(base)
             self.effects.append(list(op.adds))
             costs.append(cost)
             self.origin.append(index)
             for effect in op.conditional:
                 if effect.positive:
-                    preconditions.append(list(op.pre_pos) + list(effect.condition_pos))
+                    preconditions.append(
+                        base + relaxed(effect.condition_pos, effect.condition_neg))
                     self.effects.append([effect.fact])
                     costs.append(cost)
                     self.origin.append(index)
-        for head, body in zip(task.axiom_heads, task.axiom_positive, strict=True):
-            preconditions.append(list(body))
+        for head, body, axiom in zip(task.axiom_heads, task.axiom_positive, task.axioms,
+                                     strict=True):
+            negative = tuple(task.fact_ids[f] for f in axiom.body_neg)
+            preconditions.append(relaxed(tuple(body), negative))
             self.effects.append([head])
             costs.append(0.0)
             self.origin.append(-1)
+        for fact, rules in derived_rules.items():
+            for rule in rules:
+                preconditions.append(list(rule))
+                self.effects.append([negation[fact]])
+                costs.append(0.0)
+                self.origin.append(-1)
+        for fact, ops in deleters.items():
+            for index in ops:
+                op = task.operators[index]
+                preconditions.append(relaxed(op.pre_pos, op.pre_neg))
+                self.effects.append([negation[fact]])
+                costs.append(1.0 if unit_costs else op.cost + cost_bias)
+                self.origin.append(index)
+        self.num_facts = task.num_facts + len(negation)
+        self.negated_sources = np.array(list(negation), dtype=np.int64)
+        self.negated_ids = np.array(list(negation.values()), dtype=np.int64)
         self.preconditions = preconditions
         self.pre_flat, self.pre_starts = _flatten(preconditions, TRUE_FACT)
         self.costs = np.asarray(costs, dtype=float)
@@ -61,16 +95,82 @@ class FFHeuristic:
         self.ach_flat, self.ach_starts = _flatten(lists, 0)
         self.has_ops = len(preconditions) > 0
 
+    @staticmethod
+    def _negations(task: Task) -> tuple[dict[int, int], dict[int, list[list[int]]],
+                                        dict[int, list[int]]]:
+        """Relaxed ``¬F`` facts for facts used negatively, with how to achieve them.
+
+        A derived ``D`` is false when every rule of ``D`` is blocked: a rule is blocked by
+        making one of its positive basic literals false (``¬P``) or one of its negated
+        literals true; a rule with a positive derived literal is assumed blockable for free.
+        A basic ``P`` is made false by any operator that deletes it. Returns the id of each
+        ``¬F``, the conjunctions achieving each ``¬D`` (over fact ids; ids that have a
+        negation stand for ``¬P``), and the deleting operators of each basic ``P``.
+        """
+        used: set[int] = set()
+        for op in task.operators:
+            used.update(op.pre_neg)
+            for effect in op.conditional:
+                used.update(effect.condition_neg)
+        for axiom in task.axioms:
+            used.update(task.fact_ids[f] for f in axiom.body_neg)
+        rules_of: dict[int, list[tuple[list[int], list[int]]]] = {}
+        for head, axiom in zip(task.axiom_heads, task.axioms, strict=True):
+            rules_of.setdefault(head, []).append(
+                ([task.fact_ids[f] for f in axiom.body_pos],
+                 [task.fact_ids[f] for f in axiom.body_neg]))
+        negated_basic: set[int] = {f for f in used if not task.is_derived[f]}
+        derived_rules: dict[int, list[list[int]]] = {}
+        for fact in sorted(f for f in used if task.is_derived[f]):
+            conjunctions: list[list[int]] = [[]]
+            for positive, negative in rules_of.get(fact, []):
+                if any(task.is_derived[f] for f in positive):
+                    continue  # blockable for free
+                options = [*positive, *negative]  # ¬P for positive ones, X for negated ones
+                if not options:
+                    conjunctions = []  # a rule that always fires: ¬D is unreachable
+                    break
+                conjunctions = [[*c, o] for c in conjunctions for o in options]
+                if len(conjunctions) > MAX_NEGATION_RULES:
+                    conjunctions = [[]]  # too many combinations: no guidance for this fact
+                    break
+            derived_rules[fact] = conjunctions
+            for conjunction in conjunctions:
+                positive_sets = {f for p, _ in rules_of.get(fact, []) for f in p}
+                negated_basic.update(f for f in conjunction if f in positive_sets)
+        ids = sorted(set(derived_rules) | negated_basic)
+        negation = {fact: task.num_facts + i for i, fact in enumerate(ids)}
+        # In rules, an option that came from a positive literal means ¬P; one from a negated
+        # literal means X itself. Rewrite to explicit ids now that ¬P ids exist.
+        for fact, conjunctions in derived_rules.items():
+            positive_sets = {f for p, _ in rules_of.get(fact, []) for f in p}
+            derived_rules[fact] = [
+                [negation[f] if f in positive_sets else f for f in conjunction]
+                for conjunction in conjunctions]
+        deleters: dict[int, list[int]] = {f: [] for f in negated_basic}
+        for index, op in enumerate(task.operators):
+            for fact in op.deletes:
+                if fact in deleters:
+                    deleters[fact].append(index)
+            for effect in op.conditional:
+                if not effect.positive and effect.fact in deleters:
+                    deleters[effect.fact].append(index)
+        return negation, derived_rules, deleters
+
     def __call__(self, vector: np.ndarray) -> HeuristicResult:
         task = self.task
         if vector[task.goal]:
             return HeuristicResult(0.0, [])
-        fact_cost = np.where(vector > 0, 0.0, INFINITY)
+        fact_cost = np.full(self.num_facts, INFINITY)
+        fact_cost[: task.num_facts][vector > 0] = 0.0
+        if len(self.negated_ids):
+            fact_cost[self.negated_ids] = np.where(vector[self.negated_sources] > 0,
+                                                   INFINITY, 0.0)
         fact_cost[TRUE_FACT] = 0.0
         if not self.has_ops or not len(self.achiever_facts):
             return HeuristicResult(INFINITY, [])
         op_cost = self.costs
-        for _ in range(task.num_facts + 1):
+        for _ in range(self.num_facts + 1):
             op_cost = np.add.reduceat(fact_cost[self.pre_flat], self.pre_starts) + self.costs
             best = np.minimum.reduceat(op_cost[self.ach_flat], self.ach_starts)
             current = fact_cost[self.achiever_facts]
@@ -84,12 +184,13 @@ class FFHeuristic:
 
     def _relaxed_plan(self, vector: np.ndarray, fact_cost: np.ndarray, op_cost: np.ndarray
                       ) -> HeuristicResult:
+        # Facts of cost 0 hold already (or are reached by cost-0 axioms from what holds).
         chosen: set[int] = set()
         marked: set[int] = set()
         stack = [self.task.goal]
         while stack:
             fact = stack.pop()
-            if fact in marked or vector[fact]:
+            if fact in marked or fact_cost[fact] == 0.0:
                 continue
             marked.add(fact)
             candidates = self.achievers[fact]
@@ -101,6 +202,6 @@ class FFHeuristic:
         value = float(sum(self.costs[i] for i in chosen))
         preferred = sorted({
             self.origin[i] for i in chosen
-            if self.origin[i] >= 0 and all(vector[f] for f in self.preconditions[i])
+            if self.origin[i] >= 0 and all(fact_cost[f] == 0.0 for f in self.preconditions[i])
         })
         return HeuristicResult(value, preferred)

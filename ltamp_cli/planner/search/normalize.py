@@ -134,6 +134,10 @@ class Normalizer:
     def __init__(self, objects_by_type: Mapping[str, Sequence[str]]) -> None:
         self.objects_by_type = objects_by_type
         self.fresh = _Fresh()
+        # Universal conditions become auxiliary derived predicates (as Fast Downward does):
+        # forall x. φ  ≡  not aux(free), with aux(free) <- exists x. not φ.
+        self.auxiliary: list[NormalAxiom] = []
+        self._pending: list[tuple[str, tuple[str, ...], Formula]] = []
 
     def _assignments(self, parameters: Sequence[TypedName]) -> list[dict[str, str]]:
         domains = [self.objects_by_type.get(p.type, ()) for p in parameters]
@@ -160,6 +164,8 @@ class Normalizer:
                 return self.dnf(Or((Not(condition), consequence)), negated, bind_exists)
             case Exists(parameters, body) | ForAll(parameters, body):
                 existential = isinstance(formula, Exists) != negated
+                if not existential and bind_exists:
+                    return [(self._universal_literal(formula, negated),)]
                 if existential and bind_exists:
                     renaming = {p.name: self.fresh(p.name) for p in parameters}
                     types = tuple(
@@ -174,6 +180,27 @@ class Normalizer:
                     return [clause for child in children for clause in child]
                 return _product(children)
         raise TypeError(f"not a formula: {formula!r}")
+
+    def _universal_literal(self, formula: Exists | ForAll, negated: bool) -> LiftedLiteral:
+        """Replace a universal condition by ``not aux(free vars)`` and queue aux's rule."""
+        free = tuple(sorted(_free_variables(formula)))
+        name = f"%forall{len(self._pending) + len(self.auxiliary)}"
+        # forall x. φ ≡ not exists x. not φ;   not (exists x. φ) ≡ not aux, aux <- exists x. φ
+        counter_body: Formula = (Exists(formula.parameters, Not(formula.body))
+                                 if isinstance(formula, ForAll)
+                                 else Exists(formula.parameters, formula.body))
+        self._pending.append((name, free, counter_body))
+        return LiftedLiteral(name, free, False)
+
+    def take_auxiliary(self) -> list[NormalAxiom]:
+        """Rules of every auxiliary predicate created so far (and those they create)."""
+        while self._pending:
+            name, free, body = self._pending.pop()
+            types = tuple(LiftedLiteral(type_predicate(OBJECT_TYPE), (v,)) for v in free)
+            for clause in self.dnf(body):
+                self.auxiliary.append(NormalAxiom(name, free, types + clause))
+        rules, self.auxiliary = self.auxiliary, []
+        return rules
 
     def effects(self, effect: Effect) -> tuple[list[NormalEffect], list[CostExpression]]:
         match effect:
@@ -243,6 +270,21 @@ class Normalizer:
             extra = tuple(LiftedLiteral(type_predicate(OBJECT_TYPE), (v,)) for v in sorted(free))
             rules.append(NormalAxiom(GOAL_PREDICATE, (), extra + clause))
         return rules
+
+
+def _free_variables(formula: Formula) -> set[str]:
+    match formula:
+        case Atom(_, args):
+            return {a for a in args if is_variable(a)}
+        case Not(part):
+            return _free_variables(part)
+        case And(parts) | Or(parts):
+            return set().union(*(_free_variables(p) for p in parts)) if parts else set()
+        case Imply(condition, consequence):
+            return _free_variables(condition) | _free_variables(consequence)
+        case Exists(parameters, body) | ForAll(parameters, body):
+            return _free_variables(body) - {p.name for p in parameters}
+    raise TypeError(f"not a formula: {formula!r}")
 
 
 def _clause_variables(clause: Clause) -> set[str]:

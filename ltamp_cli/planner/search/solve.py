@@ -50,7 +50,7 @@ def plan_discrete(
     function_values: Mapping[Fact, float],
     goal: Formula,
     deadline: float,
-    algorithm: str = "lazy-greedy",
+    algorithm: str = "ff",
     unit_costs: bool = False,
 ) -> DiscreteResult:
     """Find a plan for the finite task given by ``objects`` (name → type) and ``init``."""
@@ -66,6 +66,7 @@ def plan_discrete(
     actions = [variant for action in domain.actions for variant in normalizer.action(action)]
     axioms = [rule for axiom in domain.axioms for rule in normalizer.axiom(axiom)]
     axioms += normalizer.goal(goal)
+    axioms += normalizer.take_auxiliary()
     grounding = ground_task(actions, axioms, facts, function_values)
     ground_time = time.perf_counter() - start
     if ("%goal",) not in grounding.reachable:

@@ -1,0 +1,58 @@
+"""Bindings of the symbolic kitchen: discrete slots stand in for continuous placements.
+
+A region has a number of slots (``world["slots"]``); a pose is the slot's name, shared by
+every object that can stand there, so two objects collide exactly when they use one slot.
+A configuration is where the arm is (``above:<slot>`` or ``under:<faucet>``) and a motion
+between two configurations is their ordered pair.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from typing import Any
+
+import numpy as np
+
+from ltamp_cli.planner.streams import Binding, StreamInfo
+
+
+def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str, Any]:
+    slots: dict[str, int] = {str(k): int(v) for k, v in world["slots"].items()}
+    tool_skills: dict[str, list[str]] = {str(k): list(v) for k, v in
+                                         world.get("tool_targets", {}).items()}
+
+    def sample_pose(obj: str, region: str) -> Iterator[tuple[str]]:
+        # Slots in a seeded random order, so different seeds try different placements.
+        for index in rng.permutation(slots.get(region, 0)):
+            yield (f"{region}/{int(index)}",)
+
+    def sample_grasp(obj: str) -> tuple[str]:
+        return (f"grasp:{obj}",)
+
+    def inverse_kinematics(obj: str, pose: str, grasp: str) -> tuple[str]:
+        return (f"above:{pose}",)
+
+    def fill_conf(faucet: str, cup: str, grasp: str) -> tuple[str]:
+        return (f"under:{faucet}",)
+
+    def skill_conf(tool: str, grasp: str, target: str, pose: str) -> tuple[str] | None:
+        allowed = tool_skills.get(tool.split(":")[-1])
+        if allowed is not None and target not in allowed:
+            return None  # this tool is not used on that container
+        return (f"above:{pose}",)
+
+    def plan_motion(q1: str, q2: str) -> tuple[str] | None:
+        return None if q1 == q2 else (f"{q1}->{q2}",)
+
+    def test_cfree(o1: str, p1: str, o2: str, p2: str) -> bool:
+        return p1 != p2
+
+    return {
+        "sample-pose": sample_pose,
+        "sample-grasp": sample_grasp,
+        "inverse-kinematics": inverse_kinematics,
+        "fill-conf": fill_conf,
+        "skill-conf": skill_conf,
+        "plan-motion": plan_motion,
+        "test-cfree": Binding(test_cfree, StreamInfo(eager=True)),
+    }
