@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from ltamp_cli.backends.box2d.backend import Kitchen2DBackend
+    from ltamp_cli.backends.box2d.executor import Kitchen2DExecutor
 
 
 def make_backend(**options: Any) -> Kitchen2DBackend:
@@ -20,4 +21,11 @@ def make_backend(**options: Any) -> Kitchen2DBackend:
     return Kitchen2DBackend(**options)
 
 
-__all__ = ["make_backend"]
+def make_executor(**options: Any) -> Kitchen2DExecutor:
+    """Create the kitchen2d plan executor (see :mod:`ltamp_cli.backends.execution`)."""
+    from ltamp_cli.backends.box2d.executor import Kitchen2DExecutor
+
+    return Kitchen2DExecutor(**options)
+
+
+__all__ = ["make_backend", "make_executor"]

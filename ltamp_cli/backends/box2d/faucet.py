@@ -33,6 +33,8 @@ class Faucet:
     def __init__(self, kitchen: Kitchen, spec: FaucetSpec) -> None:
         self.kitchen, self.spec = kitchen, spec
         self.emitted = 0
+        # Off until a plan's fill action opens it; skill trials never switch it.
+        self.enabled = True
         self._ticks = 0
         body = kitchen.world.CreateStaticBody(position=(spec.x, spec.y))
         body.CreatePolygonFixture(box=(0.4, 0.3, (0.0, 0.3), 0.0))
@@ -62,7 +64,7 @@ class Faucet:
     def _tick(self, dt: float) -> None:
         del dt
         self._ticks += 1
-        if self.emitted >= self.spec.capacity or self._ticks % self.spec.period:
+        if not self.enabled or self.emitted >= self.spec.capacity or self._ticks % self.spec.period:
             return
         if self.cup_below():
             r = self.spec.particle.radius

@@ -22,6 +22,7 @@ class ParticleSpec:
     density: float = 0.01
     friction: float = 0.0
     color: tuple[int, int, int] = (40, 90, 230)
+    material: str = ""
 
 
 def hex_grid(
@@ -58,7 +59,12 @@ def add_particles(kitchen: Kitchen, points: np.ndarray, spec: ParticleSpec) -> l
     for x, y in points:
         body = kitchen.world.CreateDynamicBody(position=(float(x), float(y)))
         body.CreateCircleFixture(radius=spec.radius, density=spec.density, friction=spec.friction)
-        body.userData = {"name": "particle", "color": spec.color, "radius": spec.radius}
+        body.userData = {
+            "name": "particle",
+            "color": spec.color,
+            "radius": spec.radius,
+            "material": spec.material,
+        }
         bodies.append(body)
     kitchen.particles.extend(bodies)
     return bodies

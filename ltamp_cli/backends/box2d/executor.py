@@ -1,0 +1,401 @@
+"""Replaying kitchen2d plans in Box2D and checking the goal in the simulated world.
+
+Each plan action is executed with real physics: the gripper follows the planned paths,
+grasps by contact (both fingers must touch the object), pours/scoops with the controls the
+learned streams chose, and the faucet fills whatever cup stands under it. At the end the
+goal facts are checked from particle positions and object poses, never from the plan.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ltamp_cli.backends.box2d.gripper import body_pose
+from ltamp_cli.backends.box2d.particles import inside_box
+from ltamp_cli.backends.box2d.render import FrameRecorder, View, save_frames
+from ltamp_cli.backends.box2d.scene import (
+    LiveScene,
+    SceneSpec,
+    build_scene,
+    scene_from_world,
+)
+from ltamp_cli.backends.box2d.skills import scoop as scoop_skill
+from ltamp_cli.backends.box2d.skills.common import freeze
+from ltamp_cli.backends.box2d.tamp import (
+    APPROACH_OPENING,
+    KitchenGeometry,
+    Point,
+    empty_hand_path,
+)
+from ltamp_cli.backends.execution import ExecutionReport
+
+SPEED = 14.0
+SLOW = 3.0
+#: Fraction of a poured/filled material that must end in the cup for ``Contains``.
+CONTAINS_FRACTION = 0.9
+
+
+class ActionFailed(RuntimeError):
+    """An action could not be carried out physically (e.g. a grasp closed on nothing)."""
+
+
+def resolve_pose(spec: SceneSpec, name: str, pose: Any) -> Point:
+    """Symbolic initial poses (PDDL objects without a value) are the object's home."""
+    if isinstance(pose, str):
+        return (round(spec.object(name).home, 4), round(spec.layout.table_top, 4))
+    return (float(pose[0]), float(pose[1]))
+
+
+class Kitchen2DRun:
+    """One execution: a live scene plus bookkeeping of what the actions achieved."""
+
+    def __init__(self, spec: SceneSpec, seed: int, recorder: FrameRecorder | None) -> None:
+        self.spec = spec
+        self.geometry = KitchenGeometry(spec)
+        self.scene: LiveScene = build_scene(spec, seed, recorder)
+        self.stirred: dict[str, bool] = {}
+        self.sugar_dumped: dict[str, int] = {}
+        self.n_created = len(self.scene.kitchen.particles)
+        self.log: list[dict[str, Any]] = []
+
+    # --- motion primitives ---------------------------------------------------------------
+    @property
+    def gripper(self) -> Any:
+        return self.scene.gripper
+
+    def follow(self, path: Sequence[Sequence[float]], speed: float = SPEED,
+               angle: float = 0.0) -> None:
+        """Visit ``path``'s points in straight lines with a smooth (cosine) speed profile:
+        abrupt starts and stops would throw grains out of a carried spoon or cup."""
+        dt = self.scene.kitchen.config.dt
+        for x, y in path:
+            start = self.gripper._target
+            length = math.hypot(x - start[0], y - start[1])
+            if length < 1e-9:
+                continue
+            # Peak speed of a cosine profile is pi/2 times its mean speed.
+            steps = max(1, math.ceil(length / speed * (math.pi / 2) / dt))
+            for k in range(1, steps + 1):
+                f = 0.5 * (1.0 - math.cos(math.pi * k / steps))
+                self.gripper.command((start[0] + f * (x - start[0]),
+                                      start[1] + f * (y - start[1]), angle))
+                self.scene.kitchen.step()
+
+    def rotate_about(self, pivot: Point, in_hand: Point, goal: float, speed: float) -> None:
+        """Turn the gripper to ``goal`` keeping the point ``in_hand`` (gripper frame) at
+        ``pivot`` in the world."""
+        dt = self.scene.kitchen.config.dt
+        start = self.gripper.pose[2]
+        n = max(1, math.ceil(abs(goal - start) / (speed * dt)))
+        for k in range(1, n + 1):
+            a = start + (goal - start) * k / n
+            c, s = math.cos(a), math.sin(a)
+            x = pivot[0] - (c * in_hand[0] - s * in_hand[1])
+            y = pivot[1] - (s * in_hand[0] + c * in_hand[1])
+            self.gripper.command((x, y, a))
+            self.scene.kitchen.step()
+
+    def settle(self, max_time: float, rest_speed: float = 0.05) -> None:
+        """Hold still until no particle moves (or ``max_time``); spill is frozen."""
+        kitchen = self.scene.kitchen
+        elapsed = 0.0
+        top = self.spec.layout.table_top
+        while elapsed < max_time:
+            self.gripper.hold(0.1)
+            elapsed += 0.1
+            pos = kitchen.particle_positions()
+            if len(pos) == 0:
+                return
+            freeze(kitchen.particles, pos[:, 1] < top + 0.12)
+            if np.all(kitchen.particle_speeds() < rest_speed):
+                return
+
+    # --- actions -------------------------------------------------------------------------
+    def move(self, path: Sequence[Point]) -> None:
+        self.follow(path)
+
+    def pick(self, name: str, pose: Point, grasp: Point, approach: Sequence[Point]) -> None:
+        empty = empty_hand_path(approach)
+        self.gripper.move((*empty[0], 0.0), opening=APPROACH_OPENING)
+        self.follow(empty[1:-1])
+        self.follow(empty[-1:], speed=SLOW)
+        grasped = self.gripper.close()
+        # SWIG makes a new proxy per access: compare the bodies' tags, not identities.
+        if grasped is None or grasped.userData.get("object") != name:
+            raise ActionFailed(f"pick {name}: the fingers did not close on it")
+        self.follow(list(reversed(approach[:-1])), speed=SLOW)
+
+    def place(self, name: str, pose: Point, grasp: Point, approach: Sequence[Point]) -> None:
+        self.follow(approach[1:-1])
+        self.follow(approach[-1:], speed=SLOW)
+        self.gripper.release(open_fingers=False)
+        self.gripper.move(self.gripper.pose, opening=APPROACH_OPENING, speed=1.0)
+        self.gripper.hold(0.2)
+        self.follow(list(reversed(empty_hand_path(approach)[:-1])), speed=SLOW)
+        x, y, angle = body_pose(self.scene.bodies[name])
+        if abs(x - pose[0]) > 0.5 or abs(y - pose[1]) > 0.3 or abs(angle) > 0.1:
+            raise ActionFailed(f"place {name}: it came to rest at ({x:.2f}, {y:.2f}, "
+                               f"{angle:.2f}) instead of ({pose[0]:.2f}, {pose[1]:.2f}, 0)")
+
+    def fill(self, name: str) -> None:
+        faucet = self.scene.faucet
+        if not faucet.cup_below():
+            raise ActionFailed(f"fill {name}: no cup under the faucet")
+        faucet.enabled = True
+        limit = 2 * faucet.spec.capacity * faucet.spec.period + 100
+        steps = 0
+        while faucet.emitted < faucet.spec.capacity and steps < limit:
+            self.gripper.hold(0.1)
+            steps += 10
+        faucet.enabled = False
+        self.settle(3.0)
+        self.stirred[name] = False
+
+    def pour(self, source: str, target: str, pose: Point, approach: Sequence[Point],
+             control: Sequence[float]) -> None:
+        self.follow(approach[1:], speed=SLOW)
+        top = self.spec.layout.table_top
+        item = self.spec.object(source)
+        grasp = self.gripper._held_rel
+        start = approach[-1]
+        dangle = float(control[3])
+        angle = 0.0
+        step = 1.0 * self.scene.kitchen.config.dt
+        while angle > -dangle + 1e-12:
+            nxt = max(angle - step, -dangle)
+            corners = self.geometry.hand_corners(item, (-grasp[0], -grasp[1]), start[0],
+                                                 start[1], nxt)
+            if corners[:, 1].min() < top:
+                break
+            angle = nxt
+            self.gripper.command((start[0], start[1], angle))
+            self.scene.kitchen.step()
+        self.settle(10.0)
+        self.log.append({"pour": source, "into": target, "contents": self.contents(target)})
+        self.rotate_about(start, (0.0, 0.0), 0.0, 1.0)
+        self.gripper.hold(0.3)
+        self.follow(list(reversed(approach[:-1])), speed=SLOW)
+        self.stirred[target] = False
+
+    def scoop(self, spoon: str, bowl: str, pose: Point, approach: Sequence[Point],
+              control: Sequence[float], conf: Point) -> None:
+        config = scoop_skill.ScoopConfig()
+        cup = self.spec.object(bowl).spec
+        self.follow(approach[1:], speed=SLOW)
+        path = scoop_skill.waypoints(np.array([cup.width, cup.height]),
+                                     np.asarray(control, dtype=float), config)
+        hand = self.gripper._held_rel
+        gx, gy = -hand[0], -hand[1]
+        dx, dy = pose[0], pose[1] - self.spec.layout.table_top
+        for x, y in path[1:]:
+            self.gripper.move((x + dx + gx, y + dy + gy, 0.0), speed=config.speed)
+        self.gripper.hold(config.hold_time)
+        sp = self.spec.object(spoon).spec
+        held = inside_box(self.scene.kitchen.particle_positions(), self.scene.bodies[spoon],
+                          -sp.inner_width / 2, sp.inner_width / 2, sp.wall, sp.bowl_depth)
+        self.log.append({"scoop": spoon, "in_spoon": int(held.sum())})
+        up = (self.gripper.pose[0], conf[1])
+        self.follow([up], speed=SLOW)
+        self.follow([conf])
+
+    def dump(self, spoon: str, target: str, approach: Sequence[Point],
+             control: Sequence[float]) -> None:
+        self.follow(approach[1:], speed=SLOW)
+        spoon_body = self.scene.bodies[spoon]
+        sp = self.spec.object(spoon).spec
+        in_spoon = inside_box(self.scene.kitchen.particle_positions(), spoon_body,
+                              -sp.inner_width / 2, sp.inner_width / 2, sp.wall, sp.bowl_depth)
+        hand = self.gripper._held_rel
+        centre_in_hand = (hand[0], hand[1] + sp.bowl_depth / 2)
+        pivot = (float(control[0]), float(control[1]))
+        self.rotate_about(pivot, centre_in_hand, float(control[2]), 1.5)
+        self.gripper.hold(1.0)
+        self.settle(3.0)
+        self.rotate_about(pivot, centre_in_hand, 0.0, 1.5)
+        self.follow(list(reversed(approach[:-1])), speed=SLOW)
+        self.sugar_dumped[target] = self.sugar_dumped.get(target, 0) + int(in_spoon.sum())
+        self.log.append({"dump": spoon, "in_spoon": int(in_spoon.sum())})
+        self.stirred[target] = False
+
+    def stir(self, target: str, pose: Point, approach: Sequence[Point],
+             control: Sequence[float]) -> None:
+        self.follow(approach[1:], speed=SLOW)
+        cup = self.spec.object(target).spec
+        x0, y0 = self.gripper.pose[0], self.gripper.pose[1]
+        amplitude, cycles = float(control[1]), int(control[2])
+        swept = []
+        for _ in range(cycles):
+            for side in (1.0, -1.0):
+                self.gripper.move((x0 + side * amplitude, y0, 0.0), speed=2.0)
+                swept.append(side * amplitude)
+        self.gripper.move((x0, y0, 0.0), speed=1.0)
+        self.settle(2.0)
+        self.follow(list(reversed(approach[:-1])), speed=SLOW)
+        self.stirred[target] = (max(swept) - min(swept)) >= 0.5 * cup.inner_width
+
+    # --- goal ----------------------------------------------------------------------------
+    def contents(self, name: str) -> dict[str, int]:
+        """Particles of each material inside cup ``name`` (its interior box)."""
+        body = self.scene.bodies[name]
+        spec = self.spec.object(name).spec
+        out: dict[str, int] = {}
+        for particle in self.scene.kitchen.particles:
+            material = particle.userData.get("material", "")
+            pos = np.array([tuple(particle.position)])
+            if inside_box(pos, body, -spec.inner_width / 2, spec.inner_width / 2, spec.wall,
+                          spec.height)[0]:
+                out[material] = out.get(material, 0) + 1
+        return out
+
+    def material_total(self, material: str) -> int:
+        return len(self.scene.particles_of(material))
+
+    def check_fact(self, predicate: str, args: Sequence[str]) -> tuple[bool, dict[str, Any]]:
+        """Whether a goal fact holds physically, with the measurements used."""
+        if predicate == "contains":
+            name, material = args
+            inside = self.contents(name).get(material, 0)
+            if material == "sugar":
+                need = max(1, scoop_skill.capacity(scoop_skill.ScoopConfig()) // 2)
+            else:
+                sources = [o for o in self.spec.objects if o.material == material]
+                total = sum(o.n_particles for o in sources)
+                if material == self.spec.faucet_material:
+                    total += self.scene.faucet.spec.capacity
+                need = max(1, math.ceil(CONTAINS_FRACTION * total))
+            return inside >= need, {"inside": inside, "needed": need}
+        if predicate == "stirred":
+            return self.stirred.get(args[0], False), {}
+        if predicate == "on":
+            name, region = args
+            x, y, angle = body_pose(self.scene.bodies[name])
+            lay = self.spec.layout
+            if region == "coaster":
+                ok = (abs(x - lay.coaster_x) <= lay.coaster_width / 2
+                      and abs(y - lay.table_top - lay.coaster_height) < 0.1)
+            elif region == "faucet":
+                ok = abs(x - lay.faucet_x) < 0.5 and abs(y - lay.table_top) < 0.1
+            else:
+                ok = lay.table_x0 <= x <= lay.table_x1 and abs(y - lay.table_top) < 0.1
+            ok = ok and abs(angle) < 0.1
+            return ok, {"x": round(x, 3), "y": round(y, 3), "angle": round(angle, 3)}
+        if predicate == "offtable":
+            x, y, _ = body_pose(self.scene.bodies[args[0]])
+            return y < self.spec.layout.table_top - 1.0, {"y": round(y, 3)}
+        raise ActionFailed(f"cannot check goal fact ({predicate} {' '.join(args)}) physically")
+
+    def conservation(self) -> dict[str, Any]:
+        kitchen = self.scene.kitchen
+        pos = kitchen.particle_positions()
+        return {
+            "n_particles": len(pos),
+            "n_expected": self.n_created + self.scene.faucet.emitted,
+            "n_in_world": int(kitchen.in_bounds(pos).sum()) if len(pos) else 0,
+        }
+
+
+def goal_atoms(formula: Any) -> list[tuple[str, tuple[str, ...]]]:
+    """The positive atoms of a conjunctive goal (``And`` of ``Atom``)."""
+    from ltamp_cli.planner.pddl.syntax import And, Atom
+
+    if isinstance(formula, Atom):
+        return [(formula.predicate.lower(), tuple(a.lower() for a in formula.args))]
+    if isinstance(formula, And):
+        out = []
+        for part in formula.parts:
+            out += goal_atoms(part)
+        return out
+    raise ActionFailed("only conjunctions of positive facts can be checked physically")
+
+
+def _value(step: Any, index: int) -> Any:
+    return step.values[index]
+
+
+class Kitchen2DExecutor:
+    """:class:`~ltamp_cli.backends.execution.PlanExecutor` for the kitchen2d domain."""
+
+    def __init__(self, every: int = 20, scale: float = 12.0) -> None:
+        self.every = every
+        self.scale = scale
+
+    def execute(self, problem: Any, plan_result: Any, seed: int,
+                render_path: str | Path | None = None) -> ExecutionReport:
+        spec = scene_from_world(problem.world, np.random.default_rng(seed))
+        recorder = None
+        if render_path is not None:
+            lay = spec.layout
+            bounds = (lay.table_x0 - 2, lay.table_top - 3, lay.table_x1 + 2, lay.faucet_y + 9)
+            recorder = FrameRecorder(self.every, View(bounds, self.scale))
+        run = Kitchen2DRun(spec, seed, recorder)
+        steps: list[dict[str, Any]] = []
+        success = True
+        error = ""
+        for number, step in enumerate(plan_result.plan, start=1):
+            try:
+                self._dispatch(run, step)
+                steps.append({"step": number, "action": step.name, "ok": True})
+            except ActionFailed as failure:
+                steps.append({"step": number, "action": step.name, "ok": False,
+                              "error": str(failure)})
+                success, error = False, str(failure)
+                break
+        facts = {}
+        goal_holds = success
+        for predicate, args in goal_atoms(problem.goal):
+            try:
+                holds, measured = run.check_fact(predicate, args)
+            except ActionFailed as failure:
+                holds, measured = False, {"error": str(failure)}
+            facts[f"({predicate} {' '.join(args)})"] = {"holds": holds, **measured}
+            goal_holds = goal_holds and holds
+        conservation = run.conservation()
+        details: dict[str, Any] = {
+            "steps": steps,
+            "goal": facts,
+            "particles": conservation,
+            "sim_time_s": round(run.scene.kitchen.time, 3),
+            "log": run.log,
+        }
+        if error:
+            details["error"] = error
+        if recorder is not None and recorder.frames:
+            save_frames(recorder.frames, render_path, fps=100.0 / self.every)  # type: ignore[arg-type]
+            details["render"] = str(render_path)
+        return ExecutionReport(success, bool(goal_holds), details)
+
+    def _dispatch(self, run: Kitchen2DRun, step: Any) -> None:
+        name = step.name.lower()
+        v: Callable[[int], Any] = lambda i: _value(step, i)  # noqa: E731
+        args = [a.lower() for a in step.args]
+        spec = run.spec
+        if name in ("move-free", "move-holding"):
+            run.move(v(len(step.values) - 2))
+        elif name in ("pick", "place"):
+            obj = args[0]
+            pose = resolve_pose(spec, obj, v(1))
+            action = run.pick if name == "pick" else run.place
+            action(obj, pose, tuple(v(2)), v(4))
+        elif name == "fill":
+            run.fill(args[0])
+        elif name == "pour":
+            # pour ?k ?g ?c ?p ?q ?a ?u ?m
+            run.pour(args[0], args[2], resolve_pose(spec, args[2], v(3)), v(5), v(6))
+        elif name == "scoop":
+            # scoop ?s ?g ?b ?p ?q ?a ?u ?m
+            run.scoop(args[0], args[2], resolve_pose(spec, args[2], v(3)), v(5), v(6),
+                      tuple(v(4)))
+        elif name == "dump":
+            # dump ?s ?g ?c ?p ?q ?a ?u ?m
+            run.dump(args[0], args[2], v(5), v(6))
+        elif name == "stir":
+            # stir ?s ?g ?c ?p ?q ?a ?u
+            run.stir(args[2], resolve_pose(spec, args[2], v(3)), v(5), v(6))
+        else:
+            raise ActionFailed(f"the kitchen2d executor has no action {step.name!r}")
+
