@@ -1,0 +1,158 @@
+"""Planner benchmark: every example problem × algorithm × seed, wall time per solve.
+
+Each run is one :func:`ltamp_cli.planner.api.solve` call on an already loaded problem (YAML
+and PDDL parsing excluded; the bindings' ``make_streams`` included) and every returned plan
+is checked by the independent validator. Reports per (example, algorithm): solved /
+timeouts / infeasible counts, median and max wall time, median CPU time of this process
+(the machine is shared), median cost and how many plans validated.
+
+Targets (median wall time, no timeouts, per algorithm): ``kitchen_symbolic`` ≤ 0.2 s,
+``tamp2d_4blocks`` ≤ 0.1 s. Printed as PASS/FAIL lines; the exit code does not depend on them.
+
+    OMP_NUM_THREADS=1 .venv/bin/python bench/planner.py [--seeds 5] [--max-time 10]
+        [--examples a,b] [--algorithms incremental,focused] [--out bench/results/planner.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from tqdm import tqdm
+
+from ltamp_cli.planner.algorithms.common import ALGORITHMS, PlannerConfig
+from ltamp_cli.planner.api import solve
+from ltamp_cli.planner.problem import load_problem
+from ltamp_cli.planner.validate import validate_plan
+
+REPO = Path(__file__).resolve().parent.parent
+EXAMPLES = REPO / "problems" / "examples"
+DEFAULT_OUT = REPO / "bench" / "results" / "planner.json"
+TARGETS_S = {"kitchen_symbolic": 0.2, "tamp2d_4blocks": 0.1}  # median wall seconds
+
+
+def run_one(problem: Any, algorithm: str, seed: int, max_time: float) -> dict[str, Any]:
+    config = PlannerConfig(algorithm=algorithm, seed=seed, max_time=max_time)
+    cpu = time.process_time()
+    start = time.perf_counter()
+    result = solve(problem, config)
+    wall = time.perf_counter() - start
+    cpu = time.process_time() - cpu
+    row: dict[str, Any] = {"algorithm": algorithm, "seed": seed, "status": result.status,
+                           "wall_s": wall, "cpu_s": cpu,
+                           "cost": result.cost if result.solved else None,
+                           "length": len(result.plan) if result.plan is not None else None,
+                           "valid": None, "errors": []}
+    if result.solved:
+        # Certificates name only the direct producers of the plan's facts (a known planner
+        # limitation), so stream-domain closure is not required here.
+        report = validate_plan(problem, result, check_stream_domains=False)
+        row["valid"] = report.valid
+        row["errors"] = list(report.errors[:3])
+    return row
+
+
+def summarise(example: str, algorithm: str, rows: list[dict[str, Any]]) -> dict[str, Any]:
+    walls = [r["wall_s"] for r in rows]
+    costs = [r["cost"] for r in rows if r["cost"] is not None]
+    return {
+        "example": example, "algorithm": algorithm, "runs": len(rows),
+        "solved": sum(r["status"] == "solved" for r in rows),
+        "timeouts": sum(r["status"] == "timeout" for r in rows),
+        "infeasible": sum(r["status"] == "infeasible" for r in rows),
+        "valid": sum(bool(r["valid"]) for r in rows),
+        "median_wall_s": statistics.median(walls), "max_wall_s": max(walls),
+        "median_cpu_s": statistics.median(r["cpu_s"] for r in rows),
+        "median_cost": statistics.median(costs) if costs else None,
+    }
+
+
+def check_targets(summary: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    checks = []
+    for row in summary:
+        limit = TARGETS_S.get(row["example"])
+        if limit is None:
+            continue
+        passed = (row["median_wall_s"] <= limit and row["timeouts"] == 0
+                  and row["solved"] == row["runs"] and row["valid"] == row["solved"])
+        checks.append({"example": row["example"], "algorithm": row["algorithm"],
+                       "target_median_s": limit, "median_wall_s": row["median_wall_s"],
+                       "median_cpu_s": row["median_cpu_s"], "timeouts": row["timeouts"],
+                       "passed": passed})
+    return checks
+
+
+def print_table(summary: list[dict[str, Any]], out: Any = sys.stdout) -> None:
+    header = (f"{'example':<22} {'algorithm':<12} {'solved':>6} {'t/o':>4} {'inf':>4} "
+              f"{'valid':>5} {'median s':>9} {'max s':>8} {'cpu s':>8} {'cost':>9}")
+    print(header, file=out)
+    print("-" * len(header), file=out)
+    for row in summary:
+        cost = "-" if row["median_cost"] is None else f"{row['median_cost']:.4g}"
+        print(f"{row['example']:<22} {row['algorithm']:<12} {row['solved']:>3}/{row['runs']:<2} "
+              f"{row['timeouts']:>4} {row['infeasible']:>4} {row['valid']:>5} "
+              f"{row['median_wall_s']:>9.4f} {row['max_wall_s']:>8.3f} "
+              f"{row['median_cpu_s']:>8.4f} {cost:>9}", file=out)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--examples", default="",
+                        help="comma-separated example names (default: every problems/examples"
+                             "/*.yaml)")
+    parser.add_argument("--algorithms", default=",".join(ALGORITHMS))
+    parser.add_argument("--seeds", type=int, default=5)
+    parser.add_argument("--max-time", type=float, default=10.0,
+                        help="time limit per solve in seconds (a timeout counts as a run)")
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
+    args = parser.parse_args(argv)
+
+    names = ([n for n in args.examples.split(",") if n] if args.examples
+             else sorted(p.stem for p in EXAMPLES.glob("*.yaml")))
+    algorithms = [a for a in args.algorithms.split(",") if a]
+    runs: list[dict[str, Any]] = []
+    summary: list[dict[str, Any]] = []
+    progress = tqdm(total=len(names) * len(algorithms) * args.seeds, file=sys.stderr,
+                    desc="planner", disable=not sys.stderr.isatty())
+    for name in names:
+        problem = load_problem(EXAMPLES / f"{name}.yaml")
+        for algorithm in algorithms:
+            rows = []
+            for seed in range(args.seeds):
+                progress.set_postfix_str(f"{name} {algorithm} seed {seed}")
+                row = run_one(problem, algorithm, seed, args.max_time)
+                rows.append(row)
+                runs.append({"example": name, **row})
+                progress.update()
+            summary.append(summarise(name, algorithm, rows))
+    progress.close()
+
+    print_table(summary)
+    checks = check_targets(summary)
+    print()
+    for check in checks:
+        verdict = "PASS" if check["passed"] else "FAIL"
+        print(f"{verdict}: {check['example']} / {check['algorithm']}: median "
+              f"{check['median_wall_s']:.4f} s wall (target ≤ {check['target_median_s']} s; "
+              f"CPU {check['median_cpu_s']:.4f} s), {check['timeouts']} timeout(s)")
+    invalid = [r for r in runs if r["valid"] is False]
+    for row in invalid:
+        print(f"INVALID PLAN: {row['example']} / {row['algorithm']} / seed {row['seed']}: "
+              f"{'; '.join(row['errors'])}")
+
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps({
+        "benchmark": "planner", "seeds": args.seeds, "max_time_s": args.max_time,
+        "summary": summary, "targets": checks, "runs": runs,
+    }, indent=2) + "\n")
+    print(f"\nwrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
