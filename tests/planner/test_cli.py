@@ -79,6 +79,21 @@ def test_plan_independent_of_hash_seed() -> None:
     assert len(plans) == 1
 
 
+def test_pddl_problem_file_with_domain_option(tmp_path: Path) -> None:
+    problem = tmp_path / "tower.pddl"
+    problem.write_text("(define (problem tower) (:domain blocksworld)\n"
+                       "  (:objects a b - block)\n"
+                       "  (:init (ontable a) (ontable b) (clear a) (clear b) (handempty))\n"
+                       "  (:goal (on a b)))\n")
+    run = ltamp(problem, "--domain", REPO / "domains" / "blocksworld", "--json")
+    assert run.returncode == 0, run.stderr
+    data = json.loads(run.stdout)
+    assert [(s["name"], s["args"]) for s in data["plan"]] == [("pick-up", ["a"]),
+                                                               ("stack", ["a", "b"])]
+    assert data["cost"] == 2.0
+    assert_bad_input(ltamp(problem), "needs its domain folder")
+
+
 LINE_DOMAIN = """
 (define (domain line)
   (:predicates (Pos ?p) (At ?p) (Step ?p ?q) (Goal ?p))

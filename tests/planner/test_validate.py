@@ -7,6 +7,7 @@ results corrupted on purpose check the replay and the certificate checks.
 
 from __future__ import annotations
 
+import ast
 import copy
 from collections.abc import Callable
 from pathlib import Path
@@ -69,6 +70,18 @@ init:
   - (= (Len n3 n4) 2.5)
 goal: (and (At n4) (ItemAt key n4) (forall (?n - node) (imply (Visited ?n) (Lit ?n))))
 """
+
+
+def test_validator_is_independent_of_the_search() -> None:
+    import ltamp_cli.planner.validate as module
+
+    tree = ast.parse(Path(module.__file__).read_text())
+    imported = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
+    imported |= {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import)
+                 for alias in node.names}
+    planner = {name for name in imported if name and name.startswith("ltamp_cli")}
+    assert planner <= {"ltamp_cli.planner.pddl.syntax", "ltamp_cli.planner.problem",
+                       "ltamp_cli.planner.result"}, planner
 
 
 def step(name: str, *args: str, cost: float = 0.0) -> PlanStep:
