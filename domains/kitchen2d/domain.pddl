@@ -6,7 +6,7 @@
   (:requirements :strips :equality :negative-preconditions :derived-predicates :action-costs)
   (:predicates
     (Cup ?c) (Pitcher ?k) (Bowl ?b) (Spoon ?s) (Stirrer ?s) (Graspable ?o) (Region ?r)
-    (Stackable ?o ?r) (Dispenses ?r ?m)
+    (Stackable ?o ?r) (Workspace ?r) (Dispenses ?r ?m)
     (Pose ?o ?p) (Grasp ?o ?g) (Conf ?q) (HoldConf ?o ?g ?q) (Traj ?t)
     (Contained ?o ?p ?r) (Kin ?o ?p ?g ?q ?a)
     (FreeMotion ?q1 ?t ?q2) (HoldingMotion ?o ?g ?q1 ?t ?q2) (CFree ?o1 ?p1 ?o2 ?p2)

@@ -29,9 +29,10 @@
     :outputs (?t)
     :certified (and (Traj ?t) (HoldingMotion ?o ?g ?q1 ?t ?q2)))
   ; Learned (GP level set, most confident control first): GoodPour and GoodScoop.
+  ; Pours, dumps and stirs happen where drinks are prepared: a (Workspace ?r) region.
   (:stream sample-pour
-    :inputs (?k ?c ?p)
-    :domain (and (Pitcher ?k) (Cup ?c) (Pose ?c ?p))
+    :inputs (?k ?c ?p ?r)
+    :domain (and (Pitcher ?k) (Cup ?c) (Contained ?c ?p ?r) (Workspace ?r))
     :outputs (?g ?q ?a ?u)
     :certified (and (Grasp ?k ?g) (HoldConf ?k ?g ?q) (PourKin ?k ?g ?c ?p ?q ?a ?u)))
   (:stream sample-scoop
@@ -41,13 +42,13 @@
     :certified (and (Grasp ?s ?g) (HoldConf ?s ?g ?q) (ScoopKin ?s ?g ?b ?p ?q ?a ?u)))
   ; Engineered dump and stir over a cup.
   (:stream sample-dump
-    :inputs (?s ?g ?c ?p)
-    :domain (and (Spoon ?s) (Grasp ?s ?g) (Cup ?c) (Pose ?c ?p))
+    :inputs (?s ?g ?c ?p ?r)
+    :domain (and (Spoon ?s) (Grasp ?s ?g) (Cup ?c) (Contained ?c ?p ?r) (Workspace ?r))
     :outputs (?q ?a ?u)
     :certified (and (HoldConf ?s ?g ?q) (DumpKin ?s ?g ?c ?p ?q ?a ?u)))
   (:stream sample-stir
-    :inputs (?s ?g ?c ?p)
-    :domain (and (Stirrer ?s) (Grasp ?s ?g) (Cup ?c) (Pose ?c ?p))
+    :inputs (?s ?g ?c ?p ?r)
+    :domain (and (Stirrer ?s) (Grasp ?s ?g) (Cup ?c) (Contained ?c ?p ?r) (Workspace ?r))
     :outputs (?q ?a ?u)
     :certified (and (HoldConf ?s ?g ?q) (StirKin ?s ?g ?c ?p ?q ?a ?u)))
   (:stream test-cfree

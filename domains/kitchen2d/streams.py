@@ -129,7 +129,8 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         path = geometry.plan_motion(tuple(q1), tuple(q2), name, tuple(grasp))
         return None if path is None else (path,)
 
-    def sample_pour(source: str, target: str, pose: Any) -> Iterator[tuple[Any, ...]]:
+    def sample_pour(source: str, target: str, pose: Any, region: str
+                    ) -> Iterator[tuple[Any, ...]]:
         src, dst = scene.object(source), scene.object(target)
         if source == target or not src.material:
             return
@@ -153,12 +154,12 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
                 grasp, conf, approach = setup
                 yield (grasp, conf, approach, _tuple(control))
 
-    def sample_dump(spoon: str, grasp: Point, target: str, pose: Any
+    def sample_dump(spoon: str, grasp: Point, target: str, pose: Any, region: str
                     ) -> Iterator[tuple[Any, ...]]:
         p = _pose(geometry, target, pose)
         yield from geometry.dump_setups(spoon, tuple(grasp), target, p)
 
-    def sample_stir(stirrer: str, grasp: Point, target: str, pose: Any
+    def sample_stir(stirrer: str, grasp: Point, target: str, pose: Any, region: str
                     ) -> tuple[Any, ...] | None:
         p = _pose(geometry, target, pose)
         return geometry.stir_setup(stirrer, tuple(grasp), target, p)

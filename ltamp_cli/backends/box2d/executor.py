@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from Box2D import b2
 
 from ltamp_cli.backends.box2d.gripper import body_pose
 from ltamp_cli.backends.box2d.particles import inside_box
@@ -25,7 +26,6 @@ from ltamp_cli.backends.box2d.scene import (
     scene_from_world,
 )
 from ltamp_cli.backends.box2d.skills import scoop as scoop_skill
-from ltamp_cli.backends.box2d.skills.common import freeze
 from ltamp_cli.backends.box2d.tamp import (
     APPROACH_OPENING,
     KitchenGeometry,
@@ -36,6 +36,7 @@ from ltamp_cli.backends.execution import ExecutionReport
 
 SPEED = 14.0
 SLOW = 3.0
+SPOON_SPEED = 6.0
 #: Fraction of a poured/filled material that must end in the cup for ``Contains``.
 CONTAINS_FRACTION = 0.9
 
@@ -104,20 +105,37 @@ class Kitchen2DRun:
         """Hold still until no particle moves (or ``max_time``); spill is frozen."""
         kitchen = self.scene.kitchen
         elapsed = 0.0
-        top = self.spec.layout.table_top
         while elapsed < max_time:
             self.gripper.hold(0.1)
             elapsed += 0.1
-            pos = kitchen.particle_positions()
-            if len(pos) == 0:
+            if len(kitchen.particles) == 0:
                 return
-            freeze(kitchen.particles, pos[:, 1] < top + 0.12)
+            self.sweep_spill()
             if np.all(kitchen.particle_speeds() < rest_speed):
                 return
 
+    def sweep_spill(self) -> int:
+        """Grains lying on the table or the floor are spilled for good: they become static
+        and collide with nothing, so a spoon or cup put down there stands on the table,
+        not on a few frictionless grains. Returns how many grains were swept."""
+        kitchen = self.scene.kitchen
+        pos = kitchen.particle_positions()
+        top = self.spec.layout.table_top
+        spilled = (pos[:, 1] < top + 0.15) | (pos[:, 1] < top - 1.0)
+        count = 0
+        for body, flag in zip(kitchen.particles, spilled, strict=True):
+            if flag and body.type != b2.staticBody:
+                body.type = b2.staticBody
+                for fixture in body.fixtures:
+                    data = fixture.filterData
+                    data.maskBits = 0
+                    fixture.filterData = data
+                count += 1
+        return count
+
     # --- actions -------------------------------------------------------------------------
-    def move(self, path: Sequence[Point]) -> None:
-        self.follow(path)
+    def move(self, path: Sequence[Point], speed: float = SPEED) -> None:
+        self.follow(path, speed=speed)
 
     def pick(self, name: str, pose: Point, grasp: Point, approach: Sequence[Point]) -> None:
         empty = empty_hand_path(approach)
@@ -261,7 +279,9 @@ class Kitchen2DRun:
             name, material = args
             inside = self.contents(name).get(material, 0)
             if material == "sugar":
-                need = max(1, scoop_skill.capacity(scoop_skill.ScoopConfig()) // 2)
+                # A quarter spoonful: a scoop succeeds from half a spoonful and a few grains
+                # roll off on the way to the cup.
+                need = max(1, scoop_skill.capacity(scoop_skill.ScoopConfig()) // 4)
             else:
                 sources = [o for o in self.spec.objects if o.material == material]
                 total = sum(o.n_particles for o in sources)
@@ -339,6 +359,7 @@ class Kitchen2DExecutor:
         for number, step in enumerate(plan_result.plan, start=1):
             try:
                 self._dispatch(run, step)
+                run.sweep_spill()
                 steps.append({"step": number, "action": step.name, "ok": True})
             except ActionFailed as failure:
                 steps.append({"step": number, "action": step.name, "ok": False,
@@ -374,8 +395,12 @@ class Kitchen2DExecutor:
         v: Callable[[int], Any] = lambda i: _value(step, i)  # noqa: E731
         args = [a.lower() for a in step.args]
         spec = run.spec
-        if name in ("move-free", "move-holding"):
-            run.move(v(len(step.values) - 2))
+        if name == "move-free":
+            run.move(v(1))
+        elif name == "move-holding":
+            # Gently with a spoonful of grains, briskly otherwise.
+            held = spec.object(args[0])
+            run.move(v(3), speed=SPOON_SPEED if held.kind == "spoon" else SPEED)
         elif name in ("pick", "place"):
             obj = args[0]
             pose = resolve_pose(spec, obj, v(1))

@@ -271,6 +271,10 @@ def build_scene(spec: SceneSpec, seed: int, observer: Observer | None = None) ->
     rng = np.random.default_rng(seed)
     top = spec.layout.table_top
     bodies: dict[str, b2.body] = {}
+    # A floor under the table: grains that fall off the table stay in the world.
+    floor = kitchen.world.CreateStaticBody(position=(0.0, 0.0))
+    floor.CreatePolygonFixture(box=(spec.layout.width / 2, 0.5, (0.0, 0.5), 0.0))
+    floor.userData = {"name": "floor", "color": (200, 200, 200)}
     for x, width, height in spec.walls:
         wall = kitchen.world.CreateStaticBody(position=(x, top))
         wall.CreatePolygonFixture(box=(width / 2, height / 2, (0.0, height / 2), 0.0))
