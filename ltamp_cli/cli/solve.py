@@ -29,6 +29,10 @@ def solve_command(
     unit_costs: Annotated[bool, typer.Option(
         "--unit-costs", help="Ignore action costs while searching.")] = False,
     json_output: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    backend: Annotated[str | None, typer.Option(
+        "--backend", help="Execute the plan in this backend's simulator (e.g. box2d).")] = None,
+    render: Annotated[Path | None, typer.Option(
+        "--render", help="With --backend: write the execution as a GIF.")] = None,
 ) -> None:
     """Solve PROBLEM; exit 0 when solved, 1 when infeasible or out of time, 2 on bad input."""
     from ltamp_cli.planner.algorithms.common import PlannerConfig, StreamError
@@ -60,11 +64,29 @@ def solve_command(
         raise InputError(f"{loaded.bindings_source}: {error}") from None
     except TypeError as error:
         raise InputError(f"{problem}: bad planner options: {error}") from None
+    if render is not None and backend is None:
+        raise InputError("--render: needs --backend NAME to execute the plan")
+    report = None
+    if backend is not None and result.solved:
+        from ltamp_cli.backends.execution import execute_plan
+
+        report = execute_plan(backend, loaded, result, config.seed, render)
     if json_output:
-        print(result.to_json())
+        if report is None:
+            print(result.to_json())
+        else:
+            import json
+
+            payload = json.loads(result.to_json())
+            payload.update(executed=report.success, goal_holds=report.goal_holds,
+                           execution=report.details)
+            print(json.dumps(payload))
     else:
         _print_human(result)
-    if not result.solved:
+        if report is not None:
+            print(f"executed: {report.success}  goal_holds: {report.goal_holds}"
+                  + (f"  ({report.details['error']})" if "error" in report.details else ""))
+    if not result.solved or (report is not None and not (report.success and report.goal_holds)):
         raise typer.Exit(1)
 
 
