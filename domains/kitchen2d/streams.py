@@ -7,9 +7,10 @@ are symbolic PDDL objects and mean "the object's home".
 
 GoodPour and GoodScoop are learned: the GP level-set models (``world.models``, paths
 relative to this folder) are loaded once per planning run; for a context the stream yields
-the most confident control ``θ* = argmax μ/σ`` first, then controls drawn uniformly and kept
-when ``μ/σ > β`` (the relaxed threshold ``β = Φ⁻¹(λ Φ(φ(θ*)))``), each also passing the
-skill's start-collision test and the kitchen's swing/approach checks. Values are documented
+the most confident control ``θ* = argmax μ/σ`` first, then further controls with
+``μ/σ > β`` (the relaxed threshold ``β = Φ⁻¹(λ Φ(φ(θ*)))``), all of them passing the skill's
+start-collision test and the kitchen's checks (approach, swing, the pour must not touch the
+target cup: the pour score does not penalise shoving it aside, a plan must). Values are documented
 in :mod:`ltamp_cli.backends.box2d.tamp`.
 """
 
@@ -33,13 +34,18 @@ DEFAULT_MODELS = {"pour": "../../models/kitchen2d/pour", "scoop": "../../models/
 
 
 class LearnedControls:
-    """Confident controls of one learned skill, for any context (cached per context).
+    """Confident controls of one learned skill for a context and a placement.
 
-    ``valid(context, controls (n, d)) -> (n,) bool`` is the skill's start-collision test.
+    ``valid(context, controls (n, d)) -> (n,) bool`` is the skill's start-collision test
+    (vectorised); ``feasible(control) -> bool``, given per query, is the kitchen's own check
+    (approach and swing clear of everything else). ``θ*`` is the most confident control
+    among ``n`` random valid *and feasible* controls; later ones are the other candidates
+    with ``μ/σ > β``, ``β = Φ⁻¹(λ Φ(μ/σ(θ*)))``, most confident first. Each batch of
+    candidates is predicted in one vectorised GP call; the model is never refitted.
     """
 
     def __init__(self, model_dir: Path, valid: Callable[[np.ndarray, np.ndarray], np.ndarray],
-                 rng: np.random.Generator, lam: float = 0.95, batch: int = 2000) -> None:
+                 rng: np.random.Generator, lam: float = 0.95, batch: int = 4000) -> None:
         from ltamp_cli.learning.model import LevelSetModel
 
         self.model = LevelSetModel.load(str(model_dir))
@@ -47,34 +53,30 @@ class LearnedControls:
         self.rng = rng
         self.lam = lam
         self.batch = batch
-        self._best: dict[tuple[float, ...], tuple[np.ndarray, float]] = {}
 
-    def best(self, context: np.ndarray) -> tuple[np.ndarray, float]:
-        """``(θ*, β)`` for ``context`` (computed once)."""
+    def controls(self, context: np.ndarray, feasible: Callable[[np.ndarray], bool],
+                 rounds: int = 5) -> Iterator[np.ndarray]:
         from ltamp_cli.learning.confidence import relaxed_beta
 
-        key = tuple(np.round(context, 6))
-        if key not in self._best:
-            theta, phi = self.model.most_confident_control(
-                context, np.random.default_rng(0), lambda c, u: self.valid(c, u),
-                n_candidates=2000, n_restarts=2)
-            self._best[key] = (theta, relaxed_beta(phi, self.lam))
-        return self._best[key]
-
-    def controls(self, context: np.ndarray) -> Iterator[np.ndarray]:
-        """θ* first, then uniformly drawn valid controls with ``μ/σ > β`` (endless)."""
-        theta, beta = self.best(context)
-        yield theta
+        beta: float | None = None
         space = self.model.spec.control
-        for _ in range(20):
+        for _ in range(rounds):
             candidates = space.sample_uniform(self.rng, self.batch)
             candidates = candidates[self.valid(context, candidates)]
             if len(candidates) == 0:
                 continue
-            contexts = np.repeat(context[None, :], len(candidates), axis=0)
-            mean, std = self.model.predict(contexts, candidates)
-            good = candidates[mean / std > beta]
-            yield from good[np.argsort(-(mean / std)[mean / std > beta])][:20]
+            mean, std = self.model.predict(np.repeat(context[None, :], len(candidates), 0),
+                                           candidates)
+            phi = mean / std
+            order = np.argsort(-phi)
+            for index in order:
+                if beta is not None and phi[index] <= beta:
+                    break
+                if not feasible(candidates[index]):
+                    continue
+                if beta is None:
+                    beta = relaxed_beta(float(phi[index]), self.lam)
+                yield candidates[index]
 
 
 def _pose(geometry: KitchenGeometry, name: str, pose: Any) -> Point:
@@ -136,11 +138,15 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
             return
         p = _pose(geometry, target, pose)
         context = np.array([src.spec.width, src.spec.height, dst.spec.width, dst.spec.height])
-        for control in model("pour").controls(context):
-            setup = geometry.pour_setup(source, target, p, control)
-            if setup is not None:
-                grasp, conf, approach = setup
-                yield (grasp, conf, approach, _tuple(control))
+        setups: dict[bytes, Any] = {}
+
+        def feasible(control: np.ndarray) -> bool:
+            setups[control.tobytes()] = geometry.pour_setup(source, target, p, control)
+            return setups[control.tobytes()] is not None
+
+        for control in model("pour").controls(context, feasible):
+            grasp, conf, approach = setups[control.tobytes()]
+            yield (grasp, conf, approach, _tuple(control))
 
     def sample_scoop(spoon: str, bowl: str, pose: Any) -> Iterator[tuple[Any, ...]]:
         cup = scene.object(bowl)
@@ -148,11 +154,15 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
             return
         p = _pose(geometry, bowl, pose)
         context = np.array([cup.spec.width, cup.spec.height])
-        for control in model("scoop").controls(context):
-            setup = geometry.scoop_setup(spoon, bowl, p, control)
-            if setup is not None:
-                grasp, conf, approach = setup
-                yield (grasp, conf, approach, _tuple(control))
+        setups: dict[bytes, Any] = {}
+
+        def feasible(control: np.ndarray) -> bool:
+            setups[control.tobytes()] = geometry.scoop_setup(spoon, bowl, p, control)
+            return setups[control.tobytes()] is not None
+
+        for control in model("scoop").controls(context, feasible):
+            grasp, conf, approach = setups[control.tobytes()]
+            yield (grasp, conf, approach, _tuple(control))
 
     def sample_dump(spoon: str, grasp: Point, target: str, pose: Any, region: str
                     ) -> Iterator[tuple[Any, ...]]:

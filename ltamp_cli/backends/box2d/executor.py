@@ -36,7 +36,7 @@ from ltamp_cli.backends.execution import ExecutionReport
 
 SPEED = 14.0
 SLOW = 3.0
-SPOON_SPEED = 6.0
+HOLD_SPEED = 6.0
 #: Fraction of a poured/filled material that must end in the cup for ``Contains``.
 CONTAINS_FRACTION = 0.9
 
@@ -398,9 +398,8 @@ class Kitchen2DExecutor:
         if name == "move-free":
             run.move(v(1))
         elif name == "move-holding":
-            # Gently with a spoonful of grains, briskly otherwise.
-            held = spec.object(args[0])
-            run.move(v(3), speed=SPOON_SPEED if held.kind == "spoon" else SPEED)
+            # Gently with grains aboard (sloshing spills them), briskly otherwise.
+            run.move(v(3), speed=HOLD_SPEED)
         elif name in ("pick", "place"):
             obj = args[0]
             pose = resolve_pose(spec, obj, v(1))

@@ -176,6 +176,25 @@ class KitchenGeometry:
             pts.append(_corners(held.boxes(), x + c * ox - s * oy, y + s * ox + c * oy, angle))
         return np.concatenate(pts)
 
+    def hand_edge_points(self, held: SceneObject, grasp: Point, x: float, y: float,
+                         angle: float, per_edge: int = 12) -> np.ndarray:
+        """Points ``(m, 2)`` along every edge of the held object's boxes (gripper at
+        ``(x, y, angle)``), for a thin-wall contact test against axis-aligned boxes."""
+        c, s = math.cos(angle), math.sin(angle)
+        ox, oy = -grasp[0], -grasp[1]
+        bx, by = x + c * ox - s * oy, y + s * ox + c * oy
+        t = np.linspace(0.0, 1.0, per_edge)
+        out = []
+        for b in held.boxes():
+            corners = np.array([[b.cx - b.hw, b.cy - b.hh], [b.cx + b.hw, b.cy - b.hh],
+                                [b.cx + b.hw, b.cy + b.hh], [b.cx - b.hw, b.cy + b.hh]])
+            for k in range(4):
+                a, z = corners[k], corners[(k + 1) % 4]
+                out.append(a[None, :] + t[:, None] * (z - a)[None, :])
+        local = np.concatenate(out)
+        return np.stack([bx + c * local[:, 0] - s * local[:, 1],
+                         by + s * local[:, 0] + c * local[:, 1]], axis=1)
+
     def hand_rects(self, held: SceneObject | None, grasp: Point | None, x: float, y: float
                    ) -> np.ndarray:
         """Axis-aligned boxes ``(m, 4)`` of the upright gripper and held object."""
@@ -311,9 +330,23 @@ class KitchenGeometry:
         if start[1] > height or not self.segment_free(item, grasp, approach, exclude):
             return None
         # Tilt clockwise about the grasp point (the gripper origin) up to dangle.
-        angles = -np.linspace(0.0, float(control[3]), 12)
+        angles = -np.linspace(0.0, float(control[3]), 24)
         if not self.swing_free(item, grasp, start, angles, (0.0, 0.0), [*exclude, "table"]):
             return None
+        # The pour score does not mind shoving the target cup aside; a plan does (the cup
+        # would leave its spot): the tilting cup and hand must not touch the target's walls.
+        target_item = self.spec.object(target)
+        walls = np.array([[pose[0] + b.cx - b.hw - 0.05, pose[1] + b.cy - b.hh - 0.05,
+                           pose[0] + b.cx + b.hw + 0.05, pose[1] + b.cy + b.hh + 0.05]
+                          for b in target_item.boxes()])
+        for angle in angles:
+            points = self.hand_edge_points(item, grasp, start[0], start[1], float(angle))
+            inside = ((points[:, None, 0] > walls[None, :, 0])
+                      & (points[:, None, 0] < walls[None, :, 2])
+                      & (points[:, None, 1] > walls[None, :, 1])
+                      & (points[:, None, 1] < walls[None, :, 3]))
+            if inside.any():
+                return None
         return grasp, conf, approach
 
     def scoop_setup(self, spoon: str, bowl: str, pose: Point, control: Sequence[float]
