@@ -15,6 +15,8 @@ import numpy as np
 
 from ltamp_cli.planner.streams import Binding, StreamInfo
 
+EAGER = StreamInfo(eager=True)
+
 
 def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str, Any]:
     slots: dict[str, int] = {str(k): int(v) for k, v in world["slots"].items()}
@@ -47,12 +49,13 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
     def test_cfree(o1: str, p1: str, o2: str, p2: str) -> bool:
         return p1 != p2
 
+    # Cheap closed-form streams are evaluated eagerly (for real) rather than optimistically.
     return {
         "sample-pose": sample_pose,
-        "sample-grasp": sample_grasp,
-        "inverse-kinematics": inverse_kinematics,
-        "fill-conf": fill_conf,
-        "skill-conf": skill_conf,
-        "plan-motion": plan_motion,
-        "test-cfree": Binding(test_cfree, StreamInfo(eager=True)),
+        "sample-grasp": Binding(sample_grasp, EAGER),
+        "inverse-kinematics": Binding(inverse_kinematics, EAGER),
+        "fill-conf": Binding(fill_conf, EAGER),
+        "skill-conf": Binding(skill_conf, EAGER),
+        "plan-motion": Binding(plan_motion, EAGER),
+        "test-cfree": Binding(test_cfree, EAGER),
     }

@@ -14,6 +14,8 @@ import numpy as np
 
 from ltamp_cli.planner.streams import Binding, StreamInfo
 
+EAGER = StreamInfo(eager=True)
+
 Conf = tuple[float, float]
 
 
@@ -38,10 +40,10 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         while True:
             yield (round(float(rng.uniform(low + half, high - half)), 4),)
 
-    def sample_grasp(block: str) -> Iterator[tuple[tuple[float, float]]]:
+    def sample_grasp(block: str) -> tuple[tuple[float, float]]:
         # The gripper closes on the block from above, centred: one grasp per block keeps the
         # number of configurations (and of motions between them) small.
-        yield ((0.0, height(block)),)
+        return ((0.0, height(block)),)
 
     def inverse_kinematics(block: str, pose: float, grasp: tuple[float, float]
                            ) -> tuple[Conf] | None:
@@ -65,12 +67,13 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         return round((transit_height - q1[1]) + abs(q1[0] - q2[0]) + (transit_height - q2[1])
                      + 1.0, 4)
 
+    # Cheap closed-form streams are evaluated eagerly (for real) rather than optimistically.
     return {
         "sample-pose": sample_pose,
-        "sample-grasp": sample_grasp,
-        "inverse-kinematics": inverse_kinematics,
-        "plan-motion": plan_motion,
+        "sample-grasp": Binding(sample_grasp, EAGER),
+        "inverse-kinematics": Binding(inverse_kinematics, EAGER),
+        "plan-motion": Binding(plan_motion, EAGER),
         # Cheap and decisive: evaluate as soon as its inputs exist (PDDLStream's eager).
-        "test-cfree": Binding(test_cfree, StreamInfo(eager=True)),
-        "distance": distance,
+        "test-cfree": Binding(test_cfree, EAGER),
+        "distance": Binding(distance, EAGER),
     }

@@ -19,7 +19,7 @@ EXAMPLES = REPO / "problems" / "examples"
 
 def ltamp(*args: str | Path, cwd: Path | None = None, hash_seed: str = "0"
           ) -> subprocess.CompletedProcess[str]:
-    # A fixed PYTHONHASHSEED: plans currently depend on it (see the xfail test below).
+    # A fixed PYTHONHASHSEED by default; test_plan_independent_of_hash_seed varies it.
     env = {**os.environ, "OMP_NUM_THREADS": "1", "PYTHONPATH": str(REPO),
            "PYTHONHASHSEED": hash_seed}
     return subprocess.run([sys.executable, "-m", "ltamp_cli", "solve", *map(str, args)],
@@ -69,9 +69,6 @@ def test_same_seed_same_json_plan() -> None:
     assert plans[0] == plans[1]
 
 
-@pytest.mark.xfail(strict=True, reason="plans depend on PYTHONHASHSEED: the discrete search "
-                   "iterates sets of string facts (blocksworld incremental costs 28/16/28/74 "
-                   "under hash seeds 1-4)")
 def test_plan_independent_of_hash_seed() -> None:
     plans = {json.dumps(json.loads(ltamp(EXAMPLES / "blocksworld.yaml", "--json", "--algorithm",
                                          "incremental", hash_seed=str(h)).stdout)["plan"])

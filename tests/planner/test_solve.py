@@ -39,9 +39,7 @@ def test_example_solved_and_validated(solved, name: str, algorithm: str  # type:
                                       ) -> None:
     result = solved.result(name, algorithm)
     assert result.status == "solved", result.stats
-    # The certificate lists only the direct producers of the plan's facts (see the xfail
-    # test below), so stream-domain closure is not required here; all else is checked.
-    report = validate_plan(solved.problem(name), result, check_stream_domains=False)
+    report = validate_plan(solved.problem(name), result)
     assert report.valid, report.errors
     assert report.cost == pytest.approx(result.cost)
     assert result.stats["algorithm"] == algorithm
@@ -51,8 +49,6 @@ def test_example_solved_and_validated(solved, name: str, algorithm: str  # type:
         assert not any(arg.startswith("#") for arg in step.args)  # no optimistic objects
 
 
-@pytest.mark.xfail(strict=True, reason="certificate.stream_results holds only the producers "
-                   "of preimage facts, not the producers of their streams' :domain facts")
 @pytest.mark.parametrize("algorithm", ["incremental", "focused"])
 def test_certificate_is_closed_under_stream_domains(solved, algorithm: str  # type: ignore[no-untyped-def]
                                                     ) -> None:

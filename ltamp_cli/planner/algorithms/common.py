@@ -163,13 +163,15 @@ class PlannerState:
         return outputs
 
     def search(self, init: Iterable[Fact], objects: Mapping[str, str],
-               function_values: Mapping[Fact, float]) -> DiscreteResult:
+               function_values: Mapping[Fact, float], max_expansions: int | None = None,
+               fact_effort: Mapping[Fact, float] | None = None) -> DiscreteResult:
         start = time.perf_counter()
         self.searches += 1
         try:
             return plan_discrete(
                 self.problem.domain, objects, init, function_values, self.problem.goal,
-                self.deadline, self.config.search, self.config.unit_costs)
+                self.deadline, self.config.search, self.config.unit_costs, max_expansions,
+                fact_effort)
         finally:
             self.search_time += time.perf_counter() - start
 
@@ -197,12 +199,7 @@ class PlannerState:
             cost = float(sum(step.cost for step in plan))
             used = sorted(set(preimage))
             certificate.preimage = used
-            seen: set[StreamResult] = set()
-            for fact in used:
-                producer = self.producers.get(fact)
-                if producer is not None and producer not in seen:
-                    seen.add(producer)
-                    certificate.stream_results.append(producer)
+            certificate.stream_results = self.supporting_results(used)
         stats = {
             "algorithm": self.config.algorithm,
             "iterations": self.iterations,
@@ -214,6 +211,40 @@ class PlannerState:
         }
         return PlanResult(status, plan, cost, time.perf_counter() - self.start_time, stats,
                           certificate, {n: self.objects.value(n) for n in self.objects.names()})
+
+
+    def supporting_results(self, needed: Iterable[Fact]) -> list[StreamResult]:
+        """Stream results behind ``needed`` facts, closed under the results' own domain facts
+        (and the domains of cost functions used), dependencies first."""
+        ordered: list[StreamResult] = []
+        seen: set[StreamResult] = set()
+        visiting: set[Fact] = set()
+
+        def domain_facts(name: str, inputs: tuple[str, ...]) -> list[Fact]:
+            external = self.externals[name]
+            mapping = dict(zip(external_inputs(external), inputs, strict=True))
+            return instantiate_atoms(external_domain(external), mapping)
+
+        def visit(fact: Fact) -> None:
+            if fact in visiting:
+                return
+            visiting.add(fact)
+            if fact[0] in self.externals and isinstance(self.externals[fact[0]],
+                                                        StreamFunction):
+                for domain_fact in domain_facts(fact[0], fact[1:]):
+                    visit(domain_fact)
+                return
+            producer = self.producers.get(fact)
+            if producer is None or producer in seen:
+                return
+            for domain_fact in domain_facts(producer.stream, producer.inputs):
+                visit(domain_fact)
+            seen.add(producer)
+            ordered.append(producer)
+
+        for fact in needed:
+            visit(fact)
+        return ordered
 
 
 class StreamError(Exception):

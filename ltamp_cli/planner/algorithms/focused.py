@@ -6,7 +6,7 @@ yet (fully) called certify their facts with placeholder objects ``#name``; (2) s
 real and optimistic facts; (3) retraces the optimistic facts the plan relies on to a *stream
 plan* and calls those instances in order, binding placeholders to real values. An instance
 that fails is disabled until the next search failure, which re-enables everything and raises
-the complexity bound. Complexity of an instance = max complexity of its inputs + calls made.
+the complexity bound. Complexity of an instance = summed complexity of its inputs + calls made.
 """
 
 from __future__ import annotations
@@ -27,6 +27,7 @@ from ltamp_cli.planner.search.ground import Fact, FactIndex
 from ltamp_cli.planner.streams import StreamInstance
 
 InstanceKey = tuple[str, tuple[str, ...]]
+REAL_SEARCH_EXPANSIONS = 500
 
 
 @dataclass
@@ -40,6 +41,7 @@ class OptimisticEvaluation:
     fact_producer: dict[Fact, InstanceKey] = field(default_factory=dict)
     object_producer: dict[str, InstanceKey] = field(default_factory=dict)
     outputs: dict[InstanceKey, tuple[str, ...]] = field(default_factory=dict)
+    effort: dict[Fact, float] = field(default_factory=dict)  # search cost of optimistic facts
     cut: bool = False  # an instance was left out by the complexity bound
 
 
@@ -47,7 +49,7 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
                           placeholders: dict[InstanceKey, tuple[str, ...]]
                           ) -> OptimisticEvaluation:
     index = FactIndex()
-    for fact in state.facts.members:
+    for fact in sorted(state.facts.members):  # a hash-independent order
         index.add(fact)
     evaluation = OptimisticEvaluation(index, dict(state.function_values),
                                       dict(state.object_types))
@@ -61,7 +63,9 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
                 if key in done:
                     continue
                 done.add(key)
-                level = max((evaluation.level.get(x, 0) for x in inputs), default=0)
+                # Summed input complexity: values built from several placeholders cost more,
+                # so low bounds favour plans over real values.
+                level = sum(evaluation.level.get(x, 0) for x in inputs)
                 real = state.instances.get(key)
                 if real is not None:
                     if real.disabled or (real.exhausted and not _pending_test(real)):
@@ -84,11 +88,13 @@ def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: 
     name, inputs = key
     external = state.externals[name]
     mapping = dict(zip(external_inputs(external), inputs, strict=True))
+    effort = stream_effort(state, name, level)
     if isinstance(external, StreamFunction):
         term = (external.name, *(mapping[a] for a in external.head.args))
         if term not in evaluation.function_values:
             evaluation.function_values[term] = state.bindings[name].info.opt_cost
             evaluation.fact_producer[("=", *term)] = key
+            evaluation.effort[("=", *term)] = effort
         return False
     outputs: tuple[str, ...] = ()
     if isinstance(external, Stream) and external.outputs:
@@ -111,8 +117,16 @@ def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: 
     for fact in facts:
         if evaluation.index.add(fact):
             evaluation.fact_producer[fact] = key
+            evaluation.effort[fact] = effort
             added = True
     return added
+
+
+def stream_effort(state: PlannerState, name: str, level: int) -> float:
+    """Search cost of relying on an optimistic fact (PDDLStream's stream effort): expected
+    calls to make it real, growing with its complexity so real values are preferred."""
+    info = state.bindings[name].info
+    return (1.0 + level) * max(info.overhead, 0.0) / max(info.p_success, 1e-3)
 
 
 def stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
@@ -199,17 +213,23 @@ def _report_unusable(state: PlannerState, consumed: tuple[str, ...],
         callback(inputs, tuple(state.objects.value(x) for x in outputs))
 
 
-def evaluate_eager_tests(state: PlannerState) -> None:
-    """Call every eager test (``StreamInfo.eager``) on all real inputs it was not called on."""
-    for external in state.externals.values():
-        if not state.bindings[external.name].info.eager:
-            continue
-        if isinstance(external, Stream) and external.outputs:
-            continue
-        for inputs in list(state.bindings_of(external, state.facts)):
-            instance = state.instance(external.name, inputs)
-            if instance.num_calls == 0:
-                state.call(instance)
+def evaluate_eager(state: PlannerState) -> None:
+    """Call every eager stream (``StreamInfo.eager``) once on all real inputs, to a fixpoint.
+
+    Cheap, decisive streams (collision tests, closed-form kinematics) are better evaluated
+    for real than assumed optimistically: it keeps optimistic placeholders few.
+    """
+    changed = True
+    while changed and not state.timed_out():
+        changed = False
+        for external in state.externals.values():
+            if not state.bindings[external.name].info.eager:
+                continue
+            for inputs in list(state.bindings_of(external, state.facts)):
+                instance = state.instance(external.name, inputs)
+                if instance.num_calls == 0:
+                    state.call(instance)
+                    changed = True
 
 
 def solve_focused(state: PlannerState) -> PlanResult:
@@ -220,10 +240,10 @@ def solve_focused(state: PlannerState) -> PlanResult:
     try:
         while not state.timed_out():
             state.iterations += 1
-            evaluate_eager_tests(state)
+            evaluate_eager(state)
             evaluation = optimistic_evaluation(state, complexity, placeholders)
             discrete = state.search(evaluation.index.members, evaluation.object_types,
-                                    evaluation.function_values)
+                                    evaluation.function_values, fact_effort=evaluation.effort)
             if not discrete.solved:
                 disabled = [i for i in state.instances.values() if i.disabled]
                 if not evaluation.cut and not disabled:
@@ -240,8 +260,10 @@ def solve_focused(state: PlannerState) -> PlanResult:
             if not plan:
                 return state.result(SOLVED, discrete, facts | terms)
             if process_stream_plan(state, evaluation, plan):
+                # The stream plan made the optimistic plan's facts real, so a plan over real
+                # facts is usually easy; bound the search so a miss does not get exhaustive.
                 real = state.search(state.facts.members, state.object_types,
-                                    state.function_values)
+                                    state.function_values, REAL_SEARCH_EXPANSIONS)
                 if real.solved:
                     real_facts, real_terms = plan_preimage(real)
                     return state.result(SOLVED, real, real_facts | real_terms)

@@ -8,9 +8,11 @@ import time
 from dataclasses import dataclass, field
 
 from ltamp_cli.planner.search.heuristic import INFINITY, FFHeuristic
+from ltamp_cli.planner.search.postprocess import eliminate_redundant_actions
 from ltamp_cli.planner.search.task import Task
 
 SEARCH_ALGORITHMS = ("ff", "lazy-greedy", "wastar")
+LOCAL_EXPANSIONS = 5000
 
 
 @dataclass
@@ -39,18 +41,24 @@ def _reconstruct(parents: dict, state: frozenset[int]) -> tuple[list[int], list[
 
 
 def lazy_greedy(task: Task, deadline: float, boost: int = 1000,
-                unit_costs: bool = False) -> SearchOutcome:
-    """FD-style lazy GBFS with the FF heuristic and a boosted preferred-operator queue."""
+                unit_costs: bool = False, initial: frozenset[int] | None = None,
+                heuristic: FFHeuristic | None = None, max_expansions: int | None = None
+                ) -> SearchOutcome:
+    """FD-style lazy GBFS with the FF heuristic and a boosted preferred-operator queue.
+
+    Starts from ``initial`` (default: the task's initial state); gives up (plan ``None``)
+    after ``max_expansions`` expansions when that is set.
+    """
     start_time = time.perf_counter()
-    heuristic = FFHeuristic(task, unit_costs=unit_costs)
+    heuristic = heuristic or FFHeuristic(task, unit_costs=unit_costs)
     counter = itertools.count()
-    parents: dict[frozenset[int], tuple[frozenset[int], int] | None] = {task.init: None}
-    g_values = {task.init: 0.0}
+    root = task.init if initial is None else initial
+    parents: dict[frozenset[int], tuple[frozenset[int], int] | None] = {root: None}
+    g_values = {root: 0.0}
     queues: list[list] = [[], []]  # regular, preferred
     priorities = [0, boost]
     best_h = INFINITY
     expanded = evaluated = 0
-    pending = [(task.init, None, None)]  # (state, parent, op) to evaluate
 
     def evaluate_and_expand(state: frozenset[int]) -> SearchOutcome | None:
         nonlocal best_h, expanded, evaluated
@@ -78,13 +86,14 @@ def lazy_greedy(task: Task, deadline: float, boost: int = 1000,
                 heapq.heappush(queues[1], entry)
         return None
 
-    outcome = evaluate_and_expand(task.init)
+    outcome = evaluate_and_expand(root)
     if outcome is not None:
         return outcome
-    del pending
     while queues[0] or queues[1]:
         if time.perf_counter() > deadline:
             raise SearchTimeout
+        if max_expansions is not None and expanded > max_expansions:
+            break
         which = 1 if queues[1] and priorities[1] >= priorities[0] else 0
         if not queues[which]:
             which = 1 - which
@@ -194,7 +203,17 @@ def enforced_hill_climbing(task: Task, deadline: float, unit_costs: bool = False
                     break
                 queue.append((child, child_vector, child_result.preferred, [*ops, op]))
         if found is None:
-            return None
+            # Stuck on a plateau that helpful actions cannot leave: a budgeted greedy
+            # search from here usually escapes it; else report failure.
+            local = lazy_greedy(task, deadline, initial=state, heuristic=heuristic,
+                                max_expansions=LOCAL_EXPANSIONS)
+            if local.plan is None:
+                return None
+            path_ops.extend(local.plan)
+            path_states.extend(local.states[1:])
+            expanded += local.expanded
+            evaluated += local.evaluated
+            break
         state, vector, next_result, ops = found
         for op in ops:
             path_states.append(task.successor(path_states[-1], task.state_vector(path_states[-1]),
@@ -208,15 +227,28 @@ def enforced_hill_climbing(task: Task, deadline: float, unit_costs: bool = False
                          path_states)
 
 
-def run_search(task: Task, algorithm: str, deadline: float, unit_costs: bool = False
-               ) -> SearchOutcome:
+def run_search(task: Task, algorithm: str, deadline: float, unit_costs: bool = False,
+               max_expansions: int | None = None) -> SearchOutcome:
+    """Search ``task``, then remove detours from the plan found.
+
+    ``max_expansions`` bounds the greedy searches (they are incomplete then).
+    """
+    outcome = _search(task, algorithm, deadline, unit_costs, max_expansions)
+    if outcome.plan is not None and algorithm != "wastar":
+        outcome.plan, outcome.states = eliminate_redundant_actions(task, outcome.plan)
+        outcome.cost = float(sum(task.operators[i].cost for i in outcome.plan))
+    return outcome
+
+
+def _search(task: Task, algorithm: str, deadline: float, unit_costs: bool,
+            max_expansions: int | None) -> SearchOutcome:
     if algorithm == "ff":
         outcome = enforced_hill_climbing(task, deadline, unit_costs=unit_costs)
         if outcome is not None:
             return outcome
-        return lazy_greedy(task, deadline, unit_costs=unit_costs)
+        return lazy_greedy(task, deadline, unit_costs=unit_costs, max_expansions=max_expansions)
     if algorithm == "lazy-greedy":
-        return lazy_greedy(task, deadline, unit_costs=unit_costs)
+        return lazy_greedy(task, deadline, unit_costs=unit_costs, max_expansions=max_expansions)
     if algorithm == "wastar":
         return weighted_astar(task, deadline)
     raise ValueError(f"unknown search algorithm {algorithm!r}; expected one of "

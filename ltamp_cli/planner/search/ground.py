@@ -48,6 +48,7 @@ class GroundAction:
     cost: float
     static_pre: tuple[Fact, ...] = ()
     cost_term: Fact | None = None
+    effort: float = 0.0  # search-only penalty for relying on not-yet-real (optimistic) facts
 
     def __str__(self) -> str:
         return "(" + " ".join((self.name, *self.args)) + ")"
@@ -231,13 +232,16 @@ def ground_task(
     axioms: Sequence[NormalAxiom],
     init: Iterable[Fact],
     function_values: Mapping[Fact, float],
+    fact_effort: Mapping[Fact, float] | None = None,
 ) -> Grounding:
     """Instantiate every reachable action and axiom rule."""
     derived = {axiom.predicate for axiom in axioms}
     fluent = static_predicates(actions, derived)  # predicates that are *not* static
     index = FactIndex()
     init_facts = set(init)
-    for fact in init_facts:
+    # Sorted: string hashing varies between processes, and order decides tie-breaking later.
+    ordered_init = sorted(init_facts)
+    for fact in ordered_init:
         index.add(fact)
     rules = [_make_rule("action", a, a.precondition) for a in actions]
     rules += [_make_rule("axiom", a, a.body) for a in axioms]
@@ -248,10 +252,11 @@ def ground_task(
 
     seen: set[tuple[int, tuple[str, ...]]] = set()
     result = Grounding([], [], index.members, frozenset(), frozenset(derived))
-    delta: list[Fact] = list(init_facts)
+    delta: list[Fact] = ordered_init
     for rule in rules:
         if not rule.positive:  # e.g. a parameterless action with an empty precondition
-            _emit(rule, {}, index, init_facts, fluent, function_values, seen, result, delta)
+            _emit(rule, {}, index, init_facts, fluent, function_values, seen, result, delta,
+                  fact_effort)
     while delta:
         current, delta = delta, []
         for fact in current:
@@ -266,7 +271,7 @@ def ground_task(
                     rule.joins[position] = steps
                 for binding in _run_join(steps, index, start):
                     _emit(rule, binding, index, init_facts, fluent, function_values, seen,
-                          result, delta)
+                          result, delta, fact_effort)
     result.static_predicates = frozenset(
         {fact[0] for fact in index.members} - fluent
     )
@@ -275,8 +280,8 @@ def ground_task(
 
 def _emit(rule: _Rule, binding: dict[str, str], index: FactIndex, init: set[Fact],
           fluent: frozenset[str], function_values: Mapping[Fact, float],
-          seen: set[tuple[int, tuple[str, ...]]], result: Grounding, delta: list[Fact]
-          ) -> None:
+          seen: set[tuple[int, tuple[str, ...]]], result: Grounding, delta: list[Fact],
+          fact_effort: Mapping[Fact, float] | None) -> None:
     key = (id(rule), tuple(binding[v] for v in rule.variables))
     if key in seen:
         return
@@ -337,5 +342,10 @@ def _emit(rule: _Rule, binding: dict[str, str], index: FactIndex, init: set[Fact
         if effect.positive and index.add(fact):
             delta.append(fact)
     args = tuple(binding[p] for p in source.parameters)
+    effort = 0.0
+    if fact_effort:
+        effort = sum(fact_effort.get(f, 0.0) for f in static_pos)
+        if cost_term is not None:
+            effort += fact_effort.get(("=", *cost_term), 0.0)
     result.actions.append(GroundAction(source.name, args, dynamic_pos, tuple(negative),
-                                       tuple(effects), cost, static_pos, cost_term))
+                                       tuple(effects), cost, static_pos, cost_term, effort))

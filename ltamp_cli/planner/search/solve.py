@@ -52,6 +52,8 @@ def plan_discrete(
     deadline: float,
     algorithm: str = "ff",
     unit_costs: bool = False,
+    max_expansions: int | None = None,
+    fact_effort: Mapping[Fact, float] | None = None,
 ) -> DiscreteResult:
     """Find a plan for the finite task given by ``objects`` (name → type) and ``init``."""
     start = time.perf_counter()
@@ -67,15 +69,17 @@ def plan_discrete(
     axioms = [rule for axiom in domain.axioms for rule in normalizer.axiom(axiom)]
     axioms += normalizer.goal(goal)
     axioms += normalizer.take_auxiliary()
-    grounding = ground_task(actions, axioms, facts, function_values)
+    grounding = ground_task(actions, axioms, facts, function_values, fact_effort)
     ground_time = time.perf_counter() - start
     if ("%goal",) not in grounding.reachable:
         return DiscreteResult(None, float("inf"), grounding, None, None, ground_time, 0.0)
     task = Task(grounding, facts)
-    outcome = run_search(task, algorithm, deadline, unit_costs=unit_costs)
+    outcome = run_search(task, algorithm, deadline, unit_costs=unit_costs,
+                         max_expansions=max_expansions)
     search_time = time.perf_counter() - start - ground_time
     if outcome.plan is None:
         return DiscreteResult(None, float("inf"), grounding, task, outcome, ground_time,
                               search_time)
     plan = [task.operators[i].action for i in outcome.plan]
-    return DiscreteResult(plan, outcome.cost, grounding, task, outcome, ground_time, search_time)
+    cost = float(sum(action.cost for action in plan))  # real costs, without search effort
+    return DiscreteResult(plan, cost, grounding, task, outcome, ground_time, search_time)

@@ -98,7 +98,7 @@ class Task:
             tuple(dict.fromkeys(adds)),
             tuple(dict.fromkeys(d for d in deletes if d not in adds)),
             tuple(conditional),
-            action.cost,
+            action.cost + action.effort,
         )
 
     def _compile_operators(self) -> None:
