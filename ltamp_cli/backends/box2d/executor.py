@@ -249,7 +249,7 @@ class Kitchen2DRun:
         swept = []
         for _ in range(cycles):
             for side in (1.0, -1.0):
-                self.gripper.move((x0 + side * amplitude, y0, 0.0), speed=2.0)
+                self.gripper.move((x0 + side * amplitude, y0, 0.0), speed=1.0)
                 swept.append(side * amplitude)
         self.gripper.move((x0, y0, 0.0), speed=1.0)
         self.settle(2.0)
@@ -360,7 +360,11 @@ class Kitchen2DExecutor:
             try:
                 self._dispatch(run, step)
                 run.sweep_spill()
-                steps.append({"step": number, "action": step.name, "ok": True})
+                entry = {"step": number, "action": step.name, "ok": True}
+                if step.name.lower() in ("fill", "pour", "dump", "stir"):
+                    entry["contents"] = {c.name: run.contents(c.name) for c in spec.objects
+                                         if c.kind == "cup"}
+                steps.append(entry)
             except ActionFailed as failure:
                 steps.append({"step": number, "action": step.name, "ok": False,
                               "error": str(failure)})

@@ -48,6 +48,10 @@ Rect = tuple[float, float, float, float]  # xmin, ymin, xmax, ymax
 APPROACH_OPENING = 0.4
 COLUMN_MARGIN = 0.6
 TRANSIT_MARGIN = 0.5
+#: Length of bar the fingers must hold when *picking* (the skill trials start with the
+#: object already in hand, so they accept a grasp at the very end of a bar; a real grasp
+#: there tips the object over).
+MIN_GRIP = 0.8
 
 
 def _r(value: float) -> float:
@@ -237,12 +241,29 @@ class KitchenGeometry:
         return _r(self.ceiling + TRANSIT_MARGIN + hang)
 
     # --- kinematics ----------------------------------------------------------------------
+    def grip_ok(self, item: SceneObject, grasp: Point) -> bool:
+        """Whether a real pick can take the bar at ``grasp``: the fingers hold at least
+        ``MIN_GRIP`` of it and the palm stays above the bar's top end."""
+        if item.kind in ("cup", "bowl"):
+            bar_top = item.spec.height
+        elif item.kind == "spoon":
+            bar_top = item.spec.bowl_depth + item.spec.handle_length
+        elif item.kind == "stirrer":
+            bar_top = item.spec.length
+        else:
+            return True
+        g = self.spec.gripper
+        palm_bottom = grasp[1] + g.finger_length - g.tip
+        return grasp[1] <= bar_top - MIN_GRIP and palm_bottom >= bar_top + 0.1
+
     def kinematics(self, name: str, pose: Point, grasp: Point
                    ) -> tuple[Point, tuple[Point, ...]] | None:
         """Conf above the spot and the approach of the hand *carrying* the object down to
         the grasp (see :func:`empty_hand_path` for the empty hand), or ``None`` if either
         is blocked. A cup goes under the faucet from the left."""
         item = self.spec.object(name)
+        if not self.grip_ok(item, grasp):
+            return None
         gx, gy = pose[0] + grasp[0], pose[1] + grasp[1]
         height = self.conf_height(item, grasp)
         spot = self.spot_of(pose)
@@ -321,6 +342,8 @@ class KitchenGeometry:
         The target cup itself is the learned skill's business (its validity test)."""
         item = self.spec.object(source)
         grasp = (_r(item.spec.handle_x), _r(item.spec.grasp_height(float(control[0]))))
+        if not self.grip_ok(item, grasp):
+            return None
         start = self.pour_start(target, pose, control)
         height = self.conf_height(item, grasp)
         conf = (start[0], height)
@@ -358,6 +381,8 @@ class KitchenGeometry:
         context = np.array([cup.width, cup.height])
         path = scoop_skill.waypoints(context, np.asarray(control, dtype=float), config)
         grasp = (_r(item.spec.handle_x), _r(scoop_skill.grasp_height(config, float(control[0]))))
+        if not self.grip_ok(item, grasp):
+            return None
         entry = (_r(pose[0] + path[0, 0] + grasp[0]), _r(pose[1] - self.top + path[0, 1]
                                                           + grasp[1]))
         exit_ = (_r(pose[0] + path[-1, 0] + grasp[0]), _r(pose[1] - self.top + path[-1, 1]
@@ -441,7 +466,9 @@ class KitchenGeometry:
         goes down to just above the cup floor and sweeps ``±amplitude`` ``cycles`` times."""
         item = self.spec.object(stirrer)
         cup = self.spec.object(target).spec
-        amplitude = max(0.0, cup.inner_width / 2 - item.spec.paddle_width / 2 - 0.25)
+        # A wide berth from the walls: grains squeezed between the (unstoppable) paddle and
+        # a wall are shot out of the cup by the solver.
+        amplitude = max(0.0, cup.inner_width / 2 - item.spec.paddle_width / 2 - 0.5)
         bottom = pose[1] + cup.wall + 0.25
         hand = (_r(pose[0] + grasp[0]), _r(bottom + grasp[1]))
         height = self.conf_height(item, grasp)
