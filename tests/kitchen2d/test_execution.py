@@ -96,27 +96,33 @@ def test_coffee_is_solved_and_executed_with_the_shipped_models(tmp_path: Path) -
     assert particles["n_particles"] == particles["n_expected"] == particles["n_in_world"]
 
 
-def test_learned_stream_controls_succeed_in_trials() -> None:
-    """The shipped models' first (most confident) controls for coffee-like contexts succeed
-    in real trials, and their least confident valid controls fail."""
+def test_learned_streams_yield_controls_that_succeed_in_trials() -> None:
+    """The coffee problem's learned streams (shipped models) yield, first, controls that
+    succeed in real skill trials; the models' least confident valid controls fail."""
     from ltamp_cli.backends.box2d.backend import Kitchen2DBackend
+    from ltamp_cli.backends.box2d.scene import scene_from_world
     from ltamp_cli.learning.model import LevelSetModel
 
+    problem = load_problem(COFFEE)
     backend = Kitchen2DBackend()
+    seed = 5
+    streams = problem.streams_factory(dict(problem.world), np.random.default_rng(seed))
+    scene = scene_from_world(problem.world, np.random.default_rng(seed))
+    cup, cream, sugar = (scene.object(n).spec for n in ("cup", "cream", "sugar"))
+    coaster = (-27.0, 20.2)
+    pours = streams["sample-pour"].function("cream", "cup", coaster, "coaster")
+    scoops = streams["sample-scoop"].function("spoon", "sugar", "p_sugar")
+    cases = {
+        "pour": (np.array([cream.width, cream.height, cup.width, cup.height]), pours),
+        "scoop": (np.array([sugar.width, sugar.height]), scoops),
+    }
     rng = np.random.default_rng(0)
-    contexts = {"pour": np.array([3.5, 3.2, 4.1, 3.3]), "scoop": np.array([6.0, 4.2])}
-    for skill, context in contexts.items():
+    for skill, (context, stream) in cases.items():
+        first = np.array(next(stream)[-1])
+        assert backend.run_trial(skill, context, first, 0).score > 0, skill
         model = LevelSetModel.load(str(ROOT / "models" / "kitchen2d" / skill))
-
-        def valid(c: np.ndarray, u: np.ndarray, s: str = skill) -> np.ndarray:
-            return backend.is_valid(s, c, u)
-
-        best, phi = model.most_confident_control(context, np.random.default_rng(0), valid,
-                                                 n_candidates=2000, n_restarts=2)
-        assert phi > 0
-        assert backend.run_trial(skill, context, best, 0).score > 0
         candidates = model.spec.control.sample_uniform(rng, 2000)
-        candidates = candidates[valid(context, candidates)]
+        candidates = candidates[backend.is_valid(skill, context, candidates)]
         mean, std = model.predict(np.repeat(context[None], len(candidates), 0), candidates)
         worst = candidates[np.argmin(mean / std)]
-        assert backend.run_trial(skill, context, worst, 0).score < 0
+        assert backend.run_trial(skill, context, worst, 0).score < 0, skill
