@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from ltamp_cli.backends.pybullet.backend import Kitchen3DBackend
+    from ltamp_cli.backends.pybullet.executor import Kitchen3DExecutor
 
 
 def make_backend(**options: Any) -> Kitchen3DBackend:
@@ -21,4 +22,11 @@ def make_backend(**options: Any) -> Kitchen3DBackend:
     return Kitchen3DBackend(**options)
 
 
-__all__ = ["make_backend"]
+def make_executor(**options: Any) -> Kitchen3DExecutor:
+    """Create the kitchen3d plan executor (see :mod:`ltamp_cli.backends.execution`)."""
+    from ltamp_cli.backends.pybullet.executor import Kitchen3DExecutor
+
+    return Kitchen3DExecutor(**options)
+
+
+__all__ = ["make_backend", "make_executor"]

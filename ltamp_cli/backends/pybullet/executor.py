@@ -1,0 +1,339 @@
+"""Replaying kitchen3d plans in PyBullet and checking the goal in the simulated world.
+
+The arm is driven kinematically along the planned joint paths (one configuration per
+simulation step, at a bounded joint speed); a held object is rigidly carried at
+``EE pose @ grasp`` with the velocity that reaches its next pose, so contacts push beads the
+way the pour trials do. Cups, blocks and beads are dynamic: a released object falls and
+settles, beads slosh and pour under gravity. Picks verify that both fingers are at the
+object before carrying it; places verify where the object came to rest. The goal is checked
+from bead positions and object poses, never from the plan.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pybullet as p
+
+from ltamp_cli.backends.execution import ExecutionReport
+from ltamp_cli.backends.pybullet.kitchenware import (
+    BodyMaterial,
+    KitchenwareBody,
+    create_kitchenware,
+)
+from ltamp_cli.backends.pybullet.particles import (
+    BeadSpec,
+    bead_positions,
+    contained_mask,
+    count_lost,
+    spawn_beads_in,
+)
+from ltamp_cli.backends.pybullet.render import Camera, FrameRecorder
+from ltamp_cli.backends.pybullet.robot.arm import PANDA_FINGER_JOINTS, PANDA_HOME
+from ltamp_cli.backends.pybullet.robot.pose import Pose
+from ltamp_cli.backends.pybullet.robot.scene import KitchenScene, build_kitchen_scene
+from ltamp_cli.backends.pybullet.tamp.grasping import object_grasps
+from ltamp_cli.backends.pybullet.tamp.planning import pose_of
+from ltamp_cli.backends.pybullet.tamp.scene import SceneSpec, scene_from_world
+from ltamp_cli.backends.pybullet.tamp.values import ArmPath
+from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig
+from ltamp_cli.motion.interpolation import densify_path
+
+#: Fraction of a material's beads that must end in a container for ``(Contains c m)``.
+CONTAINS_FRACTION = 0.8
+#: How far (m) a placed object may come to rest from its planned pose.
+PLACE_TOLERANCE_M = 0.02
+#: A pick needs both fingers within this distance (m) of the object.
+FINGER_CONTACT_M = 0.01
+
+
+class ActionFailed(RuntimeError):
+    """An action could not be carried out physically (e.g. the fingers missed the object)."""
+
+
+@dataclass(frozen=True)
+class ExecutionSettings:
+    """Joint speeds (rad/s) for transit, carrying contents and pouring; settle/hold times (s)."""
+
+    free_speed: float = 1.5
+    carry_speed: float = 0.8
+    pour_speed: float = 1.2
+    settle_s: float = 0.4
+    pour_hold_s: float = 0.8
+    render_every: int = 12
+
+
+def _material(kind: str, rng: np.random.Generator, fixed: bool) -> BodyMaterial:
+    friction = float(np.clip(rng.normal(0.5, 0.1), 0.2, 0.8))
+    colours = {"cup": (0.9, 0.5, 0.2, 1.0), "bowl": (0.85, 0.85, 0.8, 1.0),
+               "block": (0.3, 0.6, 0.3, 1.0), "faucet": (0.6, 0.6, 0.65, 1.0)}
+    mass = 0.0 if fixed else {"cup": 0.15, "block": 0.2}.get(kind, 0.1)
+    return BodyMaterial(mass=mass, lateral_friction=friction, restitution=0.1,
+                        rgba=colours.get(kind, (0.7, 0.7, 0.7, 1.0)))
+
+
+def _goal_atoms(formula: Any) -> list[tuple[str, tuple[str, ...]]]:
+    from ltamp_cli.planner.pddl.syntax import And, Atom
+
+    if isinstance(formula, Atom):
+        return [(formula.predicate.lower(), tuple(a.lower() for a in formula.args))]
+    if isinstance(formula, And):
+        return [atom for part in formula.parts for atom in _goal_atoms(part)]
+    raise ActionFailed("only conjunctions of facts can be checked physically")
+
+
+class Kitchen3DRun:
+    """One execution: the live PyBullet kitchen plus what the actions achieved."""
+
+    def __init__(self, spec: SceneSpec, poses: dict[str, tuple[float, float]], seed: int,
+                 settings: ExecutionSettings, recorder_camera: Camera | None) -> None:
+        self.spec = spec
+        self.settings = settings
+        self.rng = np.random.default_rng(seed)
+        self.world = PhysicsWorld(WorldConfig())
+        self.scene: KitchenScene = build_kitchen_scene(self.world.client, spec.n_arms)
+        self.table_z = float(self.scene.table.height)
+        self.recorder = (FrameRecorder(self.world.client, settings.render_every, recorder_camera)
+                         if recorder_camera is not None else None)
+        self.steps = 0
+        self.log: list[dict[str, Any]] = []
+        self.bodies: dict[str, KitchenwareBody] = {}
+        for name, obj in spec.objects.items():
+            xy = obj.at if obj.fixed else poses.get(name)
+            if xy is None:
+                raise ActionFailed(f"object {name!r} has no initial AtPose")
+            pose = pose_of(xy, self.table_z)
+            self.bodies[name] = create_kitchenware(
+                self.world.client, obj.geometry(), pose.position, pose.quaternion,
+                _material(obj.kind, self.rng, obj.fixed))
+        # Beads per material, and which container each material started in.
+        self.beads: dict[str, np.ndarray] = {}
+        for name, obj in spec.objects.items():
+            if obj.contents is None:
+                continue
+            beads = BeadSpec(count=obj.contents.beads, radius=0.006,
+                             lateral_friction=float(np.clip(self.rng.normal(0.5, 0.1), 0.2, 0.8)),
+                             restitution=float(np.clip(self.rng.normal(0.7, 0.1), 0.4, 0.9)))
+            self.beads[obj.contents.material] = spawn_beads_in(self.bodies[name], beads, self.rng)
+        for arm in self.scene.arms:
+            arm.set_configuration(np.asarray(PANDA_HOME))
+            # Fingers are kinematic too: no motors fight the resets.
+            p.setJointMotorControlArray(arm.body_id, PANDA_FINGER_JOINTS, p.VELOCITY_CONTROL,
+                                        forces=[0.0, 0.0], physicsClientId=self.world.client)
+        self.held: dict[int, tuple[str, Pose]] = {}
+        self.step_n(self.world.steps_for(settings.settle_s))
+        self.initial_counts = self.counts()
+
+    def close(self) -> None:
+        self.world.close()
+
+    # Simulation --------------------------------------------------------------------------
+
+    def _step(self) -> None:
+        self.world.step()
+        if self.recorder is not None:
+            self.recorder(self.steps)
+        self.steps += 1
+
+    def step_n(self, n: int) -> None:
+        for _ in range(n):
+            for arm_index, (name, grasp) in self.held.items():
+                self._carry(arm_index, name, grasp, None)
+            self._step()
+
+    def _carry(self, arm_index: int, name: str, grasp: Pose, nxt: Pose | None) -> None:
+        tool = self.scene.arms[arm_index].end_effector_pose() @ grasp
+        dt = self.world.config.time_step
+        linear = np.zeros(3)
+        angular = np.zeros(3)
+        if nxt is not None:
+            linear = (nxt.position - tool.position) / dt
+            delta = Pose(np.zeros(3), nxt.quaternion) @ Pose(np.zeros(3), tool.quaternion).inverse()
+            angle = 2.0 * math.acos(min(1.0, abs(float(delta.quaternion[3]))))
+            axis = delta.quaternion[:3]
+            norm = float(np.linalg.norm(axis))
+            if norm > 1e-12:
+                sign = 1.0 if delta.quaternion[3] >= 0 else -1.0
+                angular = sign * axis / norm * angle / dt
+        self.bodies[name].set_pose(tool.position, tool.quaternion, linear, angular)
+
+    def follow(self, arm_index: int, configurations: np.ndarray, speed: float) -> None:
+        """Drive the arm through ``configurations`` (n, 7) at ``speed`` rad/s (max joint)."""
+        arm = self.scene.arms[arm_index]
+        dense = densify_path(np.asarray(configurations), speed * self.world.config.time_step)
+        held = self.held.get(arm_index)
+        for i, q in enumerate(dense):
+            if held is not None:
+                nxt = None
+                if i + 1 < len(dense):
+                    arm.set_configuration(dense[i + 1])
+                    nxt = arm.end_effector_pose() @ held[1]
+                arm.set_configuration(q)
+                self._carry(arm_index, held[0], held[1], nxt)
+            else:
+                arm.set_configuration(q)
+            for other, (name, grasp) in self.held.items():
+                if other != arm_index:
+                    self._carry(other, name, grasp, None)
+            self._step()
+
+    # Measurements ------------------------------------------------------------------------
+
+    def counts(self) -> dict[str, dict[str, int]]:
+        """Beads of each material contained in each cup/bowl."""
+        containers = {n: b for n, b in self.bodies.items()
+                      if self.spec.objects[n].kind in ("cup", "bowl")}
+        out: dict[str, dict[str, int]] = {}
+        for material, ids in self.beads.items():
+            positions = bead_positions(self.world.client, ids)
+            out[material] = {n: int(contained_mask(b, positions).sum())
+                             for n, b in containers.items()}
+            out[material]["total"] = len(ids)
+            out[material]["off_table"] = count_lost(positions, floor_z=self.table_z - 0.05)
+        return out
+
+    def object_xy(self, name: str) -> tuple[float, float]:
+        position, _ = self.bodies[name].pose()
+        return float(position[0]), float(position[1])
+
+    # Actions -----------------------------------------------------------------------------
+
+    def grasp_pose(self, name: str, grasp: Any) -> Pose:
+        grasps = object_grasps(self.spec.objects[name], self.spec.n_arms)
+        return grasps[int(grasp[1])].tool_in_gripper
+
+    def move(self, path: ArmPath) -> None:
+        carrying = any(self.spec.objects[n].contents is not None for n, _ in self.held.values())
+        speed = self.settings.carry_speed if carrying else self.settings.free_speed
+        self.follow(path.arm, path.configurations, speed)
+
+    def pick(self, name: str, grasp: Any, path: ArmPath) -> None:
+        arm = self.scene.arms[path.arm]
+        arm.open_gripper()
+        self.follow(path.arm, path.configurations, self.settings.free_speed / 2)
+        width = object_grasps(self.spec.objects[name], self.spec.n_arms)[int(grasp[1])].width
+        arm.set_finger_opening(max(width - 0.002, 0.0))
+        gaps = [min((c[8] for c in p.getClosestPoints(
+            arm.body_id, self.bodies[name].body, 0.05, linkIndexA=link,
+            physicsClientId=self.world.client)), default=1.0) for link in (9, 10)]
+        if max(gaps) > FINGER_CONTACT_M:
+            raise ActionFailed(f"pick {name}: fingers {np.round(gaps, 4).tolist()} m from it")
+        self.held[path.arm] = (name, self.grasp_pose(name, grasp))
+        self.follow(path.arm, path.configurations[::-1], self.settings.free_speed / 2)
+        self.log.append({"action": "pick", "object": name, "finger_gaps_m": gaps})
+
+    def place(self, name: str, xy: tuple[float, float], path: ArmPath) -> None:
+        self.follow(path.arm, path.configurations, self.settings.free_speed / 2)
+        del self.held[path.arm]
+        arm = self.scene.arms[path.arm]
+        arm.open_gripper()
+        self.bodies[name].set_pose(*self.bodies[name].pose())  # released at rest
+        self.follow(path.arm, path.configurations[::-1], self.settings.free_speed / 2)
+        self.step_n(self.world.steps_for(self.settings.settle_s))
+        rest = self.object_xy(name)
+        error = float(np.hypot(rest[0] - xy[0], rest[1] - xy[1]))
+        self.log.append({"action": "place", "object": name, "error_m": error})
+        if error > PLACE_TOLERANCE_M:
+            raise ActionFailed(f"place {name}: came to rest {error:.3f} m from its pose")
+
+    def pour(self, path: ArmPath) -> None:
+        self.follow(path.arm, path.configurations, self.settings.pour_speed)
+        self.step_n(self.world.steps_for(self.settings.pour_hold_s))
+        self.follow(path.arm, path.configurations[::-1], self.settings.carry_speed)
+        self.step_n(self.world.steps_for(self.settings.settle_s))
+        self.log.append({"action": "pour", "counts": self.counts()})
+
+    def run_step(self, name: str, values: Sequence[Any]) -> None:
+        actions: dict[str, Callable[[], None]] = {
+            "move-free": lambda: self.move(values[1]),
+            "move-holding": lambda: self.move(values[3]),
+            "pick": lambda: self.pick(values[0], values[2], values[4]),
+            "place": lambda: self.place(values[0], (float(values[1][0]), float(values[1][1])),
+                                        values[4]),
+            "pour": lambda: self.pour(values[5]),
+        }
+        if name not in actions:
+            raise ActionFailed(f"cannot execute action {name!r}")
+        actions[name]()
+
+    # Goal --------------------------------------------------------------------------------
+
+    def check(self, predicate: str, args: tuple[str, ...]) -> tuple[bool, dict[str, Any]]:
+        if predicate == "contains":
+            container, material = args
+            counts = self.counts().get(material)
+            if counts is None:
+                return False, {"reason": f"no beads of {material}"}
+            start = self.initial_counts[material]
+            inside_start = max(v for k, v in start.items() if k not in ("total", "off_table"))
+            fraction = counts.get(container, 0) / max(inside_start, 1)
+            return fraction >= CONTAINS_FRACTION, {"fraction": fraction, "counts": counts}
+        if predicate == "on":
+            name, region = args
+            xy = self.object_xy(name)
+            area = self.spec.regions[region]
+            return area.contains(xy), {"xy": xy}
+        if predicate == "holding":
+            return any(n == args[0] for n, _ in self.held.values()), {}
+        raise ActionFailed(f"cannot check goal fact ({predicate} {' '.join(args)}) physically")
+
+
+class Kitchen3DExecutor:
+    """:class:`~ltamp_cli.backends.execution.PlanExecutor` for kitchen3d plans."""
+
+    def __init__(self, settings: ExecutionSettings | None = None,
+                 camera: Camera | None = None) -> None:
+        self.settings = settings or ExecutionSettings()
+        self.camera = camera or Camera(target=(0.0, 0.0, 0.75), distance=1.3, yaw=50.0,
+                                       pitch=-35.0)
+
+    def execute(self, problem: Any, plan_result: Any, seed: int,
+                render_path: str | Path | None = None) -> ExecutionReport:
+        spec = scene_from_world(problem.world)
+        poses: dict[str, tuple[float, float]] = {}
+        for atom in problem.init:
+            if atom.predicate.lower() == "atpose":
+                name, pose = (a.lower() for a in atom.args)
+                value = problem.objects.get(pose, (None, None))[1]
+                if value is not None:
+                    poses[name] = (float(value[0]), float(value[1]))
+        run = Kitchen3DRun(spec, poses, seed, self.settings,
+                           self.camera if render_path is not None else None)
+        steps: list[dict[str, Any]] = []
+        success = True
+        try:
+            for index, step in enumerate(plan_result.plan or ()):
+                try:
+                    run.run_step(step.name, step.values)
+                    steps.append({"index": index, "action": step.name, "ok": True})
+                except ActionFailed as error:
+                    steps.append({"index": index, "action": step.name, "ok": False,
+                                  "error": str(error)})
+                    success = False
+                    break
+            facts = []
+            goal_holds = success
+            for predicate, args in _goal_atoms(problem.goal):
+                holds, measured = run.check(predicate, args)
+                facts.append({"fact": f"({predicate} {' '.join(args)})", "holds": holds,
+                              **measured})
+                goal_holds = goal_holds and holds
+            details = {"steps": steps, "goal": facts, "log": run.log,
+                       "sim_steps": run.steps,
+                       "sim_time_s": run.steps * run.world.config.time_step,
+                       "initial_counts": run.initial_counts}
+            if render_path is not None and run.recorder is not None:
+                from ltamp_cli.backends.pybullet.tamp.animation import save_frames
+
+                details["render"] = str(save_frames(run.recorder.frames, Path(render_path)))
+            return ExecutionReport(success, bool(goal_holds), details)
+        finally:
+            run.close()
+
+
+__all__ = ["ActionFailed", "ExecutionSettings", "Kitchen3DExecutor", "Kitchen3DRun"]

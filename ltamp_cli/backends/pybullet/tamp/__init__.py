@@ -1,0 +1,9 @@
+"""Task-and-motion planning on the PyBullet Kitchen3D.
+
+:mod:`.scene` (the problem's ``world`` → objects and regions), :mod:`.values` (planner
+values: poses, grasps, arm confs and paths), :mod:`.grasping`, :mod:`.planning` (the
+headless world answering IK, motion and collision queries for the streams),
+:mod:`.skill_paths` (learned-skill tool paths placed in the kitchen), :mod:`.animation`.
+The bindings are ``domains/kitchen3d/streams.py``; plans are replayed by
+:mod:`ltamp_cli.backends.pybullet.executor`.
+"""

@@ -1,0 +1,240 @@
+"""The geometry behind the Kitchen3D streams: one headless PyBullet world with the table, the
+arms and one collision body per object, queried for IK, motions and collisions.
+
+Fixed objects stand at their ``at`` pose and are obstacles of every query. Movable objects
+are parked far away and brought in only for the query that involves them: their collisions
+with paths are separate tests (``CFreeTraj``) that the domain uses negated, so that the
+planner knows *which* object is in the way and can move it.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pybullet as p
+
+from ltamp_cli.backends.pybullet.kitchenware import (
+    BodyMaterial,
+    KitchenwareBody,
+    create_kitchenware,
+)
+from ltamp_cli.backends.pybullet.robot.cartesian import CartesianConfig, follow_tool_path
+from ltamp_cli.backends.pybullet.robot.collision import ArmCollisionChecker, AttachedBody
+from ltamp_cli.backends.pybullet.robot.grasps import Grasp
+from ltamp_cli.backends.pybullet.robot.ik import IKConfig
+from ltamp_cli.backends.pybullet.robot.motion import plan_arm_motion
+from ltamp_cli.backends.pybullet.robot.pose import Pose
+from ltamp_cli.backends.pybullet.robot.scene import KitchenScene, build_kitchen_scene
+from ltamp_cli.backends.pybullet.tamp.grasping import approach_direction, object_grasps
+from ltamp_cli.backends.pybullet.tamp.scene import XY, SceneSpec
+from ltamp_cli.backends.pybullet.tamp.values import ArmConf, ArmPath, GraspValue
+from ltamp_cli.motion.interpolation import densify_path
+from ltamp_cli.motion.rrt_connect import RRTConnectConfig
+
+#: Pre-grasp: the hand backs off this far (m) along its approach axis, and lifts this much.
+RETREAT_M = 0.08
+LIFT_M = 0.02
+#: Joint resolution (rad) of dense path collision tests.
+CHECK_RESOLUTION = 0.04
+PARK_DISTANCE_M = 20.0
+FOOTPRINT_MARGIN_M = 0.01
+
+
+def pose_of(xy: Sequence[float], table_z: float, yaw: float = 0.0) -> Pose:
+    """World pose of an upright object whose base centre is at ``xy`` on the table."""
+    return Pose.from_euler(np.array([float(xy[0]), float(xy[1]), table_z]), yaw=yaw)
+
+
+@dataclass(frozen=True)
+class PlanningSettings:
+    """Speed/robustness knobs of the geometric queries."""
+
+    rrt_time_s: float = 1.0
+    ik_restarts: int = 8
+    cartesian_restarts: int = 3
+
+
+class PlanningWorld:
+    """A PyBullet ``DIRECT`` client with the kitchen scene of ``spec`` (closed on collection)."""
+
+    def __init__(self, spec: SceneSpec, settings: PlanningSettings | None = None) -> None:
+        self.spec = spec
+        self.settings = settings or PlanningSettings()
+        self.client = p.connect(p.DIRECT)
+        if self.client < 0:
+            raise RuntimeError("could not connect to a PyBullet physics server")
+        self._finalizer = weakref.finalize(self, p.disconnect, self.client)
+        self.scene: KitchenScene = build_kitchen_scene(self.client, spec.n_arms)
+        self.table_z = float(self.scene.table.height)
+        self.bodies: dict[str, KitchenwareBody] = {}
+        self.grasps: dict[str, list[Grasp]] = {}
+        self._park_slot = {name: i for i, name in enumerate(spec.objects)}
+        for index, (name, obj) in enumerate(spec.objects.items()):
+            body = create_kitchenware(self.client, obj.geometry(), material=BodyMaterial(mass=0.0),
+                                      visual=False)
+            self.bodies[name] = body
+            self.grasps[name] = object_grasps(obj, spec.n_arms)
+            if obj.fixed and obj.at is not None:
+                self.place(name, obj.at)
+            else:
+                self.park(name, index)
+        self.cartesian = CartesianConfig(ik=IKConfig(restarts=self.settings.ik_restarts),
+                                         path_restarts=self.settings.cartesian_restarts)
+
+    def close(self) -> None:
+        self._finalizer()
+
+    # Bodies ------------------------------------------------------------------------------
+
+    def place(self, name: str, xy: Sequence[float]) -> None:
+        pose = pose_of(xy, self.table_z)
+        self.bodies[name].set_pose(pose.position, pose.quaternion)
+
+    def park(self, name: str, slot: int | None = None) -> None:
+        index = self._park_slot[name] if slot is None else slot
+        self.bodies[name].set_pose((PARK_DISTANCE_M + 2.0 * index, PARK_DISTANCE_M, 0.0))
+
+    def fixed_bodies(self) -> tuple[int, ...]:
+        return tuple(self.bodies[n].body for n, o in self.spec.objects.items() if o.fixed)
+
+    def obstacles(self, arm: int, extra: Sequence[str] = ()) -> tuple[int, ...]:
+        """Static scenery, the other arm, the fixed objects and the named movable ones."""
+        bodies = (*self.fixed_bodies(), *(self.bodies[name].body for name in extra))
+        return self.scene.obstacles_for(arm, bodies)
+
+    def grasp(self, name: str, grasp: GraspValue) -> Grasp:
+        return self.grasps[name][grasp[1]]
+
+    def checker(self, arm: int, held: tuple[str, GraspValue] | None = None,
+                extra: Sequence[str] = (), carries_contents: bool = True) -> ArmCollisionChecker:
+        attached = None
+        if held is not None:
+            name, g = held
+            carrying = carries_contents and self.spec.objects[name].contents is not None
+            attached = AttachedBody(self.bodies[name].body, self.grasp(name, g).tool_in_gripper,
+                                    carrying)
+        return ArmCollisionChecker(self.scene.arms[arm], self.obstacles(arm, extra), attached)
+
+    # Stream queries ----------------------------------------------------------------------
+
+    def grasp_values(self, name: str) -> list[GraspValue]:
+        return [(g.kind, i) for i, g in enumerate(self.grasps[name])]
+
+    def pick_kinematics(self, name: str, xy: XY, grasp: GraspValue, rng: np.random.Generator
+                        ) -> Iterator[tuple[ArmConf, ArmPath]]:
+        """For each arm that reaches it: the pre-grasp conf and the approach path to the
+        grasp (checked with ``name`` at ``xy`` as an obstacle, and carrying it back out)."""
+        g = self.grasp(name, grasp)
+        object_pose = pose_of(xy, self.table_z)
+        at_grasp = g.gripper_pose(object_pose)
+        above = Pose(at_grasp.position + np.array([0.0, 0.0, LIFT_M]), at_grasp.quaternion)
+        back = above @ Pose(np.array([0.0, 0.0, -RETREAT_M]))
+        for arm in range(self.spec.n_arms):
+            self.place(name, xy)
+            try:
+                into = follow_tool_path(self.scene.arms[arm], [back, above, at_grasp], Pose(), rng,
+                                        is_valid=self.checker(arm, extra=(name,)),
+                                        config=self.cartesian)
+                if not into.success:
+                    continue
+                assert into.configurations is not None
+                out = self.checker(arm, held=(name, grasp), carries_contents=False)
+                # Leaving with the object: it must clear everything fixed as it is lifted.
+                if not all(out(q) for q in densify_path(into.configurations[::-1],
+                                                         CHECK_RESOLUTION)):
+                    continue
+            finally:
+                self.park(name)
+            configs = into.configurations
+            yield (ArmConf.of(arm, configs[0]),
+                   ArmPath(arm, configs, "approach", None, touching=name))
+
+    def plan_motion(self, q1: ArmConf, q2: ArmConf, held: tuple[str, GraspValue] | None,
+                    seed: int) -> ArmPath | None:
+        """RRT-Connect between two confs of the same arm (carrying ``held``)."""
+        if q1.arm != q2.arm or q1 == q2:
+            return None
+        arm = self.scene.arms[q1.arm]
+        checker = self.checker(q1.arm, held)
+        try:
+            plan = plan_arm_motion(arm, q1.array, q2.array, checker,
+                                   RRTConnectConfig(time_limit=self.settings.rrt_time_s, seed=seed))
+        finally:
+            if held is not None:
+                self.park(held[0])
+        if plan.path is None:
+            return None
+        return ArmPath(q1.arm, plan.path, "holding" if held else "free", held)
+
+    def follow_object_path(self, name: str, grasp: GraspValue, poses: Sequence[Pose], arm: int,
+                           rng: np.random.Generator, kind: str) -> ArmPath | None:
+        """``follow-obj-path``: arm configurations carrying ``name`` along ``poses``
+        (world), collision-free with the fixed scenery; no tilt limit (the skill tilts)."""
+        g = self.grasp(name, grasp)
+        checker = self.checker(arm, held=(name, grasp), carries_contents=False)
+        try:
+            found = follow_tool_path(self.scene.arms[arm], poses, g.tool_in_gripper, rng,
+                                     is_valid=checker, config=self.cartesian)
+        finally:
+            self.park(name)
+        if not found.success:
+            return None
+        assert found.configurations is not None
+        return ArmPath(arm, found.configurations, kind, (name, grasp))
+
+    def skill_yaws(self, name: str, grasp: GraspValue, arm: int) -> list[tuple[float, float]]:
+        """``(ψ, φ)`` pairs for a skill whose tool tilts about its skill-frame ``y`` axis:
+        the skill frame is turned by ``ψ`` about the target, the tool by ``φ`` about its own
+        axis, so that the hand's approach lies along the tilt axis and points away from the
+        arm's base (the wrist's last joint then does the tilting)."""
+        approach = approach_direction(self.grasp(name, grasp))
+        a_obj = math.atan2(approach[1], approach[0])
+        forward = 0.0 if arm == 0 else math.pi
+        pairs = []
+        for sign in (1.0, -1.0):
+            along = math.pi / 2 if sign > 0 else -math.pi / 2  # angle of ±y_s
+            pairs.append((forward - along, along - a_obj))
+        return pairs
+
+    def path_collides(self, path: ArmPath, name: str, xy: XY) -> bool:
+        """Does ``path`` (and what it holds) hit movable object ``name`` standing at ``xy``?"""
+        if (self.spec.objects[name].fixed or name == path.touching
+                or (path.held is not None and path.held[0] == name)):
+            return False
+        arm = self.scene.arms[path.arm]
+        body = self.bodies[name].body
+        held_body = None
+        held_grasp = None
+        if path.held is not None:
+            held_body = self.bodies[path.held[0]].body
+            held_grasp = self.grasp(*path.held).tool_in_gripper
+        self.place(name, xy)
+        try:
+            for q in densify_path(path.configurations, CHECK_RESOLUTION):
+                arm.set_configuration(q)
+                points = p.getClosestPoints(arm.body_id, body, 0.0, physicsClientId=self.client)
+                if any(c[8] < -1e-3 for c in points):
+                    return True
+                if held_body is not None and held_grasp is not None:
+                    tool = arm.end_effector_pose() @ held_grasp
+                    position, quaternion = tool.as_tuples()
+                    p.resetBasePositionAndOrientation(held_body, position, quaternion,
+                                                      physicsClientId=self.client)
+                    points = p.getClosestPoints(held_body, body, 0.0, physicsClientId=self.client)
+                    if any(c[8] < -1e-3 for c in points):
+                        return True
+            return False
+        finally:
+            self.park(name)
+            if path.held is not None:
+                self.park(path.held[0])
+
+    def footprints_overlap(self, a: str, pa: XY, b: str, pb: XY) -> bool:
+        ha = self.spec.objects[a].footprint()
+        hb = self.spec.objects[b].footprint()
+        return (abs(pa[0] - pb[0]) < ha[0] + hb[0] + FOOTPRINT_MARGIN_M
+                and abs(pa[1] - pb[1]) < ha[1] + hb[1] + FOOTPRINT_MARGIN_M)
