@@ -163,15 +163,14 @@ class PlannerState:
         return outputs
 
     def search(self, init: Iterable[Fact], objects: Mapping[str, str],
-               function_values: Mapping[Fact, float], max_expansions: int | None = None,
-               fact_effort: Mapping[Fact, float] | None = None) -> DiscreteResult:
+               function_values: Mapping[Fact, float], max_expansions: int | None = None
+               ) -> DiscreteResult:
         start = time.perf_counter()
         self.searches += 1
         try:
             return plan_discrete(
                 self.problem.domain, objects, init, function_values, self.problem.goal,
-                self.deadline, self.config.search, self.config.unit_costs, max_expansions,
-                fact_effort)
+                self.deadline, self.config.search, self.config.unit_costs, max_expansions)
         finally:
             self.search_time += time.perf_counter() - start
 

@@ -41,7 +41,6 @@ class OptimisticEvaluation:
     fact_producer: dict[Fact, InstanceKey] = field(default_factory=dict)
     object_producer: dict[str, InstanceKey] = field(default_factory=dict)
     outputs: dict[InstanceKey, tuple[str, ...]] = field(default_factory=dict)
-    effort: dict[Fact, float] = field(default_factory=dict)  # search cost of optimistic facts
     cut: bool = False  # an instance was left out by the complexity bound
 
 
@@ -88,13 +87,11 @@ def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: 
     name, inputs = key
     external = state.externals[name]
     mapping = dict(zip(external_inputs(external), inputs, strict=True))
-    effort = stream_effort(state, name, level)
     if isinstance(external, StreamFunction):
         term = (external.name, *(mapping[a] for a in external.head.args))
         if term not in evaluation.function_values:
             evaluation.function_values[term] = state.bindings[name].info.opt_cost
             evaluation.fact_producer[("=", *term)] = key
-            evaluation.effort[("=", *term)] = effort
         return False
     outputs: tuple[str, ...] = ()
     if isinstance(external, Stream) and external.outputs:
@@ -117,16 +114,9 @@ def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: 
     for fact in facts:
         if evaluation.index.add(fact):
             evaluation.fact_producer[fact] = key
-            evaluation.effort[fact] = effort
             added = True
     return added
 
-
-def stream_effort(state: PlannerState, name: str, level: int) -> float:
-    """Search cost of relying on an optimistic fact (PDDLStream's stream effort): expected
-    calls to make it real, growing with its complexity so real values are preferred."""
-    info = state.bindings[name].info
-    return (1.0 + level) * max(info.overhead, 0.0) / max(info.p_success, 1e-3)
 
 
 def stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
@@ -243,7 +233,7 @@ def solve_focused(state: PlannerState) -> PlanResult:
             evaluate_eager(state)
             evaluation = optimistic_evaluation(state, complexity, placeholders)
             discrete = state.search(evaluation.index.members, evaluation.object_types,
-                                    evaluation.function_values, fact_effort=evaluation.effort)
+                                    evaluation.function_values)
             if not discrete.solved:
                 disabled = [i for i in state.instances.values() if i.disabled]
                 if not evaluation.cut and not disabled:

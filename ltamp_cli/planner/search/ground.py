@@ -48,7 +48,6 @@ class GroundAction:
     cost: float
     static_pre: tuple[Fact, ...] = ()
     cost_term: Fact | None = None
-    effort: float = 0.0  # search-only penalty for relying on not-yet-real (optimistic) facts
 
     def __str__(self) -> str:
         return "(" + " ".join((self.name, *self.args)) + ")"
@@ -232,7 +231,6 @@ def ground_task(
     axioms: Sequence[NormalAxiom],
     init: Iterable[Fact],
     function_values: Mapping[Fact, float],
-    fact_effort: Mapping[Fact, float] | None = None,
 ) -> Grounding:
     """Instantiate every reachable action and axiom rule."""
     derived = {axiom.predicate for axiom in axioms}
@@ -255,8 +253,7 @@ def ground_task(
     delta: list[Fact] = ordered_init
     for rule in rules:
         if not rule.positive:  # e.g. a parameterless action with an empty precondition
-            _emit(rule, {}, index, init_facts, fluent, function_values, seen, result, delta,
-                  fact_effort)
+            _emit(rule, {}, index, init_facts, fluent, function_values, seen, result, delta)
     while delta:
         current, delta = delta, []
         for fact in current:
@@ -271,7 +268,7 @@ def ground_task(
                     rule.joins[position] = steps
                 for binding in _run_join(steps, index, start):
                     _emit(rule, binding, index, init_facts, fluent, function_values, seen,
-                          result, delta, fact_effort)
+                          result, delta)
     result.static_predicates = frozenset(
         {fact[0] for fact in index.members} - fluent
     )
@@ -280,8 +277,8 @@ def ground_task(
 
 def _emit(rule: _Rule, binding: dict[str, str], index: FactIndex, init: set[Fact],
           fluent: frozenset[str], function_values: Mapping[Fact, float],
-          seen: set[tuple[int, tuple[str, ...]]], result: Grounding, delta: list[Fact],
-          fact_effort: Mapping[Fact, float] | None) -> None:
+          seen: set[tuple[int, tuple[str, ...]]], result: Grounding, delta: list[Fact]
+          ) -> None:
     key = (id(rule), tuple(binding[v] for v in rule.variables))
     if key in seen:
         return
@@ -342,10 +339,5 @@ def _emit(rule: _Rule, binding: dict[str, str], index: FactIndex, init: set[Fact
         if effect.positive and index.add(fact):
             delta.append(fact)
     args = tuple(binding[p] for p in source.parameters)
-    effort = 0.0
-    if fact_effort:
-        effort = sum(fact_effort.get(f, 0.0) for f in static_pos)
-        if cost_term is not None:
-            effort += fact_effort.get(("=", *cost_term), 0.0)
     result.actions.append(GroundAction(source.name, args, dynamic_pos, tuple(negative),
-                                       tuple(effects), cost, static_pos, cost_term, effort))
+                                       tuple(effects), cost, static_pos, cost_term))

@@ -53,7 +53,6 @@ def plan_discrete(
     algorithm: str = "ff",
     unit_costs: bool = False,
     max_expansions: int | None = None,
-    fact_effort: Mapping[Fact, float] | None = None,
 ) -> DiscreteResult:
     """Find a plan for the finite task given by ``objects`` (name → type) and ``init``."""
     start = time.perf_counter()
@@ -69,7 +68,7 @@ def plan_discrete(
     axioms = [rule for axiom in domain.axioms for rule in normalizer.axiom(axiom)]
     axioms += normalizer.goal(goal)
     axioms += normalizer.take_auxiliary()
-    grounding = ground_task(actions, axioms, facts, function_values, fact_effort)
+    grounding = ground_task(actions, axioms, facts, function_values)
     ground_time = time.perf_counter() - start
     if ("%goal",) not in grounding.reachable:
         return DiscreteResult(None, float("inf"), grounding, None, None, ground_time, 0.0)

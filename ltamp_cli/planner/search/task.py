@@ -98,7 +98,7 @@ class Task:
             tuple(dict.fromkeys(adds)),
             tuple(dict.fromkeys(d for d in deletes if d not in adds)),
             tuple(conditional),
-            action.cost + action.effort,
+            action.cost,
         )
 
     def _compile_operators(self) -> None:
