@@ -1,0 +1,149 @@
+"""The Kitchen3D :class:`~ltamp_cli.backends.protocol.SkillBackend` on SAPIEN (PhysX CPU).
+
+Same skills, parameter spaces, context distribution, validity pre-checks and scores as the
+PyBullet backend (``name = "sapien"``); see :mod:`.skills`. One backend owns one
+:class:`~.world.SapienWorld`, created on first use and reset for every trial.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+
+import numpy as np
+
+from ltamp_cli.backends.protocol import SkillSpec, TrialResult, as_batch
+from ltamp_cli.backends.pybullet.backend import Kitchen3DBackend
+from ltamp_cli.backends.pybullet.skills.pour import PourSettings, check_pour
+from ltamp_cli.backends.pybullet.skills.scoop import ScoopSettings, check_scoop
+from ltamp_cli.backends.sapien.render import (
+    CameraView,
+    FrameRecorder,
+    RenderProbe,
+    new_render_system,
+    probe_render_device,
+    require_renderer,
+)
+from ltamp_cli.backends.sapien.skills import StepCallback, run_pour, run_scoop
+from ltamp_cli.backends.sapien.world import SapienWorld, SapienWorldConfig
+
+
+class SapienKitchen3DBackend:
+    """SAPIEN Kitchen3D: skills ``pour`` and ``scoop``, headless on the CPU.
+
+    Options: ``solver_iterations`` (PhysX position iterations, default 5 as in PyBullet),
+    ``contact_offset`` (m), and per-skill timing via ``pour_settings``/``scoop_settings``.
+    """
+
+    name = "sapien"
+
+    def __init__(
+        self,
+        solver_iterations: int = 5,
+        contact_offset: float = 0.002,
+        pour_settings: PourSettings | None = None,
+        scoop_settings: ScoopSettings | None = None,
+    ) -> None:
+        self.config = SapienWorldConfig(
+            solver_position_iterations=int(solver_iterations),
+            contact_offset=float(contact_offset),
+        )
+        self.pour_settings = pour_settings or PourSettings()
+        self.scoop_settings = scoop_settings or ScoopSettings()
+        # The pre-checks, specs and contexts are the PyBullet backend's, never its physics.
+        self._kinematics = Kitchen3DBackend()
+        self._world: SapienWorld | None = None
+        self._render_world: SapienWorld | None = None
+        self._render_probe: RenderProbe | None = None
+
+    @property
+    def world(self) -> SapienWorld:
+        """The backend's physics-only world (created lazily, reused across trials)."""
+        if self._world is None:
+            self._world = SapienWorld(self.config)
+        return self._world
+
+    def skills(self) -> Mapping[str, SkillSpec]:
+        return self._kinematics.skills()
+
+    def _spec(self, skill: str) -> SkillSpec:
+        specs = self.skills()
+        if skill not in specs:
+            raise KeyError(f"backend 'sapien' has no skill {skill!r} (known: pour, scoop)")
+        return specs[skill]
+
+    def sample_context(self, skill: str, rng: np.random.Generator) -> np.ndarray:
+        """Randomly scaled kitchenware dimensions, shape ``(d_context,)`` metres (the same
+        distribution and draws as the PyBullet backend)."""
+        self._spec(skill)
+        return self._kinematics.sample_context(skill, rng)
+
+    def is_valid(self, skill: str, context: np.ndarray, controls: np.ndarray) -> np.ndarray:
+        """The tool path stays clear of the bowl and table (engine-independent): ``(n,)``."""
+        spec = self._spec(skill)
+        return self._kinematics.is_valid(skill, context, as_batch(controls, spec.control.dim))
+
+    def run_trial(
+        self, skill: str, context: np.ndarray, control: np.ndarray, seed: int
+    ) -> TrialResult:
+        """Simulate one trial; deterministic given ``seed`` (invalid controls not simulated)."""
+        return self._run(self.world, skill, context, control, seed, None)
+
+    def render_probe(self) -> RenderProbe:
+        """Whether SAPIEN can render here (probed once, in a child process)."""
+        if self._render_probe is None:
+            self._render_probe = probe_render_device()
+        return self._render_probe
+
+    def record_trial(
+        self,
+        skill: str,
+        context: np.ndarray,
+        control: np.ndarray,
+        seed: int,
+        every: int = 8,
+        view: CameraView | None = None,
+    ) -> tuple[TrialResult, list[np.ndarray]]:
+        """Like :meth:`run_trial`, also returning RGB frames ``(240, 320, 3)`` uint8 taken
+        every ``every`` steps. Raises :class:`~.render.RendererUnavailable` (one clear
+        message) when SAPIEN has no rendering device here."""
+        require_renderer(self.render_probe())
+        if self._render_world is None:
+            self._render_world = SapienWorld(self.config, render_system=new_render_system())
+        recorder = FrameRecorder(self._render_world, every, view)
+        result = self._run(self._render_world, skill, context, control, seed, recorder)
+        return result, recorder.frames
+
+    def _run(
+        self,
+        world: SapienWorld,
+        skill: str,
+        context: np.ndarray,
+        control: np.ndarray,
+        seed: int,
+        on_step: StepCallback | None,
+    ) -> TrialResult:
+        spec = self._spec(skill)
+        context = np.asarray(context, dtype=float).reshape(-1)
+        control = np.asarray(control, dtype=float).reshape(-1)
+        if context.shape != (spec.context.dim,) or control.shape != (spec.control.dim,):
+            raise ValueError(
+                f"{skill}: expected context of {spec.context.dim} and control of "
+                f"{spec.control.dim} values, got {context.size} and {control.size}"
+            )
+        # Checked before touching the world: invalid controls never step it.
+        verdict = (check_pour if skill == "pour" else check_scoop)(context, control)
+        if not verdict.valid:
+            return TrialResult(spec.invalid_score, False, {"reason": verdict.reason})
+        run: Callable[..., TrialResult]
+        if skill == "pour":
+            run, settings = run_pour, self.pour_settings
+        else:
+            run, settings = run_scoop, self.scoop_settings
+        return run(world, context, control, int(seed), settings, on_step, check=False)
+
+    def close(self) -> None:
+        for world in (self._world, self._render_world):
+            if world is not None:
+                world.close()
+        self._world = None
+        self._render_world = None

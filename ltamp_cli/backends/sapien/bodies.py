@@ -1,0 +1,245 @@
+"""SAPIEN bodies built from the backend-independent kitchenware geometry, and beads.
+
+Each convex piece of a :class:`~ltamp_cli.backends.kitchenware_geometry.KitchenwareGeometry`
+becomes one ``PhysxCollisionShapeConvexMesh`` made directly from its vertices (PhysX takes
+their convex hull), all attached to one rigid component, so a concave bowl collides as the
+union of its convex parts, exactly as in the PyBullet backend. Visual shapes are added only
+when the world has a render system. No files are written.
+
+Bodies are ``"static"`` (fixed kitchenware), ``"kinematic"`` (a tool moved along a path:
+PhysX derives its velocity from successive targets, so contacts push beads) or
+``"dynamic"``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ltamp_cli.backends.kitchenware_geometry import KitchenwareGeometry
+from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial
+from ltamp_cli.backends.pybullet.particles import BeadSpec, grid_in_vessel
+from ltamp_cli.backends.sapien.world import (
+    SapienWorld,
+    from_sapien_pose,
+    physx,
+    sapien,
+    to_sapien_pose,
+)
+
+BodyType = Literal["static", "kinematic", "dynamic"]
+IDENTITY_QUAT = (0.0, 0.0, 0.0, 1.0)
+#: PyBullet's default damping (1/s) for multibodies, used for beads so both engines agree.
+BEAD_DAMPING = 0.04
+
+
+@dataclass(frozen=True, eq=False)
+class SapienBody:
+    """A created kitchenware body: its entity, rigid component and geometry."""
+
+    entity: sapien.Entity
+    component: physx.PhysxRigidBaseComponent
+    geometry: KitchenwareGeometry
+    body_type: BodyType
+
+    def pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """Position ``(3,)`` m and quaternion ``(4,)`` xyzw of the object frame."""
+        return from_sapien_pose(self.entity.pose)
+
+    def set_pose(
+        self, position: Sequence[float] | np.ndarray, orientation: Sequence[float] = IDENTITY_QUAT
+    ) -> None:
+        """Teleport the object frame (no velocity): for placing, not for moving tools."""
+        pose = to_sapien_pose(position, orientation)
+        self.entity.set_pose(pose)
+        if self.body_type == "kinematic":
+            # Otherwise a stale target would drag the body back on the next step.
+            self.component.set_kinematic_target(pose)  # type: ignore[attr-defined]
+
+    def move_to(
+        self, position: Sequence[float] | np.ndarray, orientation: Sequence[float] = IDENTITY_QUAT
+    ) -> None:
+        """Reach this pose at the end of the next step, with the velocity that implies
+        (kinematic bodies only)."""
+        if self.body_type != "kinematic":
+            raise ValueError(f"only kinematic bodies move to targets, not a {self.body_type} one")
+        self.component.set_kinematic_target(  # type: ignore[attr-defined]
+            to_sapien_pose(position, orientation)
+        )
+
+
+def physx_material(friction: float, restitution: float) -> physx.PhysxMaterial:
+    """A PhysX material whose contacts behave like Bullet's for the same coefficients.
+
+    Bullet combines two bodies' friction and restitution by *multiplying* them, PhysX by
+    *averaging*. Storing squares makes PhysX's average ``(a² + b²) / 2`` equal Bullet's
+    product ``ab`` when ``a = b`` (bead on bead) and exceed it by only ``(a - b)² / 2``
+    otherwise, so both backends see (nearly) the same contact coefficients.
+    """
+    mu = float(friction) ** 2
+    return physx.PhysxMaterial(mu, mu, float(restitution) ** 2)
+
+
+def _material(material: BodyMaterial) -> physx.PhysxMaterial:
+    return physx_material(material.lateral_friction, material.restitution)
+
+
+def _visuals(geometry: KitchenwareGeometry, rgba: Sequence[float]) -> sapien.Component:
+    render = sapien.render
+    body = render.RenderBodyComponent()
+    colour = render.RenderMaterial(base_color=[float(c) for c in rgba])
+    for hull in geometry.hulls():
+        vertices = np.asarray(hull.vertices, dtype=np.float32)
+        body.attach(
+            render.RenderShapeTriangleMesh(
+                vertices,
+                np.asarray(hull.faces, dtype=np.uint32),
+                np.asarray(hull.vertex_normals, dtype=np.float32),
+                np.zeros((len(vertices), 2), dtype=np.float32),
+                colour,
+            )
+        )
+    return body
+
+
+def create_kitchenware(
+    world: SapienWorld,
+    geometry: KitchenwareGeometry,
+    position: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0),
+    orientation: Sequence[float] = IDENTITY_QUAT,
+    material: BodyMaterial | None = None,
+    body_type: BodyType = "static",
+) -> SapienBody:
+    """Add ``geometry`` to ``world`` as one body at the given object-frame pose.
+
+    A dynamic body weighs ``material.mass`` kg (uniform density over the pieces); static and
+    kinematic bodies ignore the mass.
+    """
+    material = material or BodyMaterial()
+    config = world.config
+    component: physx.PhysxRigidBaseComponent
+    if body_type == "static":
+        component = physx.PhysxRigidStaticComponent()
+    else:
+        component = physx.PhysxRigidDynamicComponent()
+    physical = _material(material)
+    density = 1000.0
+    if body_type == "dynamic":
+        if material.mass <= 0:
+            raise ValueError("a dynamic body needs a positive mass")
+        density = material.mass / geometry.volume()
+    scale = np.ones(3, dtype=np.float32)
+    for piece in geometry.pieces:
+        shape = physx.PhysxCollisionShapeConvexMesh(
+            np.asarray(piece, dtype=np.float32), scale, physical
+        )
+        shape.density = density
+        shape.contact_offset = config.contact_offset
+        shape.rest_offset = 0.0
+        component.attach(shape)
+    if isinstance(component, physx.PhysxRigidDynamicComponent):
+        component.kinematic = body_type == "kinematic"
+        component.linear_damping = material.linear_damping
+        component.angular_damping = material.angular_damping
+        component.solver_position_iterations = config.solver_position_iterations
+        component.solver_velocity_iterations = config.solver_velocity_iterations
+    entity = sapien.Entity()
+    entity.name = geometry.kind
+    entity.add_component(component)
+    if world.renders:
+        entity.add_component(_visuals(geometry, material.rgba))
+    entity.set_pose(to_sapien_pose(position, orientation))
+    world.scene.add_entity(entity)
+    return SapienBody(entity, component, geometry, body_type)
+
+
+@dataclass(frozen=True, eq=False)
+class Beads:
+    """The beads of one trial: one dynamic sphere per bead."""
+
+    components: tuple[physx.PhysxRigidDynamicComponent, ...]
+    spec: BeadSpec
+
+    def __len__(self) -> int:
+        return len(self.components)
+
+    def positions(self) -> np.ndarray:
+        """World positions ``(n, 3)`` of the bead centres, metres."""
+        if not self.components:
+            return np.zeros((0, 3))
+        return np.array([c.entity_pose.p for c in self.components], dtype=float)
+
+
+def spawn_beads(world: SapienWorld, spec: BeadSpec, positions_world: np.ndarray) -> Beads:
+    """Add one dynamic sphere per row of ``positions_world`` ``(n, 3)``."""
+    config = world.config
+    physical = physx_material(spec.lateral_friction, spec.restitution)
+    visual_material = sapien.render.RenderMaterial(base_color=list(spec.rgba)) if (
+        world.renders
+    ) else None
+    components = []
+    for position in np.asarray(positions_world, dtype=float).reshape(-1, 3):
+        component = physx.PhysxRigidDynamicComponent()
+        shape = physx.PhysxCollisionShapeSphere(float(spec.radius), physical)
+        shape.contact_offset = config.contact_offset
+        shape.rest_offset = 0.0
+        component.attach(shape)
+        component.mass = float(spec.mass)
+        component.linear_damping = BEAD_DAMPING
+        component.angular_damping = BEAD_DAMPING
+        component.solver_position_iterations = config.solver_position_iterations
+        component.solver_velocity_iterations = config.solver_velocity_iterations
+        entity = sapien.Entity()
+        entity.name = "bead"
+        entity.add_component(component)
+        if visual_material is not None:
+            visual = sapien.render.RenderBodyComponent()
+            visual.attach(sapien.render.RenderShapeSphere(float(spec.radius), visual_material))
+            entity.add_component(visual)
+        entity.set_pose(sapien.Pose(position.astype(np.float32)))
+        world.scene.add_entity(entity)
+        components.append(component)
+    return Beads(tuple(components), spec)
+
+
+def world_to_object(
+    points: np.ndarray, position: np.ndarray, orientation: np.ndarray
+) -> np.ndarray:
+    """Express world points ``(n, 3)`` in the frame at ``position`` ``(3,)`` with quaternion
+    ``orientation`` ``(4,)`` xyzw."""
+    rotation = Rotation.from_quat(orientation).as_matrix()
+    return (np.asarray(points, dtype=float).reshape(-1, 3) - np.asarray(position)) @ rotation
+
+
+def object_to_world(
+    points: np.ndarray, position: np.ndarray, orientation: np.ndarray
+) -> np.ndarray:
+    """Inverse of :func:`world_to_object`: object-frame points ``(n, 3)`` in the world."""
+    rotation = Rotation.from_quat(orientation).as_matrix()
+    return np.asarray(points, dtype=float).reshape(-1, 3) @ rotation.T + np.asarray(position)
+
+
+def contained_mask(container: SapienBody, positions_world: np.ndarray) -> np.ndarray:
+    """Bool mask ``(n,)``: which bead centres lie in ``container``'s containment prism."""
+    prism = container.geometry.cavity
+    if prism is None:
+        raise ValueError(f"a {container.geometry.kind} has no cavity to contain beads")
+    position, orientation = container.pose()
+    return prism.contains(world_to_object(positions_world, position, orientation))
+
+
+def spawn_beads_in(
+    world: SapienWorld, container: SapienBody, spec: BeadSpec, rng: np.random.Generator
+) -> Beads:
+    """Spawn ``spec.count`` beads inside ``container`` (a vessel) at its current pose, on
+    the same jittered grid (and the same draws from ``rng``) as the PyBullet backend."""
+    dims = container.geometry.vessel
+    if dims is None:
+        raise ValueError(f"a {container.geometry.kind} is not a vessel: cannot hold beads")
+    local = grid_in_vessel(dims, spec, rng, max_height=4.0 * dims.height)
+    position, orientation = container.pose()
+    return spawn_beads(world, spec, object_to_world(local, position, orientation))
