@@ -11,7 +11,8 @@ from ltamp_cli.planner.search.heuristic import INFINITY, FFHeuristic
 from ltamp_cli.planner.search.postprocess import eliminate_redundant_actions
 from ltamp_cli.planner.search.task import Task
 
-SEARCH_ALGORITHMS = ("ff", "lazy-greedy", "wastar")
+# "fd"/"fd-wastar": Fast Downward subprocesses (optional extra, search/fast_downward.py).
+SEARCH_ALGORITHMS = ("ff", "lazy-greedy", "wastar", "fd", "fd-wastar")
 LOCAL_EXPANSIONS = 5000
 
 
@@ -251,6 +252,10 @@ def _search(task: Task, algorithm: str, deadline: float, unit_costs: bool,
         return lazy_greedy(task, deadline, unit_costs=unit_costs, max_expansions=max_expansions)
     if algorithm == "wastar":
         return weighted_astar(task, deadline)
+    if algorithm in ("fd", "fd-wastar"):
+        from ltamp_cli.planner.search.fast_downward import search_with_fast_downward
+
+        return search_with_fast_downward(task, deadline, algorithm, unit_costs)
     raise ValueError(f"unknown search algorithm {algorithm!r}; expected one of "
                      f"{', '.join(SEARCH_ALGORITHMS)}")
 
