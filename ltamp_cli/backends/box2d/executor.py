@@ -37,6 +37,8 @@ from ltamp_cli.backends.execution import ExecutionReport
 SPEED = 14.0
 SLOW = 3.0
 HOLD_SPEED = 6.0
+#: Fraction of a cup's inner width the stirrer's paddle must sweep for ``Stirred``.
+STIR_COVERAGE = 0.6
 #: Fraction of a poured/filled material that must end in the cup for ``Contains``.
 CONTAINS_FRACTION = 0.9
 
@@ -240,7 +242,7 @@ class Kitchen2DRun:
         self.log.append({"dump": spoon, "in_spoon": int(in_spoon.sum())})
         self.stirred[target] = False
 
-    def stir(self, target: str, pose: Point, approach: Sequence[Point],
+    def stir(self, stirrer: str, target: str, pose: Point, approach: Sequence[Point],
              control: Sequence[float]) -> None:
         self.follow(approach[1:], speed=SLOW)
         cup = self.spec.object(target).spec
@@ -254,7 +256,11 @@ class Kitchen2DRun:
         self.gripper.move((x0, y0, 0.0), speed=1.0)
         self.settle(2.0)
         self.follow(list(reversed(approach[:-1])), speed=SLOW)
-        self.stirred[target] = (max(swept) - min(swept)) >= 0.5 * cup.inner_width
+        # Stirred: the paddle, down at the cup's floor, swept most of the cup's width.
+        paddle = self.spec.object(stirrer).spec.paddle_width
+        coverage = max(swept) - min(swept) + paddle
+        self.stirred[target] = coverage >= STIR_COVERAGE * cup.inner_width
+        self.log.append({"stir": target, "coverage": round(coverage / cup.inner_width, 3)})
 
     # --- goal ----------------------------------------------------------------------------
     def contents(self, name: str) -> dict[str, int]:
@@ -423,7 +429,7 @@ class Kitchen2DExecutor:
             run.dump(args[0], args[2], v(5), v(6))
         elif name == "stir":
             # stir ?s ?g ?c ?p ?q ?a ?u
-            run.stir(args[2], resolve_pose(spec, args[2], v(3)), v(5), v(6))
+            run.stir(args[0], args[2], resolve_pose(spec, args[2], v(3)), v(5), v(6))
         else:
             raise ActionFailed(f"the kitchen2d executor has no action {step.name!r}")
 
