@@ -1,0 +1,128 @@
+"""The SAPIEN world: headless construction, free fall, pose conversion, kitchenware bodies."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+pytest.importorskip("sapien")
+
+from ltamp_cli.backends.kitchenware_geometry import VesselDims, vessel_geometry
+from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial
+from ltamp_cli.backends.pybullet.particles import BeadSpec
+from ltamp_cli.backends.sapien.bodies import (
+    contained_mask,
+    create_kitchenware,
+    physx_material,
+    spawn_beads,
+    spawn_beads_in,
+)
+from ltamp_cli.backends.sapien.world import (
+    SapienWorld,
+    SapienWorldConfig,
+    from_sapien_pose,
+    physx,
+    to_sapien_pose,
+)
+
+CUP = VesselDims(base_diameter=0.068, top_diameter=0.08, height=0.10)
+
+
+def test_pose_conversion_round_trips_xyzw_quaternions() -> None:
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        position = rng.uniform(-1, 1, 3)
+        quaternion = Rotation.random(random_state=int(rng.integers(1 << 30))).as_quat()
+        back_p, back_q = from_sapien_pose(to_sapien_pose(position, quaternion))
+        assert np.allclose(back_p, position, atol=1e-6)
+        # q and -q are the same rotation.
+        assert min(np.abs(back_q - quaternion).max(), np.abs(back_q + quaternion).max()) < 1e-6
+
+
+def test_world_builds_without_a_gpu_and_leaves_sapien_defaults_alone() -> None:
+    before = physx.get_scene_config()
+    snapshot = (before.enable_enhanced_determinism, tuple(before.gravity))
+    world = SapienWorld(SapienWorldConfig(enhanced_determinism=not snapshot[0]))
+    after = physx.get_scene_config()
+    assert (after.enable_enhanced_determinism, tuple(after.gravity)) == snapshot
+    assert not world.renders
+    assert world.scene.timestep == pytest.approx(1.0 / 240.0)
+    world.close()
+    with pytest.raises(RuntimeError, match="closed"):
+        _ = world.scene
+
+
+def test_a_dropped_bead_falls_freely_then_rests_on_the_table() -> None:
+    world = SapienWorld()
+    spec = BeadSpec(count=1, radius=0.006)
+    beads = spawn_beads(world, spec, np.array([[0.0, 0.0, 0.5]]))
+    steps = world.steps_for(0.2)
+    world.step(steps)
+    # Free fall for 0.2 s (PyBullet's linear damping 0.04/s slows it by < 1 %).
+    expected = 0.5 - 0.5 * 9.81 * (steps * world.config.time_step) ** 2
+    assert beads.positions()[0, 2] == pytest.approx(expected, abs=0.004)
+    world.step(world.steps_for(1.0))
+    assert beads.positions()[0, 2] == pytest.approx(spec.radius, abs=0.001)
+
+
+def test_reset_empties_the_scene() -> None:
+    world = SapienWorld()
+    spawn_beads(world, BeadSpec(count=3), np.array([[0, 0, 0.1], [0, 0.1, 0.1], [0.1, 0, 0.1]]))
+    assert len(world.scene.entities) == 4  # table + 3 beads
+    world.reset()
+    assert len(world.scene.entities) == 1
+
+
+def test_materials_emulate_bullets_multiplied_coefficients() -> None:
+    material = physx_material(0.5, 0.7)
+    assert material.static_friction == pytest.approx(0.25)
+    assert material.dynamic_friction == pytest.approx(0.25)
+    assert material.restitution == pytest.approx(0.49)
+
+
+def test_beads_stay_in_a_static_cup_and_out_of_a_tilted_one() -> None:
+    world = SapienWorld()
+    rng = np.random.default_rng(0)
+    spec = BeadSpec(count=40)
+    cup = create_kitchenware(world, vessel_geometry(CUP, "cup"), material=BodyMaterial(mass=0))
+    beads = spawn_beads_in(world, cup, spec, rng)
+    assert len(beads) == 40
+    world.step(world.steps_for(0.5))
+    assert contained_mask(cup, beads.positions()).sum() == 40
+    # The same cup upside down 5 cm above the table: the beads fall out of its prism.
+    world.reset()
+    upside_down = Rotation.from_euler("x", math.pi).as_quat()
+    cup = create_kitchenware(
+        world, vessel_geometry(CUP, "cup"), (0.0, 0.0, 0.15), upside_down,
+        material=BodyMaterial(mass=0), body_type="kinematic",
+    )
+    beads = spawn_beads(world, spec, np.array([[0.0, 0.0, 0.12]]))
+    world.step(world.steps_for(0.5))
+    assert contained_mask(cup, beads.positions()).sum() == 0
+    assert beads.positions()[0, 2] < 0.02
+
+
+def test_kinematic_tool_reaches_its_targets_and_dynamic_body_has_its_mass() -> None:
+    world = SapienWorld()
+    cup = create_kitchenware(
+        world, vessel_geometry(CUP, "cup"), (0.3, 0.0, 0.0), body_type="kinematic"
+    )
+    target = np.array([0.3, 0.1, 0.05])
+    quaternion = Rotation.from_euler("y", -0.5).as_quat()
+    cup.move_to(target, quaternion)
+    world.step()
+    position, orientation = cup.pose()
+    assert np.allclose(position, target, atol=1e-5)
+    assert np.allclose(np.abs(orientation @ quaternion), 1.0, atol=1e-6)
+    world.step(10)  # no new target: stays
+    assert np.allclose(cup.pose()[0], target, atol=1e-5)
+    heavy = create_kitchenware(
+        world, vessel_geometry(CUP, "cup"), (-0.3, 0.0, 0.0),
+        material=BodyMaterial(mass=0.15), body_type="dynamic",
+    )
+    assert heavy.component.mass == pytest.approx(0.15, rel=1e-4)
+    with pytest.raises(ValueError, match="kinematic"):
+        heavy.move_to(target)
