@@ -126,3 +126,25 @@ def test_learned_streams_yield_controls_that_succeed_in_trials() -> None:
         mean, std = model.predict(np.repeat(context[None], len(candidates), 0), candidates)
         worst = candidates[np.argmin(mean / std)]
         assert backend.run_trial(skill, context, worst, 0).score < 0, skill
+
+
+def test_task2_pour_next_to_a_wall_is_planned_clear_of_the_wall() -> None:
+    from ltamp_cli.backends.box2d.scene import scene_from_world
+    from ltamp_cli.backends.box2d.tamp import KitchenGeometry
+
+    problem = load_problem(ROOT / "problems" / "kitchen2d" / "task2_pour_wall.yaml")
+    result = solve(problem, PlannerConfig(max_time=30, seed=0))
+    assert result.solved
+    pours = [step for step in result.plan if step.name == "pour"]
+    assert len(pours) == 1
+    scene = scene_from_world(problem.world, np.random.default_rng(0))
+    geometry = KitchenGeometry(scene)
+    _, grasp, _, _, _, approach, control, _ = pours[0].values
+    start = approach[-1]
+    wall = np.array([geometry.furniture[-1]])
+    # Every point of the tilting pitcher stays clear of the wall.
+    for angle in -np.linspace(0.0, control[3], 30):
+        points = geometry.hand_edge_points(scene.object("pitcher"), grasp, start[0], start[1],
+                                           float(angle))
+        assert not ((points[:, 0] > wall[0, 0]) & (points[:, 0] < wall[0, 2])
+                    & (points[:, 1] < wall[0, 3])).any()
