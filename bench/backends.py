@@ -1,0 +1,198 @@
+"""PyBullet vs SAPIEN on the same Kitchen3D pour trials: wall time and success agreement.
+
+Draws ``--trials`` pour inputs (contexts from the randomised kitchenware distribution,
+controls uniform in the box, redrawn until the geometric pre-check passes) and runs every
+one on both 3D backends with the same seed, single-threaded, each backend reusing its world.
+Also times bare particle stepping (``--beads`` spheres settling in a bowl) in both engines,
+to compare the stepping advantage with the whole-trial one. Prints tables; writes JSON to
+``--out`` (default ``bench/results/backends.json``).
+
+    OMP_NUM_THREADS=1 .venv/bin/python bench/backends.py --trials 20
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from ltamp_cli.backends import SkillBackend, load_backend
+
+BACKENDS = ("pybullet", "sapien")
+RESULTS_DIR = Path(__file__).resolve().parent / "results"
+#: Trials whose PyBullet score is at least this far from 0 are clear-cut (g = ±0.5 means
+#: 95 % or 45 % of the beads in the bowl); the others are borderline.
+CLEAR_SCORE = 0.5
+
+
+def pour_inputs(backend: SkillBackend, n: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``n`` (context, valid control) pairs drawn with a seeded generator."""
+    rng = np.random.default_rng(seed)
+    spec = backend.skills()["pour"]
+    inputs = []
+    while len(inputs) < n:
+        context = backend.sample_context("pour", rng)
+        controls = spec.control.sample_uniform(rng, 16)
+        valid = np.flatnonzero(backend.is_valid("pour", context, controls))
+        if valid.size:
+            inputs.append((context, controls[int(valid[0])]))
+    return inputs
+
+
+def time_trials(
+    name: str, inputs: list[tuple[np.ndarray, np.ndarray]], seed: int
+) -> list[dict]:
+    """Run every input on backend ``name``: wall/CPU seconds, score, fraction, steps."""
+    backend = load_backend(name)
+    rows = []
+    try:
+        for index, (context, control) in enumerate(tqdm(inputs, desc=name, leave=False)):
+            w0, c0 = time.perf_counter(), time.process_time()
+            result = backend.run_trial("pour", context, control, seed * 1000 + index)
+            rows.append(
+                {
+                    "wall_s": time.perf_counter() - w0,
+                    "cpu_s": time.process_time() - c0,
+                    "score": result.score,
+                    "valid": result.valid,
+                    "fraction_in_bowl": result.info.get("fraction_in_bowl"),
+                    "sim_steps": result.info.get("sim_steps", 0),
+                }
+            )
+    finally:
+        backend.close()
+    return rows
+
+
+def stepping_rate(name: str, beads: int, steps: int) -> float:
+    """Steps per second of ``beads`` spheres falling into and settling in a nominal bowl."""
+    from ltamp_cli.backends.kitchenware_geometry import vessel_geometry
+    from ltamp_cli.backends.pybullet.particles import BeadSpec, grid_in_vessel
+    from ltamp_cli.backends.pybullet.skills.pour import NOMINAL_BOWL
+
+    spec = BeadSpec(count=beads)
+    bowl = vessel_geometry(NOMINAL_BOWL, "bowl")
+    local = grid_in_vessel(NOMINAL_BOWL, spec, np.random.default_rng(0), 6 * NOMINAL_BOWL.height)
+    if name == "pybullet":
+        from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial, create_kitchenware
+        from ltamp_cli.backends.pybullet.particles import spawn_beads
+        from ltamp_cli.backends.pybullet.world import PhysicsWorld
+
+        world = PhysicsWorld()
+        create_kitchenware(world.client, bowl, material=BodyMaterial(mass=0.0), visual=False)
+        spawn_beads(world.client, spec, local)
+    else:
+        from ltamp_cli.backends.sapien.bodies import create_kitchenware, spawn_beads
+        from ltamp_cli.backends.sapien.world import SapienWorld
+
+        world = SapienWorld()  # type: ignore[assignment]
+        create_kitchenware(world, bowl)  # type: ignore[arg-type]
+        spawn_beads(world, spec, local)  # type: ignore[arg-type]
+    start = time.perf_counter()
+    world.step(steps)
+    rate = steps / (time.perf_counter() - start)
+    world.close()
+    return rate
+
+
+def summarise(rows: dict[str, list[dict]]) -> dict:
+    pyb, sap = rows["pybullet"], rows["sapien"]
+    agree = [(a["score"] > 0) == (b["score"] > 0) for a, b in zip(pyb, sap, strict=True)]
+    clear = [i for i, a in enumerate(pyb) if abs(a["score"]) >= CLEAR_SCORE]
+    fraction_gaps = [
+        abs(a["fraction_in_bowl"] - b["fraction_in_bowl"])
+        for a, b in zip(pyb, sap, strict=True)
+        if a["fraction_in_bowl"] is not None and b["fraction_in_bowl"] is not None
+    ]
+    per_backend = {}
+    for name, trial_rows in rows.items():
+        wall = np.array([r["wall_s"] for r in trial_rows])
+        steps = np.array([r["sim_steps"] for r in trial_rows])
+        per_backend[name] = {
+            "wall_median_s": float(np.median(wall)),
+            "wall_total_s": float(wall.sum()),
+            "cpu_median_s": float(np.median([r["cpu_s"] for r in trial_rows])),
+            "success_rate": float(np.mean([r["score"] > 0 for r in trial_rows])),
+            "trial_steps_per_s": float(steps.sum() / wall.sum()),
+        }
+    return {
+        "per_backend": per_backend,
+        "speedup_median": per_backend["pybullet"]["wall_median_s"]
+        / per_backend["sapien"]["wall_median_s"],
+        "speedup_total": per_backend["pybullet"]["wall_total_s"]
+        / per_backend["sapien"]["wall_total_s"],
+        # CPU time is the fairer ratio when other processes share the cores.
+        "speedup_cpu_median": per_backend["pybullet"]["cpu_median_s"]
+        / per_backend["sapien"]["cpu_median_s"],
+        "agreement": float(np.mean(agree)),
+        "clear_cut_trials": len(clear),
+        "agreement_clear_cut": float(np.mean([agree[i] for i in clear])) if clear else None,
+        "disagreements": [i for i, same in enumerate(agree) if not same],
+        "fraction_mean_abs_diff": float(np.mean(fraction_gaps)) if fraction_gaps else None,
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--trials", type=int, default=20)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--beads", type=int, default=200, help="spheres for the stepping test")
+    parser.add_argument("--steps", type=int, default=480, help="steps for the stepping test")
+    parser.add_argument("--out", type=Path, default=RESULTS_DIR / "backends.json")
+    args = parser.parse_args()
+    # Same generator draws for both backends: contexts and pre-checks are engine-independent.
+    probe = load_backend("pybullet")
+    inputs = pour_inputs(probe, args.trials, args.seed)
+    probe.close()
+    rows = {name: time_trials(name, inputs, args.seed) for name in BACKENDS}
+    summary = summarise(rows)
+    stepping = {name: stepping_rate(name, args.beads, args.steps) for name in BACKENDS}
+
+    print(f"{'backend':<10}{'n':>4}{'wall med':>10}{'wall sum':>10}{'cpu med':>9}"
+          f"{'steps/s':>9}{'success':>9}")
+    for name in BACKENDS:
+        row = summary["per_backend"][name]
+        print(f"{name:<10}{args.trials:>4}{row['wall_median_s']:>10.2f}"
+              f"{row['wall_total_s']:>10.1f}{row['cpu_median_s']:>9.2f}"
+              f"{row['trial_steps_per_s']:>9.0f}{row['success_rate']:>9.2f}")
+    print(f"whole pour trials: SAPIEN {summary['speedup_median']:.1f}x faster (median), "
+          f"{summary['speedup_total']:.1f}x (total), "
+          f"{summary['speedup_cpu_median']:.1f}x (median CPU)")
+    step_speedup = stepping["sapien"] / stepping["pybullet"]
+    print(f"bare stepping, {args.beads} beads: PyBullet {stepping['pybullet']:.0f} steps/s, "
+          f"SAPIEN {stepping['sapien']:.0f} steps/s ({step_speedup:.1f}x)")
+    clear = summary["agreement_clear_cut"]
+    clear_text = "n/a" if clear is None else f"{clear:.0%}"
+    print(f"success labels agree on {summary['agreement']:.0%} of trials, {clear_text} of the "
+          f"{summary['clear_cut_trials']} clear-cut ones (PyBullet |score| >= {CLEAR_SCORE}); "
+          f"disagreeing trials: {summary['disagreements']}; mean |fraction difference| "
+          f"{summary['fraction_mean_abs_diff']:.3f}")
+    payload = {
+        "benchmark": "backends",
+        "python": platform.python_version(),
+        "omp_num_threads": os.environ.get("OMP_NUM_THREADS"),
+        "trials": args.trials,
+        "seed": args.seed,
+        "clear_score": CLEAR_SCORE,
+        "summary": summary,
+        "stepping": {"beads": args.beads, "steps": args.steps, "steps_per_s": stepping,
+                     "speedup": step_speedup},
+        "rows": [
+            {"context": c.tolist(), "control": u.tolist(),
+             **{name: rows[name][i] for name in BACKENDS}}
+            for i, (c, u) in enumerate(inputs)
+        ],
+    }
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(payload, indent=2) + "\n")
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
