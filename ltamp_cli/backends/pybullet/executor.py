@@ -286,6 +286,9 @@ class Kitchen3DRun:
 class Kitchen3DExecutor:
     """:class:`~ltamp_cli.backends.execution.PlanExecutor` for kitchen3d plans."""
 
+    #: The simulation that replays the actions (the SAPIEN backend substitutes its own).
+    run_class: type[Kitchen3DRun] = Kitchen3DRun
+
     def __init__(self, settings: ExecutionSettings | None = None,
                  camera: Camera | None = None) -> None:
         self.settings = settings or ExecutionSettings()
@@ -302,8 +305,8 @@ class Kitchen3DExecutor:
                 value = problem.objects.get(pose, (None, None))[1]
                 if value is not None:
                     poses[name] = (float(value[0]), float(value[1]))
-        run = Kitchen3DRun(spec, poses, seed, self.settings,
-                           self.camera if render_path is not None else None)
+        run = self.run_class(spec, poses, seed, self.settings,
+                             self.camera if render_path is not None else None)
         steps: list[dict[str, Any]] = []
         success = True
         try:
