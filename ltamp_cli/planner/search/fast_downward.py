@@ -33,26 +33,33 @@ from ltamp_cli.planner.search.task import FALSE_FACT, TRUE_FACT, Task
 
 MISSING_EXTRA = "--search fd needs the optional 'fd' extra: pip install ltamp[fd]"
 
-# Search configurations by ``--search`` name. ``fd``: greedy best-first on h_FF with
+# Search configurations by ``--search`` name. ``fd``: lazy greedy best-first on h_FF with
 # preferred operators (the core of LAMA's first iteration, without landmarks, which do not
-# support axioms); ``fd-wastar``: eager weighted A* (w = 2) on real costs, like ``wastar``.
-FD_SEARCHES = {
-    "fd": "lazy_greedy([ff()], preferred=[ff()])",
-    "fd-wastar": "eager_wastar([ff()], preferred=[ff()], w=2)",
+# support axioms); ``fd-wastar``: eager weighted A* (w = 2), like ``wastar``. h_FF counts
+# each action's cost plus one (LAMA's ``plusone``, the in-process engine's ``cost_bias``):
+# TAMP domains often have zero-cost actions, where plain h_FF is 0 on whole plateaus and the
+# search goes blind. This Fast Downward applies a search's ``cost_type`` to g only, so the
+# heuristic is wrapped in ``eval_modify_costs``.
+_HEURISTIC = "eval_modify_costs(ff(), cost_type={cost})"
+_SEARCHES = {
+    "fd": "let(h, {heuristic}, lazy_greedy([h], preferred=[h]))",
+    "fd-wastar": "let(h, {heuristic}, eager_wastar([h], preferred=[h], w=2, cost_type={cost}))",
 }
-UNIT_COST_SEARCHES = {
-    "fd": "lazy_greedy([ff(transform=adapt_costs(one))], "
-          "preferred=[ff(transform=adapt_costs(one))], cost_type=one)",
-    "fd-wastar": "eager_wastar([ff(transform=adapt_costs(one))], "
-                 "preferred=[ff(transform=adapt_costs(one))], w=2, cost_type=one)",
-}
+
+
+def search_config(algorithm: str, unit_costs: bool) -> str:
+    """The ``downward --search`` argument for ``algorithm`` (one of :data:`FD_SEARCHES`)."""
+    cost = "one" if unit_costs else "plusone"
+    return _SEARCHES[algorithm].format(heuristic=_HEURISTIC.format(cost=cost), cost=cost)
+
+
+FD_SEARCHES = tuple(_SEARCHES)
 
 # Fast Downward exit codes (driver/returncodes.py) that mean "no plan", not "failure".
 NO_PLAN_CODES = frozenset({10, 11, 12})  # translate unsolvable, unsolvable, incomplete
 OUT_OF_TIME_CODES = frozenset({21, 23, 24})
 # Fast Downward needs integer costs: fractional costs are scaled and rounded.
 COST_SCALE = 1000
-MAX_TOTAL_COST = 2**31 - 1
 
 
 @dataclass(frozen=True)
@@ -222,8 +229,7 @@ def search_with_fast_downward(task: Task, deadline: float, algorithm: str = "fd"
             return SearchOutcome(None, INFINITY, 0, 0, time.perf_counter() - start)
         if translated.returncode != 0:
             raise _failure("translator", translated)
-        config = (UNIT_COST_SEARCHES if unit_costs else FD_SEARCHES)[algorithm]
-        searched = _run([str(tools.downward), "--search", config,
+        searched = _run([str(tools.downward), "--search", search_config(algorithm, unit_costs),
                          "--internal-plan-file", "plan"], workdir, deadline,
                         stdin_path=workdir / "output.sas")
         expanded = _last_count(r"Expanded (\d+) state", searched.stdout)
