@@ -6,6 +6,7 @@ from ltamp_cli.errors import InputError
 from ltamp_cli.planner.algorithms.common import ALGORITHMS, PlannerConfig, initial_state
 from ltamp_cli.planner.algorithms.focused import solve_focused
 from ltamp_cli.planner.algorithms.incremental import solve_incremental
+from ltamp_cli.planner.algorithms.skeletons import solve_with_skeletons
 from ltamp_cli.planner.problem import PlanningProblem
 from ltamp_cli.planner.result import PlanResult
 from ltamp_cli.planner.search.engine import SEARCH_ALGORITHMS
@@ -25,4 +26,6 @@ def solve(problem: PlanningProblem, config: PlannerConfig | None = None) -> Plan
     state = initial_state(problem, config)
     if config.algorithm == "incremental":
         return solve_incremental(state)
-    return solve_focused(state)
+    if config.algorithm == "focused":
+        return solve_focused(state)
+    return solve_with_skeletons(state, adaptive=config.algorithm == "adaptive")

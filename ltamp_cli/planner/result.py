@@ -52,6 +52,9 @@ class PlanResult:
     stats: dict[str, Any]
     certificate: Certificate
     objects: dict[str, Any] = field(default_factory=dict)  # object name -> value
+    # When not solved, why: goal facts unreachable even optimistically, streams never called
+    # or never successful, the last skeletons tried.
+    diagnostics: dict[str, Any] = field(default_factory=dict)
 
     @property
     def solved(self) -> bool:
@@ -69,6 +72,7 @@ class PlanResult:
             "cost": None if self.plan is None else self.cost,
             "time_s": round(self.time_s, 6),
             "stats": self.stats,
+            **({"diagnostics": self.diagnostics} if self.diagnostics else {}),
         }
 
     def to_json(self) -> str:

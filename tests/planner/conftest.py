@@ -14,7 +14,7 @@ from ltamp_cli.planner.problem import PlanningProblem, load_problem
 from ltamp_cli.planner.result import PlanResult
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "problems" / "examples"
-ALGORITHMS = ("incremental", "focused")
+ALGORITHMS = ("adaptive", "binding", "focused", "incremental")
 
 
 class Solved:

@@ -50,7 +50,7 @@ def test_json_output_for_a_solved_example(tmp_path: Path) -> None:
     assert block == "a" and 5.0 <= pose <= 6.0
     assert conf == [pytest.approx(pose + grasp[0]), pytest.approx(grasp[1])]
     assert data["cost"] == pytest.approx(sum(step["cost"] for step in data["plan"]))
-    assert data["stats"]["algorithm"] == "focused"  # the default
+    assert data["stats"]["algorithm"] == "adaptive"  # the default  # the default
     assert not list(tmp_path.iterdir())  # nothing written into the working directory
 
 
@@ -198,7 +198,7 @@ def test_bad_input_exits_2_with_one_line(make_problem: MakeProblem, domain: str,
 
 def test_bad_options_exit_2(make_problem: MakeProblem) -> None:
     path = make_problem(LINE_DOMAIN, GOOD_YAML, LINE_STREAMS, LINE_BINDINGS)
-    assert_bad_input(ltamp(path, "--algorithm", "adaptive"), "unknown algorithm 'adaptive'")
+    assert_bad_input(ltamp(path, "--algorithm", "astar"), "unknown algorithm 'astar'")
     assert_bad_input(ltamp(path, "--max-time", "0"), "max time must be positive")
     assert_bad_input(ltamp(path.parent / "missing.yaml"), "missing.yaml", "file not found")
 

@@ -10,7 +10,7 @@ from typing import Any
 
 import pytest
 
-from ltamp_cli.planner.algorithms.common import PlannerConfig
+from ltamp_cli.planner.algorithms.common import ALGORITHMS, PlannerConfig
 from ltamp_cli.planner.api import solve
 from ltamp_cli.planner.problem import PlanningProblem, load_problem
 from ltamp_cli.planner.result import PlanResult
@@ -20,9 +20,11 @@ MakeProblem = Callable[..., Path]
 
 FAST_EXAMPLES = ("blocksworld", "tamp2d_blocked", "tamp2d_4blocks", "synthetic_goodregion")
 EXAMPLE_CASES = [
-    *((name, algorithm) for name in FAST_EXAMPLES for algorithm in ("incremental", "focused")),
+    *((name, algorithm) for name in FAST_EXAMPLES for algorithm in ALGORITHMS),
     ("kitchen_symbolic", "incremental"),
-    pytest.param("kitchen_symbolic", "focused", marks=pytest.mark.slow),  # ~10 s at seed 0
+    # The optimistic algorithms take ~5 s here (see bench/planner.py).
+    *(pytest.param("kitchen_symbolic", algorithm, marks=pytest.mark.slow)
+      for algorithm in ALGORITHMS if algorithm != "incremental"),
 ]
 
 
@@ -49,7 +51,7 @@ def test_example_solved_and_validated(solved, name: str, algorithm: str  # type:
         assert not any(arg.startswith("#") for arg in step.args)  # no optimistic objects
 
 
-@pytest.mark.parametrize("algorithm", ["incremental", "focused"])
+@pytest.mark.parametrize("algorithm", ALGORITHMS)
 def test_certificate_is_closed_under_stream_domains(solved, algorithm: str  # type: ignore[no-untyped-def]
                                                     ) -> None:
     result = solved.result("tamp2d_blocked", algorithm)
@@ -57,7 +59,7 @@ def test_certificate_is_closed_under_stream_domains(solved, algorithm: str  # ty
     assert report.valid, report.errors[:3]
 
 
-@pytest.mark.parametrize("algorithm", ["incremental", "focused"])
+@pytest.mark.parametrize("algorithm", ALGORITHMS)
 def test_same_seed_same_plan(algorithm: str) -> None:
     problem = load_problem(Path(__file__).resolve().parents[2] / "problems" / "examples"
                            / "tamp2d_blocked.yaml")
@@ -156,7 +158,7 @@ def line_problem(make_problem: MakeProblem, top: int | None, goal: int) -> Plann
     return load_problem(make_problem(LINE_DOMAIN, text, LINE_STREAMS, LINE_BINDINGS))
 
 
-@pytest.mark.parametrize("algorithm", ["incremental", "focused"])
+@pytest.mark.parametrize("algorithm", ALGORITHMS)
 def test_stream_problem_solved_and_validated(make_problem: MakeProblem, algorithm: str) -> None:
     problem = line_problem(make_problem, top=5, goal=3)
     result = solve(problem, PlannerConfig(algorithm=algorithm, max_time=20))
@@ -166,7 +168,7 @@ def test_stream_problem_solved_and_validated(make_problem: MakeProblem, algorith
     assert report.valid, report.errors
 
 
-@pytest.mark.parametrize("algorithm", ["incremental", "focused"])
+@pytest.mark.parametrize("algorithm", ALGORITHMS)
 def test_infeasible_symbolic(make_problem: MakeProblem, algorithm: str) -> None:
     problem = load_problem(make_problem(SYMBOLIC_DOMAIN, (
         "domain: dom\nobjects: {a: null, b: null, c: null}\n"
@@ -176,7 +178,7 @@ def test_infeasible_symbolic(make_problem: MakeProblem, algorithm: str) -> None:
     assert result.plan is None
 
 
-@pytest.mark.parametrize("algorithm", ["incremental", "focused"])
+@pytest.mark.parametrize("algorithm", ALGORITHMS)
 def test_infeasible_when_streams_run_out(make_problem: MakeProblem, algorithm: str) -> None:
     problem = line_problem(make_problem, top=4, goal=9)
     result = solve(problem, PlannerConfig(algorithm=algorithm, max_time=20))
@@ -184,7 +186,7 @@ def test_infeasible_when_streams_run_out(make_problem: MakeProblem, algorithm: s
     assert result.time_s < 20
 
 
-@pytest.mark.parametrize("algorithm", ["incremental", "focused"])
+@pytest.mark.parametrize("algorithm", ALGORITHMS)
 def test_time_limit_gives_timeout(make_problem: MakeProblem, algorithm: str) -> None:
     # Streams never run out and the goal value never comes: only the time limit stops it.
     problem = line_problem(make_problem, top=None, goal=-1)

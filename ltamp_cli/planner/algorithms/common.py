@@ -12,6 +12,7 @@ from ltamp_cli.errors import InputError
 from ltamp_cli.planner.objects import ObjectTable
 from ltamp_cli.planner.pddl.syntax import (
     OBJECT_TYPE,
+    And,
     Atom,
     ExternalPredicate,
     Stream,
@@ -38,7 +39,8 @@ from ltamp_cli.planner.streams import (
     resolve_bindings,
 )
 
-ALGORITHMS = ("incremental", "focused")
+ALGORITHMS = ("adaptive", "binding", "focused", "incremental")
+MAX_REMEMBERED_SKELETONS = 3
 
 
 @dataclass(frozen=True)
@@ -49,7 +51,7 @@ class PlannerConfig:
     discrete search (``lazy-greedy`` or ``wastar``); ``unit_costs`` ignores action costs.
     """
 
-    algorithm: str = "focused"
+    algorithm: str = "adaptive"
     max_time: float = 60.0
     seed: int = 0
     search: str = "ff"
@@ -106,6 +108,8 @@ class PlannerState:
     sampling_time: float = 0.0
     iterations: int = 0
     searches: int = 0
+    last_skeletons: list[list[str]] = field(default_factory=list)
+    unreachable_goal: list[str] = field(default_factory=list)
 
     @property
     def deadline(self) -> float:
@@ -174,6 +178,20 @@ class PlannerState:
         finally:
             self.search_time += time.perf_counter() - start
 
+    def remember_skeleton(self, actions: list[str]) -> None:
+        """Keep the last optimistic plans, to explain a failure."""
+        self.last_skeletons = [*self.last_skeletons, actions][-MAX_REMEMBERED_SKELETONS:]
+
+    def diagnose(self, discrete: DiscreteResult, facts: Iterable[Fact]) -> None:
+        """Record which goal atoms the last (optimistic) search could not even reach."""
+        if discrete.solved:
+            self.unreachable_goal = []
+            return
+        reachable = discrete.grounding.reachable
+        self.unreachable_goal = [
+            "(" + " ".join(atom) + ")" for atom in goal_atoms(self.problem)
+            if atom not in reachable]
+
     def bindings_of(self, external: External, index: FactIndex) -> Iterator[tuple[str, ...]]:
         """Input tuples whose domain facts all hold in ``index``."""
         inputs = external_inputs(external)
@@ -199,6 +217,19 @@ class PlannerState:
             used = sorted(set(preimage))
             certificate.preimage = used
             certificate.stream_results = self.supporting_results(used)
+        if status != SOLVED:
+            stats_calls = {name: self.stream_stats.get(name) for name in self.externals}
+            diagnostics = {
+                "unreachable_goal_facts": self.unreachable_goal,
+                "streams_never_called": sorted(
+                    n for n, s in stats_calls.items() if s is None or s.calls == 0),
+                "streams_never_succeeded": sorted(
+                    n for n, s in stats_calls.items()
+                    if s is not None and s.calls > 0 and s.successes == 0),
+                "last_skeletons": self.last_skeletons,
+            }
+        else:
+            diagnostics = {}
         stats = {
             "algorithm": self.config.algorithm,
             "iterations": self.iterations,
@@ -209,7 +240,8 @@ class PlannerState:
             "streams": {name: s.as_dict() for name, s in sorted(self.stream_stats.items())},
         }
         return PlanResult(status, plan, cost, time.perf_counter() - self.start_time, stats,
-                          certificate, {n: self.objects.value(n) for n in self.objects.names()})
+                          certificate, {n: self.objects.value(n) for n in self.objects.names()},
+                          diagnostics)
 
 
     def supporting_results(self, needed: Iterable[Fact]) -> list[StreamResult]:
@@ -244,6 +276,14 @@ class PlannerState:
         for fact in needed:
             visit(fact)
         return ordered
+
+
+def goal_atoms(problem: PlanningProblem) -> list[Fact]:
+    """Ground atoms of the goal's top-level conjunction (the ones a user names)."""
+    goal = problem.goal
+    parts = goal.parts if isinstance(goal, And) else (goal,)
+    return [(p.predicate, *p.args) for p in parts
+            if isinstance(p, Atom) and not any(a.startswith("?") for a in p.args)]
 
 
 class StreamError(Exception):

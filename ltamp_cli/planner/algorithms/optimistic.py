@@ -1,0 +1,180 @@
+"""Optimistic evaluation of streams, shared by the focused, binding and adaptive algorithms.
+
+Instances not yet (fully) called certify their facts with placeholder objects ``#name`` up to
+a complexity bound (complexity of an instance = summed complexity of its inputs + calls
+made); a plan over real and optimistic facts is then retraced to the *stream plan* of
+instances whose calls would make its optimistic facts real.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+from ltamp_cli.planner.algorithms.common import (
+    PlannerState,
+    certified_facts,
+    external_inputs,
+    instantiate_atoms,
+)
+from ltamp_cli.planner.pddl.syntax import OBJECT_TYPE, Stream, StreamFunction
+from ltamp_cli.planner.search.ground import Fact, FactIndex
+from ltamp_cli.planner.streams import StreamInstance
+
+InstanceKey = tuple[str, tuple[str, ...]]
+
+
+@dataclass
+class OptimisticEvaluation:
+    """Real facts plus optimistic ones, and which (possibly optimistic) instance made each."""
+
+    index: FactIndex
+    function_values: dict[Fact, float]
+    object_types: dict[str, str]
+    level: dict[str, int] = field(default_factory=dict)  # optimistic object -> complexity
+    fact_producer: dict[Fact, InstanceKey] = field(default_factory=dict)
+    object_producer: dict[str, InstanceKey] = field(default_factory=dict)
+    outputs: dict[InstanceKey, tuple[str, ...]] = field(default_factory=dict)
+    cut: bool = False  # an instance was left out by the complexity bound
+
+
+def optimistic_evaluation(state: PlannerState, complexity: int,
+                          placeholders: dict[InstanceKey, tuple[str, ...]]
+                          ) -> OptimisticEvaluation:
+    index = FactIndex()
+    for fact in sorted(state.facts.members):  # a hash-independent order
+        index.add(fact)
+    evaluation = OptimisticEvaluation(index, dict(state.function_values),
+                                      dict(state.object_types))
+    done: set[InstanceKey] = set()
+    changed = True
+    while changed:
+        changed = False
+        for external in state.externals.values():
+            for inputs in list(state.bindings_of(external, index)):
+                key = (external.name, inputs)
+                if key in done:
+                    continue
+                done.add(key)
+                # Summed input complexity: values built from several placeholders cost more,
+                # so low bounds favour plans over real values.
+                level = sum(evaluation.level.get(x, 0) for x in inputs)
+                real = state.instances.get(key)
+                if real is not None:
+                    if real.disabled or (real.exhausted and not _pending_test(real)):
+                        continue
+                    level += real.num_calls
+                if level > complexity:
+                    evaluation.cut = True
+                    done.discard(key)
+                    continue
+                changed |= _add_optimistic(state, evaluation, key, level, placeholders)
+    return evaluation
+
+
+def _pending_test(instance: StreamInstance) -> bool:
+    return instance.is_test and instance.num_calls == 0
+
+
+def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: InstanceKey,
+                    level: int, placeholders: dict[InstanceKey, tuple[str, ...]]) -> bool:
+    name, inputs = key
+    external = state.externals[name]
+    mapping = dict(zip(external_inputs(external), inputs, strict=True))
+    if isinstance(external, StreamFunction):
+        term = (external.name, *(mapping[a] for a in external.head.args))
+        if term not in evaluation.function_values:
+            evaluation.function_values[term] = state.bindings[name].info.opt_cost
+            evaluation.fact_producer[("=", *term)] = key
+        return False
+    outputs: tuple[str, ...] = ()
+    if isinstance(external, Stream) and external.outputs:
+        outputs = placeholders.get(key, ())
+        if not outputs:
+            number = len(placeholders)
+            outputs = tuple(f"#{v[1:]}{number}" for v in external.outputs)
+            placeholders[key] = outputs
+        evaluation.outputs[key] = outputs
+        for placeholder in outputs:
+            evaluation.level[placeholder] = level + 1
+            evaluation.object_types[placeholder] = OBJECT_TYPE
+            evaluation.object_producer[placeholder] = key
+        mapping.update(zip(external.outputs, outputs, strict=True))
+        facts = instantiate_atoms(external.certified, mapping)
+    else:
+        instance = StreamInstance(external, state.bindings[name], inputs)
+        facts = certified_facts(instance, ())
+    added = False
+    for fact in facts:
+        if evaluation.index.add(fact):
+            evaluation.fact_producer[fact] = key
+            added = True
+    return added
+
+
+
+def stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
+                needed: Iterable[Fact]) -> list[InstanceKey]:
+    """Instances to call, dependencies first, to make the needed optimistic facts real."""
+    ordered: list[InstanceKey] = []
+    visited: set[InstanceKey] = set()
+
+    def visit(key: InstanceKey) -> None:
+        if key in visited:
+            return
+        visited.add(key)
+        name, inputs = key
+        for value in inputs:
+            producer = evaluation.object_producer.get(value)
+            if producer is not None:
+                visit(producer)
+        external = state.externals[name]
+        mapping = dict(zip(external_inputs(external), inputs, strict=True))
+        for fact in instantiate_atoms(external.domain, mapping):
+            if fact not in state.facts.members and fact in evaluation.fact_producer:
+                visit(evaluation.fact_producer[fact])
+        ordered.append(key)
+
+    for fact in sorted(needed):
+        if fact in state.facts.members:
+            continue
+        key = evaluation.fact_producer.get(fact) or evaluation.fact_producer.get(("=", *fact))
+        if key is not None:
+            visit(key)
+    return ordered
+
+
+def report_unusable(state: PlannerState, consumed: tuple[str, ...],
+                     made_by: dict[str, tuple[StreamInstance, tuple[str, ...]]]) -> None:
+    reported: set[int] = set()
+    for name in consumed:
+        if name not in made_by:
+            continue
+        producer, outputs = made_by[name]
+        callback = producer.binding.on_unusable
+        if callback is None or id(outputs) in reported:
+            continue
+        reported.add(id(outputs))
+        inputs = tuple(state.objects.value(x) for x in producer.inputs)
+        callback(inputs, tuple(state.objects.value(x) for x in outputs))
+
+
+def evaluate_eager(state: PlannerState) -> None:
+    """Call every eager stream (``StreamInfo.eager``) once on all real inputs, to a fixpoint.
+
+    Cheap, decisive streams (collision tests, closed-form kinematics) are better evaluated
+    for real than assumed optimistically: it keeps optimistic placeholders few.
+    """
+    changed = True
+    while changed and not state.timed_out():
+        changed = False
+        for external in state.externals.values():
+            if not state.bindings[external.name].info.eager:
+                continue
+            for inputs in list(state.bindings_of(external, state.facts)):
+                instance = state.instance(external.name, inputs)
+                if instance.num_calls == 0:
+                    state.call(instance)
+                    changed = True
+
+
