@@ -28,6 +28,16 @@ def solve_command(
         help="Domain folder, for a .pddl problem file.")] = None,
     unit_costs: Annotated[bool, typer.Option(
         "--unit-costs", help="Ignore action costs while searching.")] = False,
+    success_cost: Annotated[float | None, typer.Option(
+        "--success-cost", help="Anytime: keep improving until the plan costs at most this "
+        "(0: until --max-time).")] = None,
+    skeleton: Annotated[list[str] | None, typer.Option(
+        "--skeleton", help="An action pattern the plan must follow, in order (repeat the "
+        "option): 'NAME ARG ...' with '?' for any argument, '*' any action, '...' any "
+        "actions.")] = None,
+    statistics: Annotated[bool, typer.Option(
+        "--stats/--no-stats", help="Persist stream statistics per domain in the user cache "
+        "directory.")] = True,
     json_output: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
     backend: Annotated[str | None, typer.Option(
         "--backend", help="Execute the plan in this backend's simulator (e.g. box2d).")] = None,
@@ -42,7 +52,7 @@ def solve_command(
     loaded = load_problem(problem, domain)
     options = dict(loaded.planner_options)
     known = {"algorithm", "max_time", "seed", "search", "unit_costs", "initial_complexity",
-             "max_complexity"}
+             "max_complexity", "success_cost", "skeleton"}
     for key in options:
         if key not in known:
             raise InputError(f"{problem}: unknown planner option {key!r}: expected one of "
@@ -57,6 +67,19 @@ def solve_command(
         options["search"] = search
     if unit_costs:
         options["unit_costs"] = True
+    if success_cost is not None:
+        options["success_cost"] = success_cost
+    if skeleton:
+        options["skeleton"] = skeleton
+    if "skeleton" in options:
+        if not isinstance(options["skeleton"], list | tuple):
+            raise InputError(f"{problem}: planner option 'skeleton' must be a list of action "
+                             "patterns")
+        options["skeleton"] = tuple(str(entry) for entry in options["skeleton"])
+    if statistics:
+        from ltamp_cli.planner.statistics import default_statistics_dir
+
+        options["statistics_dir"] = str(default_statistics_dir())
     try:
         config = PlannerConfig(**options)
         result = solve(loaded, config)
@@ -94,6 +117,7 @@ def _print_human(result) -> None:  # type: ignore[no-untyped-def]
     out = sys.stdout
     if result.plan is None:
         print(f"status: {result.status} after {result.time_s:.3f} s", file=out)
+        _print_diagnostics(result.diagnostics)
         return
     print(f"status: {result.status}  actions: {len(result.plan)}  cost: {result.cost:g}  "
           f"time: {result.time_s:.3f} s", file=out)
@@ -101,6 +125,22 @@ def _print_human(result) -> None:  # type: ignore[no-untyped-def]
     for number, step in enumerate(result.plan, start=1):
         values = " ".join(_short(v) for v in step.values)
         print(f"{number:>{width}}. {step.name} {values}", file=out)
+
+
+def _print_diagnostics(diagnostics: dict) -> None:  # type: ignore[type-arg]
+    """Why no plan: what could never be reached, which streams never helped, what was tried."""
+    if not diagnostics:
+        return
+    print("why no plan:")
+    unreachable = diagnostics.get("unreachable_goal_facts") or []
+    if unreachable:
+        print("  goal facts unreachable even optimistically: " + " ".join(unreachable))
+    for key, label in (("streams_never_called", "streams never called"),
+                       ("streams_never_succeeded", "streams that never succeeded")):
+        if diagnostics.get(key):
+            print(f"  {label}: {', '.join(diagnostics[key])}")
+    for number, skeleton in enumerate(diagnostics.get("last_skeletons") or [], start=1):
+        print(f"  skeleton tried #{number}: {' '.join(skeleton)}")
 
 
 def _short(value) -> str:  # type: ignore[no-untyped-def]

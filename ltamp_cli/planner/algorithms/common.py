@@ -48,7 +48,12 @@ class PlannerConfig:
     """Options of one planner run (all passed explicitly, nothing global).
 
     ``max_time`` in seconds; ``seed`` seeds the stream bindings' RNG; ``search`` is the
-    discrete search (``lazy-greedy`` or ``wastar``); ``unit_costs`` ignores action costs.
+    discrete search (``ff``, ``lazy-greedy``, ``wastar``, ``fd``); ``unit_costs`` ignores
+    action costs. ``success_cost``: keep improving the plan (anytime) until its cost is at
+    most this or time runs out (``inf``: return the first plan). ``skeleton``: action
+    patterns the plan must follow (see :mod:`ltamp_cli.planner.search.skeleton`).
+    ``statistics_dir``: where per-domain stream statistics persist across runs (``None``:
+    nowhere).
     """
 
     algorithm: str = "adaptive"
@@ -58,6 +63,9 @@ class PlannerConfig:
     unit_costs: bool = False
     initial_complexity: int = 0
     max_complexity: int = 20
+    success_cost: float = float("inf")
+    skeleton: tuple[str, ...] = ()
+    statistics_dir: str | None = None
 
 
 def external_domain(external: External) -> tuple[Atom, ...]:
@@ -109,6 +117,7 @@ class PlannerState:
     iterations: int = 0
     searches: int = 0
     last_skeletons: list[list[str]] = field(default_factory=list)
+    cost_bound: float | None = None  # anytime mode: only plans cheaper than this
     unreachable_goal: list[str] = field(default_factory=list)
 
     @property
@@ -174,7 +183,8 @@ class PlannerState:
         try:
             return plan_discrete(
                 self.problem.domain, objects, init, function_values, self.problem.goal,
-                self.deadline, self.config.search, self.config.unit_costs, max_expansions)
+                self.deadline, self.config.search, self.config.unit_costs, max_expansions,
+                self.config.skeleton, self.cost_bound)
         finally:
             self.search_time += time.perf_counter() - start
 

@@ -111,8 +111,13 @@ def lazy_greedy(task: Task, deadline: float, boost: int = 1000,
     return SearchOutcome(None, INFINITY, expanded, evaluated, time.perf_counter() - start_time)
 
 
-def weighted_astar(task: Task, deadline: float, weight: float = 2.0) -> SearchOutcome:
-    """Eager weighted A* on real action costs with the FF heuristic (reopening closed)."""
+def weighted_astar(task: Task, deadline: float, weight: float = 2.0,
+                   cost_bound: float | None = None) -> SearchOutcome:
+    """Eager weighted A* on real action costs with the FF heuristic (reopening closed).
+
+    With ``cost_bound``, only plans cheaper than the bound are accepted (paths reaching it are
+    pruned): the anytime mode's "find a better plan".
+    """
     start_time = time.perf_counter()
     heuristic = FFHeuristic(task, cost_bias=0.0)
     counter = itertools.count()
@@ -141,6 +146,8 @@ def weighted_astar(task: Task, deadline: float, weight: float = 2.0) -> SearchOu
         for op in task.applicable(vector):
             child = task.successor(state, vector, int(op))
             g = g_values[state] + task.operators[op].cost
+            if cost_bound is not None and g >= cost_bound - 1e-9:
+                continue
             if child in g_values and g_values[child] <= g:
                 continue
             g_values[child] = g

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from ltamp_cli.planner.pddl.syntax import OBJECT_TYPE, Domain, Formula
-from ltamp_cli.planner.search.engine import SearchOutcome, run_search
+from ltamp_cli.planner.search.engine import SearchOutcome, run_search, weighted_astar
 from ltamp_cli.planner.search.ground import Fact, GroundAction, Grounding, ground_task
 from ltamp_cli.planner.search.normalize import Normalizer, type_predicate
+from ltamp_cli.planner.search.skeleton import constrain
 from ltamp_cli.planner.search.task import Task
 
 
@@ -53,8 +54,14 @@ def plan_discrete(
     algorithm: str = "ff",
     unit_costs: bool = False,
     max_expansions: int | None = None,
+    skeleton: Sequence[str] | None = None,
+    cost_bound: float | None = None,
 ) -> DiscreteResult:
-    """Find a plan for the finite task given by ``objects`` (name → type) and ``init``."""
+    """Find a plan for the finite task given by ``objects`` (name → type) and ``init``.
+
+    ``skeleton`` constrains the plan to a sequence of action patterns (see
+    :mod:`.skeleton`); ``cost_bound`` asks for a plan cheaper than it (weighted A* then).
+    """
     start = time.perf_counter()
     closure = type_closure(domain)
     objects_by_type: dict[str, list[str]] = {}
@@ -72,9 +79,15 @@ def plan_discrete(
     ground_time = time.perf_counter() - start
     if ("%goal",) not in grounding.reachable:
         return DiscreteResult(None, float("inf"), grounding, None, None, ground_time, 0.0)
+    if skeleton:
+        grounding, first_step = constrain(grounding, skeleton)
+        facts.add(first_step)
     task = Task(grounding, facts)
-    outcome = run_search(task, algorithm, deadline, unit_costs=unit_costs,
-                         max_expansions=max_expansions)
+    if cost_bound is not None:
+        outcome = weighted_astar(task, deadline, cost_bound=cost_bound)
+    else:
+        outcome = run_search(task, algorithm, deadline, unit_costs=unit_costs,
+                             max_expansions=max_expansions)
     search_time = time.perf_counter() - start - ground_time
     if outcome.plan is None:
         return DiscreteResult(None, float("inf"), grounding, task, outcome, ground_time,

@@ -1,0 +1,164 @@
+"""Planner features beyond plain solving: anytime costs, skeleton constraints, diagnostics,
+downstream feedback to streams, persistent statistics (issue: planner, complete)."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from ltamp_cli.planner.algorithms.common import ALGORITHMS, PlannerConfig
+from ltamp_cli.planner.api import solve
+from ltamp_cli.planner.problem import load_problem
+from ltamp_cli.planner.validate import validate_plan
+
+REPO = Path(__file__).resolve().parents[2]
+BLOCKED = REPO / "problems" / "examples" / "tamp2d_blocked.yaml"
+
+# A value line: `next` yields p+1; `good` (a test) accepts only even values, so odd samples
+# fail downstream and must be reported back to `next`.
+FEEDBACK_DOMAIN = """
+(define (domain hop)
+  (:predicates (Pos ?p) (At ?p) (Next ?p ?q) (Good ?q) (Goal ?p))
+  (:action hop
+    :parameters (?p ?q)
+    :precondition (and (At ?p) (Next ?p ?q) (Good ?q))
+    :effect (and (At ?q) (not (At ?p)))))
+"""
+FEEDBACK_STREAMS = """
+(define (stream hop)
+  (:stream next
+    :inputs (?p) :domain (Pos ?p) :outputs (?q)
+    :certified (and (Pos ?q) (Next ?p ?q)))
+  (:stream good
+    :inputs (?q) :domain (Pos ?q)
+    :certified (Good ?q))
+  (:predicate (Goal ?p) (Pos ?p)))
+"""
+FEEDBACK_BINDINGS = """
+from ltamp_cli.planner.streams import Binding
+
+REPORTS = []
+
+def make_streams(world, rng):
+    def next_(p):
+        for step in (1, 2, 3):
+            yield (p + step,)
+
+    return {
+        "next": Binding(next_, on_unusable=lambda inputs, outputs: REPORTS.append(
+            (inputs, outputs))),
+        "good": lambda q: q % 2 == 0,
+        "goal": lambda p: p >= 4,
+    }
+"""
+
+
+def feedback_problem(make_problem):  # type: ignore[no-untyped-def]
+    path = make_problem(FEEDBACK_DOMAIN,
+                        "domain: dom\nbindings: bindings.py\nobjects: {p0: 0}\n"
+                        "init: [\"(Pos p0)\", \"(At p0)\"]\n"
+                        "goal: (exists (?p) (and (At ?p) (Goal ?p)))\n",
+                        FEEDBACK_STREAMS, FEEDBACK_BINDINGS)
+    return load_problem(path)
+
+
+@pytest.mark.parametrize("algorithm", ["adaptive", "binding", "focused"])
+def test_unusable_outputs_are_reported_to_their_stream(make_problem, algorithm: str) -> None:  # type: ignore[no-untyped-def]
+    problem = feedback_problem(make_problem)
+    module = sys.modules[problem.streams_factory.__module__]
+    module.REPORTS.clear()
+    result = solve(problem, PlannerConfig(algorithm=algorithm, max_time=20))
+    assert result.solved
+    assert all(value % 2 == 0 for step in result.plan for value in step.values[1:])
+    assert validate_plan(problem, result).valid
+    # The first sample of `next` from 0 is 1, which `good` rejects: reported as unusable.
+    assert ((0,), (1,)) in module.REPORTS
+
+
+def test_anytime_mode_improves_cost_monotonically() -> None:
+    problem = load_problem(BLOCKED)
+    first = solve(problem, PlannerConfig(seed=0, max_time=20))
+    anytime = solve(problem, PlannerConfig(seed=0, max_time=6, success_cost=0.0))
+    costs = anytime.stats["anytime_costs"]
+    assert costs[0] == pytest.approx(first.cost)
+    assert all(later < earlier for earlier, later in itertools.pairwise(costs))
+    assert anytime.cost == pytest.approx(costs[-1])
+    report = validate_plan(problem, anytime)
+    assert report.valid and report.cost == pytest.approx(anytime.cost)
+    assert [step.cost for step in anytime.plan] and all(s.cost > 0 for s in anytime.plan)
+
+
+def test_success_cost_stops_at_the_first_good_enough_plan() -> None:
+    problem = load_problem(BLOCKED)
+    result = solve(problem, PlannerConfig(seed=0, max_time=20, success_cost=1e9))
+    assert result.stats["anytime_costs"] == [result.cost]
+
+
+@pytest.mark.parametrize("algorithm", ALGORITHMS)
+def test_plan_follows_the_skeleton(algorithm: str) -> None:
+    problem = load_problem(BLOCKED)
+    skeleton = ("move", "pick b ? ? ?", "...", "place a ? ? ?")
+    result = solve(problem, PlannerConfig(algorithm=algorithm, seed=0, max_time=30,
+                                          skeleton=skeleton))
+    assert result.solved, result.diagnostics
+    names = [(step.name, step.args[0] if step.args else None) for step in result.plan]
+    assert names[0][0] == "move" and names[1] == ("pick", "b") and names[-1] == ("place", "a")
+    assert validate_plan(problem, result).valid
+
+
+def test_impossible_skeleton_is_not_solved_and_explained() -> None:
+    # a cannot be placed in the goal while b is there: the skeleton forbids moving b.
+    problem = load_problem(BLOCKED)
+    skeleton = ("move", "pick a ? ? ?", "move", "place a ? ? ?")
+    result = solve(problem, PlannerConfig(algorithm="adaptive", seed=0, max_time=2,
+                                          skeleton=skeleton))
+    assert not result.solved
+    tried = result.diagnostics["last_skeletons"]
+    assert tried and tried[-1][-1].startswith("(place a")
+
+
+def test_diagnostics_name_unreachable_goal_facts_and_idle_streams(make_problem) -> None:  # type: ignore[no-untyped-def]
+    path = make_problem(FEEDBACK_DOMAIN,
+                        "domain: dom\nbindings: bindings.py\nobjects: {p0: 0, p9: 9}\n"
+                        "init: [\"(Pos p0)\", \"(At p0)\"]\n"
+                        "goal: (and (At p9) (Good p9))\n",
+                        FEEDBACK_STREAMS, FEEDBACK_BINDINGS)
+    result = solve(load_problem(path), PlannerConfig(max_time=5))
+    assert result.status == "infeasible"
+    assert "(good p9)" in result.diagnostics["unreachable_goal_facts"]
+    assert "(at p9)" in result.diagnostics["unreachable_goal_facts"]
+    assert "goal" in result.diagnostics["streams_never_called"]
+
+
+def test_statistics_accumulate_across_runs(tmp_path: Path) -> None:
+    problem = load_problem(BLOCKED)
+    config = PlannerConfig(seed=0, max_time=20, statistics_dir=str(tmp_path))
+    first = solve(problem, config)
+    second = solve(problem, config)
+    calls = first.stats["streams"]["sample-pose"]["calls"]
+    assert second.stats["stream_history"]["sample-pose"]["calls"] == 2 * calls
+    saved = json.loads((tmp_path / "tamp2d.json").read_text())
+    assert saved["streams"]["test-cfree"]["calls"] > 0
+
+
+def test_cli_skeleton_success_cost_and_why_no_plan(tmp_path: Path) -> None:
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "XDG_CACHE_HOME": str(tmp_path)}
+    command = [sys.executable, "-m", "ltamp_cli", "solve", str(BLOCKED)]
+    impossible = subprocess.run(
+        [*command, "--max-time", "2", "--skeleton", "move", "--skeleton", "pick a ? ? ?",
+         "--skeleton", "move", "--skeleton", "place a ? ? ?"],
+        capture_output=True, text=True, env=env, timeout=120)
+    assert impossible.returncode == 1
+    assert "why no plan:" in impossible.stdout and "skeleton tried #1:" in impossible.stdout
+    anytime = subprocess.run([*command, "--max-time", "4", "--success-cost", "0", "--json"],
+                             capture_output=True, text=True, env=env, timeout=120)
+    assert anytime.returncode == 0, anytime.stderr
+    data = json.loads(anytime.stdout)
+    assert data["cost"] == pytest.approx(min(data["stats"]["anytime_costs"]))
+    assert (tmp_path / "ltamp" / "stream-statistics" / "tamp2d.json").exists()
