@@ -56,20 +56,37 @@ class SapienBody:
         """Teleport the object frame (no velocity): for placing, not for moving tools."""
         pose = to_sapien_pose(position, orientation)
         self.entity.set_pose(pose)
-        if self.body_type == "kinematic":
+        if self.is_kinematic:
             # Otherwise a stale target would drag the body back on the next step.
             self.component.set_kinematic_target(pose)  # type: ignore[attr-defined]
+
+    @property
+    def is_kinematic(self) -> bool:
+        return bool(getattr(self.component, "kinematic", False))
 
     def move_to(
         self, position: Sequence[float] | np.ndarray, orientation: Sequence[float] = IDENTITY_QUAT
     ) -> None:
         """Reach this pose at the end of the next step, with the velocity that implies
         (kinematic bodies only)."""
-        if self.body_type != "kinematic":
+        if not self.is_kinematic:
             raise ValueError(f"only kinematic bodies move to targets, not a {self.body_type} one")
         self.component.set_kinematic_target(  # type: ignore[attr-defined]
             to_sapien_pose(position, orientation)
         )
+
+    def set_kinematic(self, kinematic: bool) -> None:
+        """Switch a non-static body between carried (kinematic) and free (dynamic, at rest):
+        how a grasped object is held and released."""
+        if self.body_type == "static":
+            raise ValueError("a static body cannot be picked up")
+        component = self.component
+        component.kinematic = bool(kinematic)  # type: ignore[attr-defined]
+        if kinematic:
+            component.set_kinematic_target(self.entity.pose)  # type: ignore[attr-defined]
+        else:
+            component.linear_velocity = np.zeros(3)  # type: ignore[attr-defined]
+            component.angular_velocity = np.zeros(3)  # type: ignore[attr-defined]
 
 
 def physx_material(friction: float, restitution: float) -> physx.PhysxMaterial:
