@@ -42,6 +42,7 @@ FAST_EXAMPLES = ("blocksworld", "tamp2d_blocked", "tamp2d_4blocks", "synthetic_g
 CASES = [
     *((name, algorithm, search) for name in FAST_EXAMPLES
       for algorithm in ("incremental", "focused") for search in ("fd", "fd-wastar")),
+    *((name, algorithm, "fd") for name in FAST_EXAMPLES for algorithm in ("adaptive", "binding")),
     ("kitchen_symbolic", "incremental", "fd"),
     ("kitchen_symbolic", "incremental", "fd-wastar"),
     # ~5-25 s: the focused algorithm searches optimistic tasks of ~1000 operators 7-10 times.
