@@ -232,3 +232,16 @@ def test_cli_search_fd_writes_nothing_into_cwd(tmp_path: Path) -> None:
     assert run.returncode == 0, run.stderr
     assert json.loads(run.stdout)["status"] == "solved"
     assert list(tmp_path.iterdir()) == []
+
+
+def test_goal_already_true_gives_empty_plan(make_problem: MakeProblem) -> None:
+    domain = """
+    (define (domain t)
+      (:predicates (A) (B))
+      (:action make-a :parameters () :precondition (and (B)) :effect (and (A))))
+    """
+    problem = load_problem(make_problem(domain, 'domain: dom\nobjects: {}\ninit: ["(A)"]\n'
+                                                'goal: (A)\n'))
+    discrete = first_search(problem, "fd")
+    assert discrete.solved and discrete.actions == [] and discrete.task is not None
+    assert discrete.outcome is not None and discrete.outcome.states == [discrete.task.init]
