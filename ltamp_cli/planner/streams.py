@@ -14,6 +14,11 @@ The declaration decides how a plain callable is used:
 * a stream without outputs (a test) and a ``:predicate``: ``fn(*inputs) -> bool``;
 * a ``:function``: ``fn(*inputs) -> float`` (an action cost).
 
+A stream declared with ``:fluents (P ...)`` is also given ``fluents=[(P, *values), ...]``: the
+facts of those predicates in the state where its output is used (e.g. obstacle poses for a
+motion planner). Its certified facts then hold only in states that contain those facts: the
+planner adds them as preconditions of every action that relies on the output.
+
 Wrap a callable in :class:`Binding` to give per-stream :class:`StreamInfo`.
 """
 
@@ -104,10 +109,13 @@ class StreamStats:
 class StreamInstance:
     """A stream applied to concrete input objects; called repeatedly for more outputs."""
 
-    def __init__(self, external: External, binding: Binding, inputs: tuple[str, ...]) -> None:
+    def __init__(self, external: External, binding: Binding, inputs: tuple[str, ...],
+                 fluent_facts: tuple[tuple[str, ...], ...] = ()) -> None:
         self.external = external
         self.binding = binding
         self.inputs = inputs
+        # For a stream with :fluents, the state facts it is called under (object names).
+        self.fluent_facts = fluent_facts
         self.num_calls = 0
         self.exhausted = False
         self.disabled = False
@@ -154,7 +162,12 @@ class StreamInstance:
                 self.value = bool(self.value)
             return []
         if self._iterator is None:
-            produced = self.binding.function(*values)
+            if external.fluents:
+                fluents = [(fact[0], *(objects.value(a) for a in fact[1:]))
+                           for fact in self.fluent_facts]
+                produced = self.binding.function(*values, fluents=fluents)
+            else:
+                produced = self.binding.function(*values)
             if produced is None:
                 self.exhausted = True
                 return []

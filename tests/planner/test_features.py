@@ -162,3 +162,79 @@ def test_cli_skeleton_success_cost_and_why_no_plan(tmp_path: Path) -> None:
     data = json.loads(anytime.stdout)
     assert data["cost"] == pytest.approx(min(data["stats"]["anytime_costs"]))
     assert (tmp_path / "ltamp" / "stream-statistics" / "tamp2d.json").exists()
+
+
+# A robot on a line must get from 0 to 10; a block at 5 is in the way. The motion planner
+# is a fluent stream: it sees the blocks' current poses and fails through an obstacle.
+FLUENT_DOMAIN = """
+(define (domain corridor)
+  (:predicates (Conf ?q) (AtConf ?q) (Block ?b) (AtPose ?b ?p) (Motion ?q1 ?t ?q2)
+               (Cleared ?b))
+  (:action move
+    :parameters (?q1 ?t ?q2)
+    :precondition (and (Motion ?q1 ?t ?q2) (AtConf ?q1))
+    :effect (and (AtConf ?q2) (not (AtConf ?q1))))
+  (:action clear
+    :parameters (?b ?p)
+    :precondition (and (Block ?b) (AtPose ?b ?p))
+    :effect (and (not (AtPose ?b ?p)) (Cleared ?b))))
+"""
+FLUENT_STREAMS = """
+(define (stream corridor)
+  (:stream plan-motion
+    :inputs (?q1 ?q2)
+    :domain (and (Conf ?q1) (Conf ?q2))
+    :fluents (AtPose)
+    :outputs (?t)
+    :certified (Motion ?q1 ?t ?q2)))
+"""
+FLUENT_BINDINGS = """
+CALLS = []
+
+def make_streams(world, rng):
+    def plan_motion(q1, q2, fluents):
+        CALLS.append(sorted(fluents))
+        blocked = any(min(q1, q2) < pose < max(q1, q2) for _, _, pose in fluents)
+        return None if blocked or q1 == q2 else ((q1, q2),)
+    return {"plan-motion": plan_motion}
+"""
+
+
+@pytest.mark.parametrize("algorithm", ["adaptive", "binding", "focused"])
+def test_fluent_stream_sees_the_state_where_its_output_is_used(make_problem, algorithm: str  # type: ignore[no-untyped-def]
+                                                               ) -> None:
+    path = make_problem(FLUENT_DOMAIN,
+                        "domain: dom\nbindings: bindings.py\n"
+                        "objects: {q0: 0, q1: 10, b: null, pb: 5}\n"
+                        "init: [\"(Conf q0)\", \"(Conf q1)\", \"(AtConf q0)\", \"(Block b)\","
+                        " \"(AtPose b pb)\"]\n"
+                        "goal: (AtConf q1)\n",
+                        FLUENT_STREAMS, FLUENT_BINDINGS)
+    problem = load_problem(path)
+    module = sys.modules[problem.streams_factory.__module__]
+    module.CALLS.clear()
+    result = solve(problem, PlannerConfig(algorithm=algorithm, max_time=20))
+    assert result.solved, result.diagnostics
+    # The block must be cleared before the motion, which was planned without it.
+    assert [step.name for step in result.plan] == ["clear", "move"]
+    assert [("atpose", "b", 5)] in module.CALLS  # first tried (and failed) with the block
+    assert [] in module.CALLS                     # then planned in the cleared corridor
+
+
+def test_fluent_certificates_are_not_reused_in_other_states(make_problem) -> None:  # type: ignore[no-untyped-def]
+    # A motion certified with no block on the corridor must not be used while one is there:
+    # grounding makes actions relying on it require the context it was computed under.
+    from ltamp_cli.planner.search.solve import plan_discrete
+
+    problem = load_problem(make_problem(
+        FLUENT_DOMAIN, "domain: dom\nobjects: {q0: null, q1: null, t: null, b: null, p: null}\n"
+        "init: [\"(AtConf q0)\", \"(Motion q0 t q1)\", \"(Block b)\", \"(AtPose b p)\"]\n"
+        "goal: (AtConf q1)\n"))
+    objects = {name: "object" for name in problem.objects}
+    init = {(a.predicate, *a.args) for a in problem.init}
+    free = plan_discrete(problem.domain, objects, init, {}, problem.goal, 1e12)
+    assert [a.name for a in free.actions] == ["move"]
+    needs_clear = plan_discrete(problem.domain, objects, init, {}, problem.goal, 1e12,
+                                fluent_requirements={("motion", "q0", "t", "q1"):
+                                                     [(("atpose",), ())]})
+    assert [a.name for a in needs_clear.actions] == ["clear", "move"]

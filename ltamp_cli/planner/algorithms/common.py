@@ -28,7 +28,7 @@ from ltamp_cli.planner.result import (
     PlanStep,
     StreamResult,
 )
-from ltamp_cli.planner.search.ground import Fact, FactIndex, join
+from ltamp_cli.planner.search.ground import Context, Fact, FactIndex, join
 from ltamp_cli.planner.search.normalize import LiftedLiteral
 from ltamp_cli.planner.search.solve import DiscreteResult, plan_discrete
 from ltamp_cli.planner.streams import (
@@ -118,6 +118,20 @@ class PlannerState:
     searches: int = 0
     last_skeletons: list[list[str]] = field(default_factory=list)
     cost_bound: float | None = None  # anytime mode: only plans cheaper than this
+    # Facts certified by :fluents streams -> the state facts they were computed under.
+    # A context is (fluent predicates, the facts of them that held): it holds in a state
+    # whose facts of those predicates are exactly these.
+    fluent_requirements: dict[Fact, list[Context]] = field(default_factory=dict)
+    # (:fluents stream, inputs) -> the contexts in which a call of it failed.
+    failed_contexts: dict[tuple[str, tuple[str, ...]], list[Context]] = field(
+        default_factory=dict)
+
+    def record_failure(self, instance: StreamInstance) -> None:
+        external = instance.external
+        if isinstance(external, Stream) and external.fluents:
+            key = (instance.name, instance.inputs)
+            self.failed_contexts.setdefault(key, []).append(
+                (external.fluents, instance.fluent_facts))
     unreachable_goal: list[str] = field(default_factory=list)
 
     @property
@@ -133,13 +147,22 @@ class PlannerState:
             self.producers[fact] = producer
         return added
 
-    def instance(self, name: str, inputs: tuple[str, ...]) -> StreamInstance:
-        key = (name, inputs)
-        found = self.instances.get(key)
+    def instance(self, name: str, inputs: tuple[str, ...],
+                 fluent_facts: tuple[Fact, ...] = ()) -> StreamInstance:
+        key = (name, inputs) if not fluent_facts else (name, inputs, fluent_facts)
+        found = self.instances.get(key)  # type: ignore[call-overload]
         if found is None:
-            found = StreamInstance(self.externals[name], self.bindings[name], inputs)
-            self.instances[key] = found
+            found = StreamInstance(self.externals[name], self.bindings[name], inputs,
+                                   fluent_facts)
+            self.instances[key] = found  # type: ignore[index]
         return found
+
+    def fluent_context(self, name: str, state_facts: Iterable[Fact]) -> tuple[Fact, ...]:
+        """The facts of a state that a stream with ``:fluents`` is called under."""
+        external = self.externals[name]
+        if not isinstance(external, Stream) or not external.fluents:
+            return ()
+        return tuple(sorted(f for f in state_facts if f[0] in external.fluents))
 
     def call(self, instance: StreamInstance) -> list[tuple[str, ...]]:
         """Call an instance once and record what it certified. Returns new output tuples."""
@@ -173,10 +196,14 @@ class PlannerState:
             result = StreamResult(instance.name, instance.inputs, output, tuple(facts))
             for fact in facts:
                 self.add_fact(fact, result)
+                if isinstance(instance.external, Stream) and instance.external.fluents:
+                    self.fluent_requirements.setdefault(fact, []).append(
+                        (instance.external.fluents, instance.fluent_facts))
         return outputs
 
     def search(self, init: Iterable[Fact], objects: Mapping[str, str],
-               function_values: Mapping[Fact, float], max_expansions: int | None = None
+               function_values: Mapping[Fact, float], max_expansions: int | None = None,
+               context_blocks: Mapping[Fact, list[Context]] | None = None
                ) -> DiscreteResult:
         start = time.perf_counter()
         self.searches += 1
@@ -184,7 +211,8 @@ class PlannerState:
             return plan_discrete(
                 self.problem.domain, objects, init, function_values, self.problem.goal,
                 self.deadline, self.config.search, self.config.unit_costs, max_expansions,
-                self.config.skeleton, self.cost_bound)
+                self.config.skeleton, self.cost_bound, self.fluent_requirements,
+                context_blocks)
         finally:
             self.search_time += time.perf_counter() - start
 

@@ -13,7 +13,9 @@ from ltamp_cli.planner.algorithms.common import PlannerState
 from ltamp_cli.planner.algorithms.optimistic import (
     InstanceKey,
     OptimisticEvaluation,
+    bind_context,
     evaluate_eager,
+    fluent_contexts,
     optimistic_evaluation,
     report_unusable,
     stream_plan,
@@ -21,6 +23,7 @@ from ltamp_cli.planner.algorithms.optimistic import (
 from ltamp_cli.planner.algorithms.preimage import plan_preimage
 from ltamp_cli.planner.pddl.syntax import StreamFunction
 from ltamp_cli.planner.result import INFEASIBLE, SOLVED, TIMEOUT, PlanResult
+from ltamp_cli.planner.search.ground import Fact
 from ltamp_cli.planner.streams import StreamInstance
 
 # The stream plan made the optimistic plan's facts real, so a plan over real facts is
@@ -29,7 +32,8 @@ REAL_SEARCH_EXPANSIONS = 500
 
 
 def process_stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
-                        plan: list[InstanceKey]) -> bool:
+                        plan: list[InstanceKey],
+                        contexts: dict[InstanceKey, tuple[Fact, ...]] | None = None) -> bool:
     """Call the stream plan in order; True when every instance succeeded.
 
     When an instance fails, every output this stream plan produced that the failed
@@ -43,7 +47,10 @@ def process_stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
         real_inputs = tuple(binding.get(x, x) for x in inputs)
         if any(x.startswith("#") for x in real_inputs):
             return False
-        instance = state.instance(name, real_inputs)
+        context = bind_context((contexts or {}).get((name, inputs), ()), binding)
+        if context is None:
+            return False
+        instance = state.instance(name, real_inputs, context)
         if instance.disabled:
             return False
         if instance.is_test:
@@ -52,11 +59,13 @@ def process_stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
             if isinstance(instance.external, StreamFunction) or instance.value:
                 continue
             instance.disabled = True
+            state.record_failure(instance)
             report_unusable(state, real_inputs, made_by)
             return False
         outputs = state.call(instance)
         if not outputs:
             instance.disabled = True
+            state.record_failure(instance)
             report_unusable(state, real_inputs, made_by)
             return False
         placeholders = evaluation.outputs.get((name, inputs), ())
@@ -77,7 +86,8 @@ def solve_focused(state: PlannerState) -> PlanResult:
             evaluate_eager(state)
             evaluation = optimistic_evaluation(state, complexity, placeholders)
             discrete = state.search(evaluation.index.members, evaluation.object_types,
-                                    evaluation.function_values)
+                                    evaluation.function_values,
+                                    context_blocks=evaluation.context_blocks)
             if not discrete.solved:
                 disabled = [i for i in state.instances.values() if i.disabled]
                 if not evaluation.cut and not disabled:
@@ -93,7 +103,8 @@ def solve_focused(state: PlannerState) -> PlanResult:
             plan = stream_plan(state, evaluation, facts | terms)
             if not plan:
                 return state.result(SOLVED, discrete, facts | terms)
-            if process_stream_plan(state, evaluation, plan):
+            contexts = fluent_contexts(state, evaluation, discrete)
+            if process_stream_plan(state, evaluation, plan, contexts):
                 # The stream plan made the optimistic plan's facts real, so a plan over real
                 # facts is usually easy; bound the search so a miss does not get exhaustive.
                 real = state.search(state.facts.members, state.object_types,

@@ -34,9 +34,13 @@ def solve_incremental(state: PlannerState) -> PlanResult:
 
 def sample_all(state: PlannerState) -> bool:
     """Create every new legal instance, then call each non-exhausted one once."""
+    # Streams with :fluents see the initial state here (incremental plans are not
+    # interleaved with sampling, so no later state is known when they are called).
+    initial = [(atom.predicate, *atom.args) for atom in state.problem.init]
     for external in state.externals.values():
+        context = state.fluent_context(external.name, initial)
         for inputs in list(state.bindings_of(external, state.facts)):
-            state.instance(external.name, inputs)
+            state.instance(external.name, inputs, context)
     before = (len(state.facts.members), len(state.function_values))
     for instance in list(state.instances.values()):
         if state.timed_out():

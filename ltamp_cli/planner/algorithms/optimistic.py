@@ -18,7 +18,8 @@ from ltamp_cli.planner.algorithms.common import (
     instantiate_atoms,
 )
 from ltamp_cli.planner.pddl.syntax import OBJECT_TYPE, Stream, StreamFunction
-from ltamp_cli.planner.search.ground import Fact, FactIndex
+from ltamp_cli.planner.search.ground import Context, Fact, FactIndex
+from ltamp_cli.planner.search.solve import DiscreteResult
 from ltamp_cli.planner.streams import StreamInstance
 
 InstanceKey = tuple[str, tuple[str, ...]]
@@ -36,6 +37,8 @@ class OptimisticEvaluation:
     object_producer: dict[str, InstanceKey] = field(default_factory=dict)
     outputs: dict[InstanceKey, tuple[str, ...]] = field(default_factory=dict)
     cut: bool = False  # an instance was left out by the complexity bound
+    # Optimistic facts of :fluents streams -> contexts where the stream already failed.
+    context_blocks: dict[Fact, list[Context]] = field(default_factory=dict)
 
 
 def optimistic_evaluation(state: PlannerState, complexity: int,
@@ -105,10 +108,13 @@ def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: 
         instance = StreamInstance(external, state.bindings[name], inputs)
         facts = certified_facts(instance, ())
     added = False
+    failed = state.failed_contexts.get(key, [])
     for fact in facts:
         if evaluation.index.add(fact):
             evaluation.fact_producer[fact] = key
             added = True
+            if failed:
+                evaluation.context_blocks[fact] = failed
     return added
 
 
@@ -178,3 +184,31 @@ def evaluate_eager(state: PlannerState) -> None:
                     changed = True
 
 
+
+
+def fluent_contexts(state: PlannerState, evaluation: OptimisticEvaluation,
+                    discrete: DiscreteResult) -> dict[InstanceKey, tuple[Fact, ...]]:
+    """For each optimistic instance of a ``:fluents`` stream the plan relies on, the state
+    facts (of its fluent predicates) just before the first action that uses its output."""
+    contexts: dict[InstanceKey, tuple[Fact, ...]] = {}
+    if discrete.actions is None or discrete.task is None or discrete.outcome is None:
+        return contexts
+    task = discrete.task
+    for step, action in enumerate(discrete.actions):
+        for fact in action.static_pre:
+            key = evaluation.fact_producer.get(fact)
+            if key is None or key in contexts:
+                continue
+            external = state.externals[key[0]]
+            if isinstance(external, Stream) and external.fluents:
+                facts = (task.facts[i] for i in discrete.outcome.states[step])
+                contexts[key] = state.fluent_context(key[0], facts)
+    return contexts
+
+
+def bind_context(context: tuple[Fact, ...], binding: dict[str, str]) -> tuple[Fact, ...] | None:
+    """A fluent context with placeholders replaced by their bound values (None: unbound)."""
+    bound = tuple(sorted((f[0], *(binding.get(a, a) for a in f[1:])) for f in context))
+    if any(a.startswith("#") for fact in bound for a in fact[1:]):
+        return None
+    return bound

@@ -9,23 +9,24 @@ real facts.
 
 * ``binding`` searches again only when no binding in the queue can progress without more
   retries (alternative outputs, instances that produced nothing) than the current bound;
-* ``adaptive`` (the default) also shares time between searching and sampling: after a
-  search it processes bindings for at most as long as the search took, then searches again
-  if sampling taught it new facts. A search that finds nothing new raises the retry and
-  complexity bounds.
+* ``adaptive`` (the default) also shares effort between searching and sampling: after a
+  search it processes a number of bindings proportional to the states the search evaluated,
+  then searches again if sampling taught it new facts. A search that finds nothing new
+  raises the retry and complexity bounds.
 """
 
 from __future__ import annotations
 
 import heapq
 import itertools
-import time
 from dataclasses import dataclass, field
 
 from ltamp_cli.planner.algorithms.common import PlannerState
 from ltamp_cli.planner.algorithms.optimistic import (
     InstanceKey,
+    bind_context,
     evaluate_eager,
+    fluent_contexts,
     optimistic_evaluation,
     report_unusable,
     stream_plan,
@@ -34,10 +35,13 @@ from ltamp_cli.planner.algorithms.preimage import plan_preimage
 from ltamp_cli.planner.pddl.syntax import StreamFunction
 from ltamp_cli.planner.result import INFEASIBLE, SOLVED, TIMEOUT, PlanResult
 from ltamp_cli.planner.search.engine import SearchTimeout
+from ltamp_cli.planner.search.ground import Fact
 from ltamp_cli.planner.streams import StreamInstance
 
 REAL_SEARCH_EXPANSIONS = 500
-MIN_SAMPLING_SLICE_S = 0.005
+# Sampling effort after a search, in binding steps per state the search evaluated: a work
+# measure rather than seconds, so that runs are deterministic for a given seed.
+STEPS_PER_EVALUATION = 0.1
 
 
 @dataclass(frozen=True)
@@ -45,6 +49,7 @@ class Skeleton:
     stream_plan: tuple[InstanceKey, ...]
     placeholders: dict[InstanceKey, tuple[str, ...]]
     actions: tuple[str, ...]  # the optimistic plan, for diagnostics
+    contexts: dict[InstanceKey, tuple[Fact, ...]] = field(default_factory=dict)
 
 
 @dataclass
@@ -87,13 +92,17 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
     real_inputs = tuple(binding.mapping.get(x, x) for x in inputs)
     if any(x.startswith("#") for x in real_inputs):
         return []
-    instance = state.instance(name, real_inputs)
+    context = bind_context(binding.skeleton.contexts.get((name, inputs), ()), binding.mapping)
+    if context is None:
+        return []
+    instance = state.instance(name, real_inputs, context)
     if instance.is_test:
         if instance.num_calls == 0:
             state.call(instance)
         if isinstance(instance.external, StreamFunction) or instance.value:
             return [Binding(binding.skeleton, binding.step + 1, binding.mapping,
                             binding.made_by, 0, binding.attempts)]
+        state.record_failure(instance)
         report_unusable(state, real_inputs, binding.made_by)
         return []
     if binding.output_index >= len(instance.results) and not instance.exhausted:
@@ -109,6 +118,7 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
                               binding.made_by, binding.output_index + 1, binding.attempts + 1)
         return [child, alternative]
     if instance.exhausted:
+        state.record_failure(instance)
         report_unusable(state, real_inputs, binding.made_by)
         return []
     binding.attempts += 1  # nothing this call: retry later
@@ -119,8 +129,8 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
     complexity = state.config.initial_complexity
     placeholders: dict[InstanceKey, tuple[str, ...]] = {}
     queue = BindingQueue()
-    seen_skeletons: set[tuple[InstanceKey, ...]] = set()
-    last_search_s = 0.0
+    seen_skeletons: set[tuple[object, ...]] = set()
+    last_search_work = 0
     retry_threshold = 0
     facts_at_search = -1
     try:
@@ -131,12 +141,12 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
             stalled = head is None or head.attempts > retry_threshold
             learned = len(state.facts.members) != facts_at_search
             if stalled or (adaptive and learned):
-                start = time.perf_counter()
                 facts_at_search = len(state.facts.members)
                 evaluation = optimistic_evaluation(state, complexity, placeholders)
                 discrete = state.search(evaluation.index.members, evaluation.object_types,
-                                        evaluation.function_values)
-                last_search_s = time.perf_counter() - start
+                                        evaluation.function_values,
+                                    context_blocks=evaluation.context_blocks)
+                last_search_work = discrete.outcome.evaluated if discrete.outcome else 0
                 state.diagnose(discrete, evaluation.index.members)
                 if discrete.solved:
                     facts, terms = plan_preimage(discrete)
@@ -144,10 +154,13 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                     if not plan:
                         return state.result(SOLVED, discrete, facts | terms)
                     state.remember_skeleton([str(a) for a in discrete.actions or []])
-                    if plan not in seen_skeletons:
-                        seen_skeletons.add(plan)
-                        queue.push(Binding(Skeleton(plan, dict(evaluation.outputs),
-                                                    tuple(str(a) for a in discrete.actions))))
+                    contexts = fluent_contexts(state, evaluation, discrete)
+                    signature = (plan, tuple(sorted(contexts.items())))
+                    if signature not in seen_skeletons:
+                        seen_skeletons.add(signature)
+                        queue.push(Binding(Skeleton(
+                            plan, dict(evaluation.outputs),
+                            tuple(str(a) for a in discrete.actions or []), contexts)))
                     elif stalled:
                         # Nothing new to try at this bound: allow more retries and
                         # more complex optimistic values.
@@ -160,8 +173,8 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                     complexity += 1
                     if complexity > state.config.max_complexity and not len(queue):
                         return state.result(INFEASIBLE, None)
-            result = _process(state, queue, adaptive, max(last_search_s, MIN_SAMPLING_SLICE_S),
-                              retry_threshold)
+            steps = max(1, round(last_search_work * STEPS_PER_EVALUATION))
+            result = _process(state, queue, adaptive, steps, retry_threshold)
             if result is not None:
                 return result
         return state.result(TIMEOUT, None)
@@ -169,14 +182,15 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
         return state.result(TIMEOUT, None)
 
 
-def _process(state: PlannerState, queue: BindingQueue, adaptive: bool, time_slice: float,
+def _process(state: PlannerState, queue: BindingQueue, adaptive: bool, steps: int,
              retry_threshold: int) -> PlanResult | None:
-    start = time.perf_counter()
+    done = 0
     while len(queue) and not state.timed_out():
         head = queue.peek()
         assert head is not None
-        if adaptive and time.perf_counter() - start > time_slice:
+        if adaptive and done >= steps:
             return None
+        done += 1
         if head.attempts > retry_threshold:
             return None
         binding = queue.pop()

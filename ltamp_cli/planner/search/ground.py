@@ -27,6 +27,9 @@ from ltamp_cli.planner.search.normalize import (
 )
 
 Fact = tuple[str, ...]  # (predicate, *args)
+# A fluent context: (predicates, facts). It holds in a state whose facts of those predicates
+# are exactly the given facts (what a :fluents stream was called with).
+Context = tuple[tuple[str, ...], tuple[Fact, ...]]
 OBJECT_TYPE_PREDICATE = f"type:{OBJECT_TYPE}"
 
 
@@ -341,3 +344,68 @@ def _emit(rule: _Rule, binding: dict[str, str], index: FactIndex, init: set[Fact
     args = tuple(binding[p] for p in source.parameters)
     result.actions.append(GroundAction(source.name, args, dynamic_pos, tuple(negative),
                                        tuple(effects), cost, static_pos, cost_term))
+
+
+def _context_literals(grounding: Grounding, context: Context
+                      ) -> tuple[tuple[Fact, ...], tuple[Fact, ...]]:
+    """(facts that must hold, facts that must not) for a context to hold."""
+    predicates, facts = context
+    present = set(facts)
+    absent = tuple(sorted(f for f in grounding.reachable if f[0] in predicates
+                          and f not in present))
+    return tuple(facts), absent
+
+
+def require_fluent_contexts(grounding: Grounding,
+                            requirements: Mapping[Fact, Sequence[Context]]) -> Grounding:
+    """Make actions that rely on a fluent stream's fact also require the context it was
+    computed under (one copy of the action per alternative context)."""
+    import itertools
+    from dataclasses import replace
+
+    actions: list[GroundAction] = []
+    for action in grounding.actions:
+        needs = [requirements[f] for f in action.static_pre if f in requirements]
+        if not needs:
+            actions.append(action)
+            continue
+        for choice in itertools.product(*needs):
+            positive: list[Fact] = []
+            negative: list[Fact] = []
+            for context in choice:
+                present, absent = _context_literals(grounding, context)
+                positive.extend(present)
+                negative.extend(absent)
+            actions.append(replace(action,
+                                   pre_pos=(*action.pre_pos, *dict.fromkeys(positive)),
+                                   pre_neg=(*action.pre_neg, *dict.fromkeys(negative))))
+    return replace(grounding, actions=actions)
+
+
+def forbid_contexts(grounding: Grounding,
+                    blocks: Mapping[Fact, Sequence[Context]]) -> Grounding:
+    """Actions relying on an optimistic fact of a ``:fluents`` stream may not be applied in a
+    state where a context it already failed in holds again: each failed context becomes a
+    derived fact (``%failed-context``) that such actions require to be false."""
+    from dataclasses import replace
+
+    context_ids: dict[Context, Fact] = {}
+    axioms = list(grounding.axioms)
+    actions: list[GroundAction] = []
+    for action in grounding.actions:
+        forbidden: list[Fact] = []
+        for fact in action.static_pre:
+            for context in blocks.get(fact, ()):
+                head = context_ids.get(context)
+                if head is None:
+                    head = ("%failed-context", str(len(context_ids)))
+                    context_ids[context] = head
+                    present, absent = _context_literals(grounding, context)
+                    axioms.append(GroundAxiom(head, present, absent))
+                forbidden.append(head)
+        actions.append(replace(action, pre_neg=(*action.pre_neg, *forbidden))
+                       if forbidden else action)
+    derived = grounding.derived_predicates | ({"%failed-context"} if context_ids else set())
+    return replace(grounding, actions=actions, axioms=axioms,
+                   derived_predicates=frozenset(derived),
+                   reachable=grounding.reachable | set(context_ids.values()))

@@ -8,7 +8,15 @@ from dataclasses import dataclass
 
 from ltamp_cli.planner.pddl.syntax import OBJECT_TYPE, Domain, Formula
 from ltamp_cli.planner.search.engine import SearchOutcome, run_search, weighted_astar
-from ltamp_cli.planner.search.ground import Fact, GroundAction, Grounding, ground_task
+from ltamp_cli.planner.search.ground import (
+    Context,
+    Fact,
+    GroundAction,
+    Grounding,
+    forbid_contexts,
+    ground_task,
+    require_fluent_contexts,
+)
 from ltamp_cli.planner.search.normalize import Normalizer, type_predicate
 from ltamp_cli.planner.search.skeleton import constrain
 from ltamp_cli.planner.search.task import Task
@@ -56,6 +64,8 @@ def plan_discrete(
     max_expansions: int | None = None,
     skeleton: Sequence[str] | None = None,
     cost_bound: float | None = None,
+    fluent_requirements: Mapping[Fact, Sequence[Context]] | None = None,
+    context_blocks: Mapping[Fact, Sequence[Context]] | None = None,
 ) -> DiscreteResult:
     """Find a plan for the finite task given by ``objects`` (name → type) and ``init``.
 
@@ -76,6 +86,10 @@ def plan_discrete(
     axioms += normalizer.goal(goal)
     axioms += normalizer.take_auxiliary()
     grounding = ground_task(actions, axioms, facts, function_values)
+    if fluent_requirements:
+        grounding = require_fluent_contexts(grounding, fluent_requirements)
+    if context_blocks:
+        grounding = forbid_contexts(grounding, context_blocks)
     ground_time = time.perf_counter() - start
     if ("%goal",) not in grounding.reachable:
         return DiscreteResult(None, float("inf"), grounding, None, None, ground_time, 0.0)
