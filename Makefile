@@ -16,11 +16,14 @@ setup: $(STAMP)
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install --quiet --disable-pip-version-check -c constraints.txt -e '.[dev]'
+	$(BIN)/pip install --quiet --disable-pip-version-check -c constraints.txt -e '.[dev,fd,sapien]'
 	touch $(STAMP)
 
+# The coffee task of the 2D kitchen: plan with the shipped pour/scoop models, execute the plan
+# in Box2D, check the goal physically and write an animation.
 demo: setup
-	$(BIN)/ltamp solve problems/examples/tamp2d_blocked.yaml
+	mkdir -p out
+	$(BIN)/ltamp solve problems/kitchen2d/coffee.yaml --backend box2d --seed 1 --render out/coffee.gif
 
 test: setup
 	$(BIN)/ruff check ltamp_cli tests bench
