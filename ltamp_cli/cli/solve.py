@@ -18,12 +18,13 @@ def register(app: typer.Typer) -> None:
 def solve_command(
     problem: Annotated[Path, typer.Argument(help="Problem file (.yaml, or .pddl with --domain).")],
     algorithm: Annotated[str | None, typer.Option(
-        help="incremental | focused (default: the problem's, else focused).")] = None,
+        help="adaptive | binding | focused | incremental (default: the problem's, else "
+        "adaptive).")] = None,
     max_time: Annotated[float | None, typer.Option(
         "--max-time", help="Time limit in seconds (default: the problem's, else 60).")] = None,
     seed: Annotated[int | None, typer.Option(help="Seed for the stream samplers.")] = None,
     search: Annotated[str | None, typer.Option(
-        help="Discrete search: lazy-greedy | wastar.")] = None,
+        help="Discrete search: ff (default) | lazy-greedy | wastar | fd | fd-wastar.")] = None,
     domain: Annotated[Path | None, typer.Option(
         help="Domain folder, for a .pddl problem file.")] = None,
     unit_costs: Annotated[bool, typer.Option(
