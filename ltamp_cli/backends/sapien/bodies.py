@@ -89,20 +89,23 @@ class SapienBody:
             component.angular_velocity = np.zeros(3)  # type: ignore[attr-defined]
 
 
-def physx_material(friction: float, restitution: float) -> physx.PhysxMaterial:
+def physx_material(
+    friction: float, restitution: float, friction_scale: float = 1.0
+) -> physx.PhysxMaterial:
     """A PhysX material whose contacts behave like Bullet's for the same coefficients.
 
     Bullet combines two bodies' friction and restitution by *multiplying* them, PhysX by
     *averaging*. Storing squares makes PhysX's average ``(a² + b²) / 2`` equal Bullet's
     product ``ab`` when ``a = b`` (bead on bead) and exceed it by only ``(a - b)² / 2``
-    otherwise, so both backends see (nearly) the same contact coefficients.
+    otherwise. ``friction_scale`` then corrects for the solvers themselves (see
+    :class:`~.world.SapienWorldConfig`).
     """
-    mu = float(friction) ** 2
+    mu = float(friction) ** 2 * float(friction_scale)
     return physx.PhysxMaterial(mu, mu, float(restitution) ** 2)
 
 
-def _material(material: BodyMaterial) -> physx.PhysxMaterial:
-    return physx_material(material.lateral_friction, material.restitution)
+def _material(material: BodyMaterial, friction_scale: float) -> physx.PhysxMaterial:
+    return physx_material(material.lateral_friction, material.restitution, friction_scale)
 
 
 def _visuals(geometry: KitchenwareGeometry, rgba: Sequence[float]) -> sapien.Component:
@@ -143,7 +146,7 @@ def create_kitchenware(
         component = physx.PhysxRigidStaticComponent()
     else:
         component = physx.PhysxRigidDynamicComponent()
-    physical = _material(material)
+    physical = _material(material, config.friction_scale)
     density = 1000.0
     if body_type == "dynamic":
         if material.mass <= 0:
@@ -194,7 +197,7 @@ class Beads:
 def spawn_beads(world: SapienWorld, spec: BeadSpec, positions_world: np.ndarray) -> Beads:
     """Add one dynamic sphere per row of ``positions_world`` ``(n, 3)``."""
     config = world.config
-    physical = physx_material(spec.lateral_friction, spec.restitution)
+    physical = physx_material(spec.lateral_friction, spec.restitution, config.friction_scale)
     visual_material = sapien.render.RenderMaterial(base_color=list(spec.rgba)) if (
         world.renders
     ) else None

@@ -95,7 +95,7 @@ class SapienArm:
     def __init__(self, world: SapienWorld, arm: PandaArm) -> None:
         self.arm = arm
         client = arm.client_id
-        material = physx_material(0.5, 0.0)
+        material = physx_material(0.5, 0.0, world.config.friction_scale)
         self.links: list[tuple[int, Any, sapien.Entity]] = []
         scale = np.ones(3, dtype=np.float32)
         for link in range(-1, p.getNumJoints(arm.body_id, physicsClientId=client)):
@@ -232,7 +232,7 @@ class SapienKitchen3DRun(Kitchen3DRun):
     def _add_scenery(self) -> None:
         """The model's table and pedestals as static SAPIEN boxes (floor: the ground)."""
         client = self.model.client
-        material = physx_material(0.6, 0.0)
+        material = physx_material(0.6, 0.0, self.world.config.friction_scale)  # type: ignore[attr-defined]
         for body in (self.scene.table_id, *self.scene.pedestal_ids):
             (shape,) = p.getCollisionShapeData(body, -1, physicsClientId=client)
             half = np.asarray(shape[3], dtype=np.float32) / 2.0  # boxes report full extents
