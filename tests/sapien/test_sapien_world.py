@@ -81,6 +81,9 @@ def test_materials_emulate_bullets_multiplied_coefficients() -> None:
     assert material.static_friction == pytest.approx(0.25)
     assert material.dynamic_friction == pytest.approx(0.25)
     assert material.restitution == pytest.approx(0.49)
+    scaled = physx_material(0.5, 0.7, friction_scale=0.125)
+    assert scaled.dynamic_friction == pytest.approx(0.25 * 0.125)
+    assert scaled.restitution == pytest.approx(0.49)
 
 
 def test_beads_stay_in_a_static_cup_and_out_of_a_tilted_one() -> None:

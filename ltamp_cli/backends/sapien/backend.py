@@ -31,7 +31,7 @@ class SapienKitchen3DBackend:
     """SAPIEN Kitchen3D: skills ``pour`` and ``scoop``, headless on the CPU.
 
     Options: ``solver_iterations`` (PhysX position iterations, default 5 as in PyBullet),
-    ``contact_offset`` (m), ``friction_scale`` (see :class:`~.world.SapienWorldConfig`),
+    ``contact_offset`` (m), ``bead_friction_scale`` (see :class:`~.world.SapienWorldConfig`),
     and per-skill timing via ``pour_settings``/``scoop_settings``.
     """
 
@@ -41,14 +41,18 @@ class SapienKitchen3DBackend:
         self,
         solver_iterations: int = 5,
         contact_offset: float = 0.002,
-        friction_scale: float | None = None,
+        bead_friction_scale: float | None = None,
         pour_settings: PourSettings | None = None,
         scoop_settings: ScoopSettings | None = None,
     ) -> None:
         self.config = SapienWorldConfig(
             solver_position_iterations=int(solver_iterations),
             contact_offset=float(contact_offset),
-            **({} if friction_scale is None else {"friction_scale": float(friction_scale)}),
+            **(
+                {}
+                if bead_friction_scale is None
+                else {"bead_friction_scale": float(bead_friction_scale)}
+            ),
         )
         self.pour_settings = pour_settings or PourSettings()
         self.scoop_settings = scoop_settings or ScoopSettings()

@@ -97,7 +97,7 @@ def physx_material(
     Bullet combines two bodies' friction and restitution by *multiplying* them, PhysX by
     *averaging*. Storing squares makes PhysX's average ``(a² + b²) / 2`` equal Bullet's
     product ``ab`` when ``a = b`` (bead on bead) and exceed it by only ``(a - b)² / 2``
-    otherwise. ``friction_scale`` then corrects for the solvers themselves (see
+    otherwise. ``friction_scale`` then corrects for the solvers themselves (beads only, see
     :class:`~.world.SapienWorldConfig`).
     """
     mu = float(friction) ** 2 * float(friction_scale)
@@ -146,7 +146,7 @@ def create_kitchenware(
         component = physx.PhysxRigidStaticComponent()
     else:
         component = physx.PhysxRigidDynamicComponent()
-    physical = _material(material, config.friction_scale)
+    physical = _material(material, 1.0)
     density = 1000.0
     if body_type == "dynamic":
         if material.mass <= 0:
@@ -197,7 +197,9 @@ class Beads:
 def spawn_beads(world: SapienWorld, spec: BeadSpec, positions_world: np.ndarray) -> Beads:
     """Add one dynamic sphere per row of ``positions_world`` ``(n, 3)``."""
     config = world.config
-    physical = physx_material(spec.lateral_friction, spec.restitution, config.friction_scale)
+    physical = physx_material(
+        spec.lateral_friction, spec.restitution, config.bead_friction_scale
+    )
     visual_material = sapien.render.RenderMaterial(base_color=list(spec.rgba)) if (
         world.renders
     ) else None

@@ -11,8 +11,11 @@ goal checked from bead positions); only the simulation underneath is replaced:
   use the backend-independent Panda model (:mod:`ltamp_cli.backends.pybullet.robot`, a
   never-stepped PyBullet client) that planning used, so nothing about IK or grasps is
   duplicated. Every arm link with collision geometry is mirrored into SAPIEN as a kinematic
-  body (the URDF's collision meshes, no visuals), driven to the model's link poses each step,
-  so the arm pushes beads and objects it touches.
+  body (the URDF's collision meshes, no visuals), placed at the model's link poses before
+  each step. Like the PyBullet executor's joint resets, the links are *teleported*: PhysX
+  pushes whatever they overlap out of the way, but a link grazing an object (the planner
+  tolerates ~1 mm) does not sweep it along with the arm's velocity, as kinematic targets
+  would (infinitely heavy links dragged a grazed cup 2 cm and spilled it).
 """
 
 from __future__ import annotations
@@ -73,8 +76,7 @@ from ltamp_cli.errors import InputError
 
 #: Finger clearance (m, per side) when the gripper opens around an object. The PyBullet
 #: executor opens fully (8 cm); a fully open finger beside a 4 cm block dips into a cup
-#: standing 13 mm away, which teleported PyBullet links shrug off but PhysX's kinematic
-#: links (infinitely heavy, moving) shove aside, spilling the cup.
+#: standing 13 mm away and shoves it in PhysX.
 PRESHAPE_CLEARANCE_M = 0.003
 
 #: The kitchen seen from the front-right, above the table (metres).
@@ -95,7 +97,7 @@ class SapienArm:
     def __init__(self, world: SapienWorld, arm: PandaArm) -> None:
         self.arm = arm
         client = arm.client_id
-        material = physx_material(0.5, 0.0, world.config.friction_scale)
+        material = physx_material(0.5, 0.0)
         self.links: list[tuple[int, Any, sapien.Entity]] = []
         scale = np.ones(3, dtype=np.float32)
         for link in range(-1, p.getNumJoints(arm.body_id, physicsClientId=client)):
@@ -144,9 +146,10 @@ class SapienArm:
         return to_sapien_pose(position, quaternion)
 
     def follow_model(self) -> None:
-        """Target every mirrored link at the model's current link pose (reached next step)."""
-        for link, component, _ in self.links:
-            component.set_kinematic_target(self._link_pose(link))
+        """Place every mirrored link at the model's current link pose (see the module
+        docstring for why they are teleported rather than given kinematic targets)."""
+        for link, _, entity in self.links:
+            entity.set_pose(self._link_pose(link))
 
 
 class SapienKitchen3DRun(Kitchen3DRun):
@@ -232,7 +235,7 @@ class SapienKitchen3DRun(Kitchen3DRun):
     def _add_scenery(self) -> None:
         """The model's table and pedestals as static SAPIEN boxes (floor: the ground)."""
         client = self.model.client
-        material = physx_material(0.6, 0.0, self.world.config.friction_scale)  # type: ignore[attr-defined]
+        material = physx_material(0.6, 0.0)
         for body in (self.scene.table_id, *self.scene.pedestal_ids):
             (shape,) = p.getCollisionShapeData(body, -1, physicsClientId=client)
             half = np.asarray(shape[3], dtype=np.float32) / 2.0  # boxes report full extents

@@ -39,11 +39,10 @@ class SapienWorldConfig:
     starts generating contacts: its 1 cm default makes every 6 mm bead touch all its
     neighbours and triples the step cost; 2 mm keeps heaps stable at 1/240 s.
     ``enhanced_determinism`` makes PhysX results independent of the island order.
-    ``friction_scale`` multiplies every (squared, see :func:`~.bodies.physx_material`)
-    friction coefficient: PhysX's friction (solved every iteration, with patch anchors)
-    holds beads more firmly than Bullet's for the same coefficient. 0.5 was fitted on 20
-    random pour trials (``bench/backends.py --seed 0``: mean |Δ fraction in bowl| 0.057 at
-    1.0, 0.031 at 0.5, 0.041 at 0.25) and checked on another 20 (``--seed 1``).
+    ``bead_friction_scale`` multiplies the beads' (squared, see
+    :func:`~.bodies.physx_material`) friction: in a heap, PhysX's friction (solved every
+    iteration, with patch anchors) holds beads more firmly than Bullet's for the same
+    coefficient, while a single object sliding on the table behaves alike in both.
     """
 
     time_step: float = 1.0 / 240.0
@@ -52,7 +51,7 @@ class SapienWorldConfig:
     contact_offset: float = 0.002
     table_friction: float = 0.6
     enhanced_determinism: bool = True
-    friction_scale: float = 0.5
+    bead_friction_scale: float = 0.125
 
     def __post_init__(self) -> None:
         if not self.time_step > 0:
@@ -61,8 +60,8 @@ class SapienWorldConfig:
             raise ValueError("solver iterations must be >= 1 (position) and >= 0 (velocity)")
         if not self.contact_offset > 0:
             raise ValueError("contact_offset must be positive")
-        if not self.friction_scale > 0:
-            raise ValueError("friction_scale must be positive")
+        if not self.bead_friction_scale > 0:
+            raise ValueError("bead_friction_scale must be positive")
 
 
 def to_sapien_pose(
@@ -140,7 +139,7 @@ class SapienWorld:
             systems.append(self._render_system)
         self._scene = sapien.Scene(systems)
         # Squared like every material here (Bullet multiplies coefficients, PhysX averages).
-        mu = self.config.table_friction**2 * self.config.friction_scale
+        mu = self.config.table_friction**2
         table = physx.PhysxMaterial(mu, mu, 0.0)
         self._scene.add_ground(0.0, render=self.renders, material=table)
 
