@@ -4,10 +4,12 @@ Draws ``--trials`` pour inputs (contexts from the randomised kitchenware distrib
 controls uniform in the box, redrawn until the geometric pre-check passes) and runs every
 one on both 3D backends with the same seed, single-threaded, each backend reusing its world.
 Also times bare particle stepping (``--beads`` spheres settling in a bowl) in both engines,
-to compare the stepping advantage with the whole-trial one. Prints tables; writes JSON to
-``--out`` (default ``bench/results/backends.json``).
+to compare the stepping advantage with the whole-trial one, and (``--plans N``) solves
+``problems/kitchen3d/pour_blocked.yaml`` with seeds ``0..N-1`` and executes every plan on
+both backends (execution wall time, whether the goal holds physically). Prints tables;
+writes JSON to ``--out`` (default ``bench/results/backends.json``).
 
-    OMP_NUM_THREADS=1 .venv/bin/python bench/backends.py --trials 20
+    OMP_NUM_THREADS=1 .venv/bin/python bench/backends.py --trials 20 --plans 3
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from ltamp_cli.backends import SkillBackend, load_backend
 
 BACKENDS = ("pybullet", "sapien")
 RESULTS_DIR = Path(__file__).resolve().parent / "results"
+POUR_BLOCKED = Path(__file__).resolve().parents[1] / "problems" / "kitchen3d" / "pour_blocked.yaml"
 #: Trials whose PyBullet score is at least this far from 0 are clear-cut (g = ±0.5 means
 #: 95 % or 45 % of the beads in the bowl); the others are borderline.
 CLEAR_SCORE = 0.5
@@ -101,6 +104,34 @@ def stepping_rate(name: str, beads: int, steps: int) -> float:
     return rate
 
 
+def execute_plans(n: int) -> list[dict]:
+    """Solve pour_blocked with seeds ``0..n-1``; execute each plan on both backends."""
+    from ltamp_cli.backends.execution import execute_plan
+    from ltamp_cli.planner.algorithms.common import PlannerConfig
+    from ltamp_cli.planner.api import solve
+    from ltamp_cli.planner.problem import load_problem
+
+    problem = load_problem(POUR_BLOCKED)
+    rows = []
+    for seed in tqdm(range(n), desc="pour_blocked", leave=False):
+        result = solve(problem, PlannerConfig(**{**problem.planner_options, "seed": seed}))
+        row: dict = {"seed": seed, "status": result.status}
+        if result.solved:
+            for name in BACKENDS:
+                start = time.perf_counter()
+                report = execute_plan(name, problem, result, seed)
+                goal = report.details["goal"][0] if report.details.get("goal") else {}
+                row[name] = {
+                    "wall_s": time.perf_counter() - start,
+                    "executed": report.success,
+                    "goal_holds": report.goal_holds,
+                    "fraction": goal.get("fraction"),
+                    "sim_time_s": report.details.get("sim_time_s"),
+                }
+        rows.append(row)
+    return rows
+
+
 def summarise(rows: dict[str, list[dict]]) -> dict:
     pyb, sap = rows["pybullet"], rows["sapien"]
     agree = [(a["score"] > 0) == (b["score"] > 0) for a, b in zip(pyb, sap, strict=True)]
@@ -144,6 +175,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--beads", type=int, default=200, help="spheres for the stepping test")
     parser.add_argument("--steps", type=int, default=480, help="steps for the stepping test")
+    parser.add_argument("--plans", type=int, default=0, help="pour_blocked plans to execute")
     parser.add_argument("--out", type=Path, default=RESULTS_DIR / "backends.json")
     args = parser.parse_args()
     # Same generator draws for both backends: contexts and pre-checks are engine-independent.
@@ -153,6 +185,7 @@ def main() -> None:
     rows = {name: time_trials(name, inputs, args.seed) for name in BACKENDS}
     summary = summarise(rows)
     stepping = {name: stepping_rate(name, args.beads, args.steps) for name in BACKENDS}
+    plans = execute_plans(args.plans)
 
     print(f"{'backend':<10}{'n':>4}{'wall med':>10}{'wall sum':>10}{'cpu med':>9}"
           f"{'steps/s':>9}{'success':>9}")
@@ -173,6 +206,18 @@ def main() -> None:
           f"{summary['clear_cut_trials']} clear-cut ones (PyBullet |score| >= {CLEAR_SCORE}); "
           f"disagreeing trials: {summary['disagreements']}; mean |fraction difference| "
           f"{summary['fraction_mean_abs_diff']:.3f}")
+    executed = [row for row in plans if "sapien" in row]
+    if executed:
+        print(f"{'seed':>4}{'pyb exec s':>11}{'pyb goal':>9}{'sap exec s':>11}{'sap goal':>9}")
+        for row in executed:
+            pyb, sap = row["pybullet"], row["sapien"]
+            print(f"{row['seed']:>4}{pyb['wall_s']:>11.1f}{pyb['goal_holds']!s:>9}"
+                  f"{sap['wall_s']:>11.1f}{sap['goal_holds']!s:>9}")
+        same = sum(r["pybullet"]["goal_holds"] == r["sapien"]["goal_holds"] for r in executed)
+        ratio = sum(r["pybullet"]["wall_s"] for r in executed) / sum(
+            r["sapien"]["wall_s"] for r in executed)
+        print(f"pour_blocked executions: goal verdicts agree on {same}/{len(executed)} plans; "
+              f"SAPIEN executes {ratio:.1f}x faster")
     payload = {
         "benchmark": "backends",
         "python": platform.python_version(),
@@ -183,6 +228,7 @@ def main() -> None:
         "summary": summary,
         "stepping": {"beads": args.beads, "steps": args.steps, "steps_per_s": stepping,
                      "speedup": step_speedup},
+        "plans": plans,
         "rows": [
             {"context": c.tolist(), "control": u.tolist(),
              **{name: rows[name][i] for name in BACKENDS}}
