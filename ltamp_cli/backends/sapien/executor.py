@@ -180,13 +180,26 @@ class SapienKitchen3DRun(Kitchen3DRun):
             render_system = new_render_system()
         # The kinematic model: never stepped, only posed (FK and distance queries).
         self.model = PhysicsWorld()
-        self.scene: KitchenScene = build_kitchen_scene(self.model.client, spec.n_arms)
         self.world = SapienWorld(SapienWorldConfig(), render_system=render_system)  # type: ignore[assignment]
+        try:
+            self._build(spec, poses, settings)
+        except BaseException:
+            self.close()
+            raise
+
+    def _build(
+        self,
+        spec: SceneSpec,
+        poses: dict[str, tuple[float, float]],
+        settings: ExecutionSettings,
+    ) -> None:
+        """Scenery, kitchenware, beads and arms; settle; record the initial bead counts."""
+        self.scene: KitchenScene = build_kitchen_scene(self.model.client, spec.n_arms)
         self.table_z = float(self.scene.table.height)
         self._add_scenery()
         self.recorder = (
             FrameRecorder(self.world, settings.render_every, KITCHEN_VIEW)  # type: ignore[arg-type]
-            if render_system is not None
+            if self.world.renders  # type: ignore[attr-defined]
             else None
         )
         self.steps = 0
