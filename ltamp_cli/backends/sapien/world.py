@@ -42,7 +42,10 @@ class SapienWorldConfig:
     ``bead_friction_scale`` multiplies the beads' (squared, see
     :func:`~.bodies.physx_material`) friction: in a heap, PhysX's friction (solved every
     iteration, with patch anchors) holds beads more firmly than Bullet's for the same
-    coefficient, while a single object sliding on the table behaves alike in both.
+    coefficient, while a single object sliding on the table behaves alike in both. 0.125
+    was fitted on the 20 pour trials of ``bench/backends.py --seed 0`` (mean |difference
+    of the fraction poured| 0.057 → 0.035, labels agreeing 80 % → 95 %) and checked on the
+    20 of ``--seed 1`` (0.046, 95 %; unscaled: 0.111, 75 %).
     """
 
     time_step: float = 1.0 / 240.0
