@@ -3,7 +3,8 @@ and the geometric pre-check of a tool path against a bowl."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import math
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,7 +15,8 @@ from ltamp_cli.backends.kitchenware_geometry import (
     check_points,
     points_in_vessel_wall,
 )
-from ltamp_cli.backends.pybullet.kitchenware import KitchenwareBody
+from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial, KitchenwareBody
+from ltamp_cli.backends.pybullet.particles import BeadSpec
 from ltamp_cli.backends.pybullet.paths import PosePath, velocities
 from ltamp_cli.backends.pybullet.world import PhysicsWorld
 
@@ -33,6 +35,45 @@ def truncated_normal(
         if low <= value <= high:
             return float(value)
     return float(np.clip(mean, low, high))
+
+
+def sample_beads(rng: np.random.Generator, count_mean: float, count_std: float,
+                 count_low: float, count_high: float) -> BeadSpec:
+    """Bead size, mass, count and surface properties for one trial (field facts: radius
+    ~6 mm, friction ~N(0.5, 0.1), restitution ~N(0.7, 0.1))."""
+    radius = truncated_normal(rng, 0.006, 0.0005, 0.005, 0.007)
+    density = truncated_normal(rng, 1000.0, 150.0, 700.0, 1300.0)
+    count = round(truncated_normal(rng, count_mean, count_std, count_low, count_high))
+    return BeadSpec(
+        count=count,
+        radius=radius,
+        mass=density * 4.0 / 3.0 * math.pi * radius**3,
+        lateral_friction=truncated_normal(rng, 0.5, 0.1, 0.2, 0.8),
+        restitution=truncated_normal(rng, 0.7, 0.1, 0.4, 0.9),
+    )
+
+
+def sample_material(rng: np.random.Generator, rgba: tuple[float, float, float, float],
+                    mass: tuple[float, float, float, float] | None = None) -> BodyMaterial:
+    """Friction and restitution of a kitchenware body; ``mass`` = (mean, std, low, high) in
+    kg, or ``None`` for a fixed body. Draw order: mass, friction, restitution."""
+    return BodyMaterial(
+        mass=0.0 if mass is None else truncated_normal(rng, *mass),
+        lateral_friction=truncated_normal(rng, 0.5, 0.1, 0.2, 0.8),
+        restitution=truncated_normal(rng, 0.1, 0.05, 0.0, 0.2),
+        rgba=rgba,
+    )
+
+
+BOWL_RGBA = (0.85, 0.85, 0.8, 1.0)
+
+
+def batch_path_validity(tool: KitchenwareGeometry, paths: Iterable[PosePath],
+                        bowl: VesselDims) -> np.ndarray:
+    """The pre-check for a batch of tool paths: bool ``(n,)``."""
+    points = check_points(tool, CHECK_SPACING_M)
+    return np.array([check_tool_path(tool, path, bowl, tool_points=points).valid
+                     for path in paths], dtype=bool)
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ltamp_cli.backends.kitchenware_geometry import VesselDims, check_points, vessel_geometry
+from ltamp_cli.backends.kitchenware_geometry import VesselDims, vessel_geometry
 from ltamp_cli.backends.protocol import ParamSpace, SkillSpec, TrialResult
 from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial, create_kitchenware
 from ltamp_cli.backends.pybullet.particles import (
@@ -39,13 +39,15 @@ from ltamp_cli.backends.pybullet.particles import (
 )
 from ltamp_cli.backends.pybullet.paths import PosePath, rotation_about_axis, timed_poses
 from ltamp_cli.backends.pybullet.skills.common import (
-    CHECK_SPACING_M,
+    BOWL_RGBA,
     PathCheck,
     StepCallback,
+    batch_path_validity,
     check_tool_path,
     follow_path,
     hold,
-    truncated_normal,
+    sample_beads,
+    sample_material,
 )
 from ltamp_cli.backends.pybullet.skills.scoring import piecewise_linear_score
 from ltamp_cli.backends.pybullet.world import PhysicsWorld
@@ -165,16 +167,9 @@ def check_pour(context: np.ndarray, control: np.ndarray) -> PathCheck:
 def pour_is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
     """Geometric pre-check for a batch ``controls (n, 5)``: bool ``(n,)``."""
     scene = PourContext.from_array(context)
-    cup = vessel_geometry(scene.cup, "cup")
-    points = check_points(cup, CHECK_SPACING_M)
     batch = np.asarray(controls, dtype=float).reshape(-1, 5)
-    return np.array(
-        [
-            check_tool_path(cup, pour_path(scene, c), scene.bowl, tool_points=points).valid
-            for c in batch
-        ],
-        dtype=bool,
-    )
+    return batch_path_validity(vessel_geometry(scene.cup, "cup"),
+                               (pour_path(scene, c) for c in batch), scene.bowl)
 
 
 @dataclass(frozen=True)
@@ -187,28 +182,9 @@ class PourLatents:
 
 
 def sample_pour_latents(rng: np.random.Generator, settings: PourSettings) -> PourLatents:
-    radius = truncated_normal(rng, 0.006, 0.0005, 0.005, 0.007)
-    density = truncated_normal(rng, 1000.0, 150.0, 700.0, 1300.0)
-    count = round(truncated_normal(rng, settings.bead_count_mean, 10.0, 70.0, 130.0))
-    beads = BeadSpec(
-        count=count,
-        radius=radius,
-        mass=density * 4.0 / 3.0 * math.pi * radius**3,
-        lateral_friction=truncated_normal(rng, 0.5, 0.1, 0.2, 0.8),
-        restitution=truncated_normal(rng, 0.7, 0.1, 0.4, 0.9),
-    )
-    bowl = BodyMaterial(
-        mass=0.0,
-        lateral_friction=truncated_normal(rng, 0.5, 0.1, 0.2, 0.8),
-        restitution=truncated_normal(rng, 0.1, 0.05, 0.0, 0.2),
-        rgba=(0.85, 0.85, 0.8, 1.0),
-    )
-    cup = BodyMaterial(
-        mass=truncated_normal(rng, 0.15, 0.03, 0.08, 0.25),
-        lateral_friction=truncated_normal(rng, 0.5, 0.1, 0.2, 0.8),
-        restitution=truncated_normal(rng, 0.1, 0.05, 0.0, 0.2),
-        rgba=(0.9, 0.5, 0.2, 1.0),
-    )
+    beads = sample_beads(rng, settings.bead_count_mean, 10.0, 70.0, 130.0)
+    bowl = sample_material(rng, BOWL_RGBA)
+    cup = sample_material(rng, (0.9, 0.5, 0.2, 1.0), mass=(0.15, 0.03, 0.08, 0.25))
     return PourLatents(beads, bowl, cup)
 
 

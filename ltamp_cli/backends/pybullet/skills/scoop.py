@@ -31,7 +31,6 @@ import numpy as np
 from ltamp_cli.backends.kitchenware_geometry import (
     SpoonDims,
     VesselDims,
-    check_points,
     spoon_geometry,
     vessel_geometry,
 )
@@ -46,13 +45,15 @@ from ltamp_cli.backends.pybullet.particles import (
 )
 from ltamp_cli.backends.pybullet.paths import PosePath, rotation_about_axis, timed_poses
 from ltamp_cli.backends.pybullet.skills.common import (
-    CHECK_SPACING_M,
+    BOWL_RGBA,
     PathCheck,
     StepCallback,
+    batch_path_validity,
     check_tool_path,
     follow_path,
     hold,
-    truncated_normal,
+    sample_beads,
+    sample_material,
 )
 from ltamp_cli.backends.pybullet.skills.pour import (
     BOWL_BASE_RATIO,
@@ -170,16 +171,9 @@ def check_scoop(context: np.ndarray, control: np.ndarray) -> PathCheck:
 def scoop_is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
     """Geometric pre-check for a batch ``controls (n, 5)``: bool ``(n,)``."""
     scene = ScoopContext.from_array(context)
-    spoon = spoon_geometry(scene.spoon)
-    points = check_points(spoon, CHECK_SPACING_M)
     batch = np.asarray(controls, dtype=float).reshape(-1, 5)
-    return np.array(
-        [
-            check_tool_path(spoon, scoop_path(scene, c), scene.bowl, tool_points=points).valid
-            for c in batch
-        ],
-        dtype=bool,
-    )
+    return batch_path_validity(spoon_geometry(scene.spoon),
+                               (scoop_path(scene, c) for c in batch), scene.bowl)
 
 
 @dataclass(frozen=True)
@@ -192,28 +186,9 @@ class ScoopLatents:
 
 
 def sample_scoop_latents(rng: np.random.Generator, settings: ScoopSettings) -> ScoopLatents:
-    radius = truncated_normal(rng, 0.006, 0.0005, 0.005, 0.007)
-    density = truncated_normal(rng, 1000.0, 150.0, 700.0, 1300.0)
-    count = round(truncated_normal(rng, settings.bead_count_mean, 20.0, 200.0, 300.0))
-    beads = BeadSpec(
-        count=count,
-        radius=radius,
-        mass=density * 4.0 / 3.0 * math.pi * radius**3,
-        lateral_friction=truncated_normal(rng, 0.5, 0.1, 0.2, 0.8),
-        restitution=truncated_normal(rng, 0.7, 0.1, 0.4, 0.9),
-    )
-    bowl = BodyMaterial(
-        mass=0.0,
-        lateral_friction=truncated_normal(rng, 0.5, 0.1, 0.2, 0.8),
-        restitution=truncated_normal(rng, 0.1, 0.05, 0.0, 0.2),
-        rgba=(0.85, 0.85, 0.8, 1.0),
-    )
-    spoon = BodyMaterial(
-        mass=truncated_normal(rng, 0.05, 0.01, 0.02, 0.08),
-        lateral_friction=truncated_normal(rng, 0.5, 0.1, 0.2, 0.8),
-        restitution=truncated_normal(rng, 0.1, 0.05, 0.0, 0.2),
-        rgba=(0.6, 0.6, 0.65, 1.0),
-    )
+    beads = sample_beads(rng, settings.bead_count_mean, 20.0, 200.0, 300.0)
+    bowl = sample_material(rng, BOWL_RGBA)
+    spoon = sample_material(rng, (0.6, 0.6, 0.65, 1.0), mass=(0.05, 0.01, 0.02, 0.08))
     return ScoopLatents(beads, bowl, spoon)
 
 
