@@ -35,6 +35,25 @@ from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig
 _SPECS: Mapping[str, SkillSpec] = MappingProxyType({"pour": POUR_SPEC, "scoop": SCOOP_SPEC})
 
 
+def precheck_trial(spec: SkillSpec, context: np.ndarray, control: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, TrialResult | None]:
+    """Shapes checked and the geometric pre-check run *before* any world is touched: invalid
+    controls never create or step one. Returns the flattened inputs and the result of a
+    rejected trial (``None`` when it may be simulated). Shared by the 3D backends."""
+    context = np.asarray(context, dtype=float).reshape(-1)
+    control = np.asarray(control, dtype=float).reshape(-1)
+    if context.shape != (spec.context.dim,) or control.shape != (spec.control.dim,):
+        raise ValueError(
+            f"{spec.name}: expected context of {spec.context.dim} and control of "
+            f"{spec.control.dim} values, got {context.size} and {control.size}"
+        )
+    verdict = (check_pour if spec.name == "pour" else check_scoop)(context, control)
+    if not verdict.valid:
+        return context, control, TrialResult(spec.invalid_score, False,
+                                              {"reason": verdict.reason})
+    return context, control, None
+
+
 class Kitchen3DBackend:
     """PyBullet Kitchen3D: skills ``pour`` and ``scoop``.
 
@@ -112,18 +131,9 @@ class Kitchen3DBackend:
         seed: int,
         on_step: StepCallback | None,
     ) -> TrialResult:
-        spec = self._spec(skill)
-        context = np.asarray(context, dtype=float).reshape(-1)
-        control = np.asarray(control, dtype=float).reshape(-1)
-        if context.shape != (spec.context.dim,) or control.shape != (spec.control.dim,):
-            raise ValueError(
-                f"{skill}: expected context of {spec.context.dim} and control of "
-                f"{spec.control.dim} values, got {context.size} and {control.size}"
-            )
-        # Checked before touching the world: invalid controls never create or step it.
-        verdict = (check_pour if skill == "pour" else check_scoop)(context, control)
-        if not verdict.valid:
-            return TrialResult(spec.invalid_score, False, {"reason": verdict.reason})
+        context, control, rejected = precheck_trial(self._spec(skill), context, control)
+        if rejected is not None:
+            return rejected
         run: Callable[..., TrialResult]
         if skill == "pour":
             run, settings = run_pour, self.pour_settings

@@ -12,9 +12,9 @@ from collections.abc import Callable, Mapping
 import numpy as np
 
 from ltamp_cli.backends.protocol import SkillSpec, TrialResult, as_batch
-from ltamp_cli.backends.pybullet.backend import Kitchen3DBackend
-from ltamp_cli.backends.pybullet.skills.pour import PourSettings, check_pour
-from ltamp_cli.backends.pybullet.skills.scoop import ScoopSettings, check_scoop
+from ltamp_cli.backends.pybullet.backend import Kitchen3DBackend, precheck_trial
+from ltamp_cli.backends.pybullet.skills.pour import PourSettings
+from ltamp_cli.backends.pybullet.skills.scoop import ScoopSettings
 from ltamp_cli.backends.sapien.render import (
     CameraView,
     FrameRecorder,
@@ -129,18 +129,9 @@ class SapienKitchen3DBackend:
         seed: int,
         on_step: StepCallback | None,
     ) -> TrialResult:
-        spec = self._spec(skill)
-        context = np.asarray(context, dtype=float).reshape(-1)
-        control = np.asarray(control, dtype=float).reshape(-1)
-        if context.shape != (spec.context.dim,) or control.shape != (spec.control.dim,):
-            raise ValueError(
-                f"{skill}: expected context of {spec.context.dim} and control of "
-                f"{spec.control.dim} values, got {context.size} and {control.size}"
-            )
-        # Checked before touching the world: invalid controls never step it.
-        verdict = (check_pour if skill == "pour" else check_scoop)(context, control)
-        if not verdict.valid:
-            return TrialResult(spec.invalid_score, False, {"reason": verdict.reason})
+        context, control, rejected = precheck_trial(self._spec(skill), context, control)
+        if rejected is not None:
+            return rejected
         run: Callable[..., TrialResult]
         if skill == "pour":
             run, settings = run_pour, self.pour_settings
