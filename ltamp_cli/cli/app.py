@@ -27,19 +27,9 @@ def build_app() -> typer.Typer:
     # A callback keeps `ltamp COMMAND` form even while only one command is registered.
     app.callback()(lambda: None)
     # Command modules are imported here, not at module import, to keep start-up cheap.
-    from ltamp_cli.cli import (
-        check,
-        collect,
-        evaluate,
-        import_trials,
-        sample,
-        skills,
-        solve,
-        tell,
-        train,
-    )
+    from ltamp_cli.cli import check, collect, evaluate, sample, skills, solve, train
 
-    for module in (solve, collect, skills, train, evaluate, sample, check, import_trials, tell):
+    for module in (solve, collect, skills, train, evaluate, sample, check):
         module.register(app)
     return app
 
