@@ -27,9 +27,19 @@ def build_app() -> typer.Typer:
     # A callback keeps `ltamp COMMAND` form even while only one command is registered.
     app.callback()(lambda: None)
     # Command modules are imported here, not at module import, to keep start-up cheap.
-    from ltamp_cli.cli import check, collect, evaluate, sample, skills, solve, train
+    from ltamp_cli.cli import (
+        check,
+        collect,
+        evaluate,
+        import_trials,
+        sample,
+        skills,
+        solve,
+        tell,
+        train,
+    )
 
-    for module in (solve, collect, skills, train, evaluate, sample, check):
+    for module in (solve, collect, skills, train, evaluate, sample, check, import_trials, tell):
         module.register(app)
     return app
 

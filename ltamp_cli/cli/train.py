@@ -65,6 +65,9 @@ def train_command(
     curve: Annotated[
         Path | None, typer.Option("--curve", help="Write the learning curve to this PNG.")
     ] = None,
+    ask: Annotated[
+        bool, typer.Option("--ask", help="Propose the next trial (see `ltamp tell`), not run it.")
+    ] = False,
 ) -> None:
     """Learn SKILL's success constraint and save the model to --out.
 
@@ -102,6 +105,13 @@ def train_command(
                 f"backend {backend!r} has no skill {skill!r} (known: {', '.join(sorted(specs))})"
             )
         spec = specs[skill]
+        if ask:
+            if data is not None:
+                raise InputError("--ask proposes live trials: it cannot be used with --data")
+            from ltamp_cli.learning.ask_tell import ask as ask_next
+
+            typer.echo(json.dumps(ask_next(physics, skill, config, out).to_json()))
+            return
         evaluator = None
         if eval_every > 0:
             if test_data is not None:

@@ -1,0 +1,30 @@
+"""``ltamp tell``: record the outcome of the trial proposed by ``ltamp train --ask``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+
+def register(app: typer.Typer) -> None:
+    app.command(name="tell")(tell_command)
+
+
+def tell_command(
+    directory: Annotated[Path, typer.Argument(help="Model directory given to `train --ask`.")],
+    score: Annotated[float, typer.Option("--score", help="Measured score (> 0 = success).")],
+    valid: Annotated[
+        bool, typer.Option("--valid/--invalid", help="Whether the trial could be run.")
+    ] = True,
+) -> None:
+    """Record the pending trial's score in DIR/trials.jsonl, refit and save the model."""
+    import torch
+
+    from ltamp_cli.learning.ask_tell import tell
+
+    torch.set_num_threads(1)
+    record = tell(directory, score, valid)
+    typer.echo(json.dumps({"model": str(directory), "index": record.index, "score": score}))

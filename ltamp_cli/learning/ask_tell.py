@@ -1,0 +1,201 @@
+"""Ask/tell active learning for trials run outside ltamp (e.g. on a real robot).
+
+:func:`ask` proposes the next trial without running it and writes ``DIR/pending.json``;
+:func:`tell` records its outcome in ``DIR/trials.jsonl``, refits the model, saves it to ``DIR``
+and only then removes ``pending.json``. Every step leaves a consistent directory on disk, and a
+``tell`` repeated after a crash never records the same trial twice (the pending trial's
+``index`` is checked against the file).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ltamp_cli.backends.protocol import SkillBackend
+from ltamp_cli.errors import InputError, location_in
+from ltamp_cli.learning.active import (
+    ACTIVE_STRATEGIES,
+    LearningConfig,
+    _propose,
+    _training_score,
+    _trial_seed,
+    fit_model,
+)
+from ltamp_cli.learning.baselines import RandomModel
+from ltamp_cli.learning.model import SkillModel
+from ltamp_cli.learning.model_dir import METADATA_FILE, load_model, spec_from_json, spec_to_json
+from ltamp_cli.trials.record import TrialDataset, TrialRecord
+
+PENDING_FILE = "pending.json"
+TRIALS_FILE = "trials.jsonl"
+
+
+@dataclass(frozen=True)
+class Proposal:
+    """The trial to run next; ``context``/``control`` in physical units, by parameter name."""
+
+    skill: str
+    backend: str
+    index: int
+    seed: int
+    context: dict[str, float]
+    control: dict[str, float]
+
+    def to_json(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def _write_json(path: Path, data: dict[str, Any]) -> None:
+    temporary = path.with_name(path.name + ".tmp")
+    temporary.write_text(json.dumps(data, indent=2, sort_keys=True, allow_nan=False) + "\n")
+    with temporary.open("rb") as handle:
+        os.fsync(handle.fileno())
+    temporary.replace(path)
+
+
+def _previous_model(directory: Path) -> SkillModel | None:
+    if not (directory / METADATA_FILE).is_file():
+        return None
+    return load_model(directory).model
+
+
+def _training_arrays(
+    records: list[TrialRecord], template: RandomModel
+) -> tuple[np.ndarray, np.ndarray]:
+    x = np.array([template.to_unit(r.context, r.control)[0] for r in records])
+    y = np.array([_training_score(template.spec, r.score) for r in records])
+    return x.reshape(len(records), template.dim), y
+
+
+def ask(
+    backend: SkillBackend, skill: str, config: LearningConfig, directory: str | Path
+) -> Proposal:
+    """Propose the next trial of ``skill`` and save it as ``DIR/pending.json``.
+
+    Asking again before telling returns the same pending proposal. The first ``config.init``
+    proposals are random; later ones maximise the straddle of the model fitted on
+    ``DIR/trials.jsonl`` (for ``lse``/``lse2``).
+    """
+    directory = Path(directory)
+    pending_path = directory / PENDING_FILE
+    if pending_path.is_file():
+        pending = _read_pending(directory)
+        if pending["proposal"]["skill"] != skill:
+            raise InputError(
+                f"a trial of skill {pending['proposal']['skill']!r} is pending here; "
+                "tell its outcome first",
+                location_in(pending_path),
+            )
+        return Proposal(**pending["proposal"])
+    spec = backend.skills()[skill]
+    dataset = TrialDataset(directory / TRIALS_FILE)
+    records = dataset.read()
+    strangers = [r for r in records if r.skill != skill]
+    if strangers:
+        raise InputError(
+            f"holds trials of skill {strangers[0].skill!r}, not {skill!r}",
+            location_in(dataset.path),
+        )
+    rng = np.random.default_rng([config.seed, len(records), 7])
+    model: SkillModel | None = None
+    if config.strategy in ACTIVE_STRATEGIES and len(records) >= config.init:
+        template = RandomModel(spec, 0.0)
+        x, y = _training_arrays(records, template)
+        previous = _previous_model(directory)
+        model = fit_model(spec, config, x, y, previous, rng=rng)
+
+    def is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
+        return backend.is_valid(skill, context, controls)
+
+    context, control = _propose(backend, skill, spec, config, rng, model, is_valid)
+    index = len(records)
+    proposal = Proposal(
+        skill=skill,
+        backend=backend.name,
+        index=index,
+        seed=_trial_seed(config.seed, index),
+        context={n: float(v) for n, v in zip(spec.context.names, context, strict=True)},
+        control={n: float(v) for n, v in zip(spec.control.names, control, strict=True)},
+    )
+    directory.mkdir(parents=True, exist_ok=True)
+    _write_json(
+        pending_path,
+        {"proposal": proposal.to_json(), "spec": spec_to_json(spec), "config": asdict(config)},
+    )
+    return proposal
+
+
+def _read_pending(directory: Path) -> dict[str, Any]:
+    path = directory / PENDING_FILE
+    if not path.is_file():
+        raise InputError(
+            "no pending trial: run `ltamp train SKILL --ask --out DIR` first",
+            location_in(directory),
+        )
+    try:
+        data = json.loads(path.read_text())
+        spec_from_json(data["spec"])
+        LearningConfig(**data["config"])
+        Proposal(**data["proposal"])
+    except (ValueError, KeyError, TypeError) as error:
+        raise InputError(
+            f"corrupt pending trial ({type(error).__name__}: {error})", location_in(path)
+        ) from None
+    return data
+
+
+def tell(directory: str | Path, score: float, valid: bool = True) -> TrialRecord:
+    """Record the outcome of the pending trial, refit and save the model, clear the pending.
+
+    Raises :class:`InputError` when nothing is pending or ``score`` is not finite.
+    """
+    directory = Path(directory)
+    pending = _read_pending(directory)
+    if not np.isfinite(score):
+        raise InputError(f"--score: expected a finite number, got {score}")
+    spec = spec_from_json(pending["spec"])
+    config = LearningConfig(**pending["config"])
+    proposal = Proposal(**pending["proposal"])
+    dataset = TrialDataset(directory / TRIALS_FILE)
+    records = dataset.read()
+    record = TrialRecord(
+        skill=proposal.skill,
+        context=tuple(proposal.context[n] for n in spec.context.names),
+        control=tuple(proposal.control[n] for n in spec.control.names),
+        score=float(score),
+        valid=bool(valid),
+        seed=proposal.seed,
+        backend=proposal.backend,
+        index=proposal.index,
+        info={"strategy": config.strategy, "source": "tell"},
+    )
+    # A crash between appending and clearing pending.json must not duplicate the trial.
+    if not any(r.index == proposal.index for r in records):
+        dataset.append(record)
+        records.append(record)
+    template = RandomModel(spec, 0.0)
+    x, y = _training_arrays(records, template)
+    rng = np.random.default_rng([config.seed, len(records), 11])
+    model = fit_model(spec, config, x, y, _previous_model(directory), rng=rng)
+    model.save(
+        str(directory),
+        backend=proposal.backend,
+        strategy=config.strategy,
+        training={
+            "mode": "ask-tell",
+            "n_trials": len(records),
+            "n_valid": sum(r.valid for r in records),
+            "n_success": sum(r.score > 0 for r in records),
+            "init": config.init,
+            "seed": config.seed,
+            "trials_file": TRIALS_FILE,
+        },
+    )
+    (directory / PENDING_FILE).unlink()
+    return record
