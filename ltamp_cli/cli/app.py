@@ -32,6 +32,7 @@ def build_app() -> typer.Typer:
         collect,
         evaluate,
         import_trials,
+        plot,
         sample,
         skills,
         solve,
@@ -39,7 +40,8 @@ def build_app() -> typer.Typer:
         train,
     )
 
-    for module in (solve, collect, skills, train, evaluate, sample, check, import_trials, tell):
+    for module in (solve, collect, skills, train, evaluate, sample, check, import_trials, tell,
+                   plot):
         module.register(app)
     return app
 
