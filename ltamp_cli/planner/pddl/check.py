@@ -133,11 +133,9 @@ def check_domain(domain: Domain) -> None:
                     raise InputError(f"variable {arg} is not a parameter in {what}",
                                      term.location)
     for axiom in domain.axioms:
-        scope = {p.name for p in axiom.head.parameters} | _quantified_variables(axiom.body)
         for atom in formula_atoms(axiom.body):
             # Free body variables of a derived predicate are implicitly existential.
             _check_atom(atom, arities, None, constants, f"derived predicate {axiom.head.name!r}")
-        del scope
 
 
 def check_problem(problem: Problem, domain: Domain) -> None:

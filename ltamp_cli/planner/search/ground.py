@@ -191,7 +191,6 @@ def _match(literal: LiftedLiteral, args: tuple[str, ...]) -> dict[str, str] | No
 
 @dataclass
 class _Rule:
-    kind: str  # "action" or "axiom"
     source: NormalAction | NormalAxiom
     positive: tuple[LiftedLiteral, ...]
     negative: tuple[LiftedLiteral, ...]
@@ -199,19 +198,14 @@ class _Rule:
     variables: tuple[str, ...]
     joins: dict[int, list[_Step]] = field(default_factory=dict)
 
-    def produces(self) -> list[tuple[str, tuple[str, ...]]]:
-        if isinstance(self.source, NormalAxiom):
-            return [(self.source.predicate, self.source.head_args)]
-        return [(e.predicate, e.args) for e in self.source.effects if e.positive]
 
-
-def _make_rule(kind: str, source: NormalAction | NormalAxiom, clause: Clause) -> _Rule:
+def _make_rule(source: NormalAction | NormalAxiom, clause: Clause) -> _Rule:
     positive = _without_redundant_object_types(
         [lit for lit in clause if lit.positive and lit.predicate != EQUALITY])
     negative = tuple(lit for lit in clause if not lit.positive and lit.predicate != EQUALITY)
     equalities = tuple(lit for lit in clause if lit.predicate == EQUALITY)
     variables = tuple(sorted({a for lit in clause for a in lit.args if is_variable(a)}))
-    return _Rule(kind, source, positive, negative, equalities, variables)
+    return _Rule(source, positive, negative, equalities, variables)
 
 
 def _without_redundant_object_types(literals: list[LiftedLiteral]) -> tuple[LiftedLiteral, ...]:
@@ -244,8 +238,8 @@ def ground_task(
     ordered_init = sorted(init_facts)
     for fact in ordered_init:
         index.add(fact)
-    rules = [_make_rule("action", a, a.precondition) for a in actions]
-    rules += [_make_rule("axiom", a, a.body) for a in axioms]
+    rules = [_make_rule(a, a.precondition) for a in actions]
+    rules += [_make_rule(a, a.body) for a in axioms]
     by_predicate: dict[str, list[tuple[_Rule, int]]] = defaultdict(list)
     for rule in rules:
         for position, literal in enumerate(rule.positive):
