@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Annotated
 
@@ -68,8 +67,8 @@ def level_set_command(
     import numpy as np
     import torch
 
+    from ltamp_cli.cli.options import check_confidence_options
     from ltamp_cli.cli.sample import parse_context
-    from ltamp_cli.learning.confidence import LAMBDA_RANGE
     from ltamp_cli.learning.model import LevelSetModel
     from ltamp_cli.learning.model_dir import load_model
     from ltamp_cli.sampling.factory import make_sampler
@@ -81,11 +80,7 @@ def level_set_command(
         raise InputError(f"--out: expected a .png file name, got {str(out)!r}")
     if samples < 0:
         raise InputError(f"--samples: expected a number >= 0, got {samples}")
-    if not LAMBDA_RANGE[0] <= lam <= LAMBDA_RANGE[1]:
-        raise InputError(f"--lambda: expected a value in [{LAMBDA_RANGE[0]}, "
-                         f"{LAMBDA_RANGE[1]}], got {lam}")
-    if beta is not None and not math.isfinite(beta):
-        raise InputError(f"--beta: expected a finite number, got {beta}")
+    check_confidence_options(lam, beta)
     model = load_model(model_dir).model
     if not isinstance(model, LevelSetModel):
         raise InputError(f"{model_dir}: level-set plots need a GP model, this one is "

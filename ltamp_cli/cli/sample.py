@@ -72,7 +72,7 @@ def sample_command(
     import numpy as np
     import torch
 
-    from ltamp_cli.learning.confidence import LAMBDA_RANGE
+    from ltamp_cli.cli.options import check_confidence_options
     from ltamp_cli.learning.model import LevelSetModel
     from ltamp_cli.learning.model_dir import load_model
     from ltamp_cli.sampling.factory import SAMPLER_NAMES, make_sampler
@@ -84,11 +84,7 @@ def sample_command(
                          f"{', '.join(SAMPLER_NAMES)})")
     if n < 1:
         raise InputError(f"-n: expected a number >= 1, got {n}")
-    if not LAMBDA_RANGE[0] <= lam <= LAMBDA_RANGE[1]:
-        raise InputError(f"--lambda: expected a value in [{LAMBDA_RANGE[0]}, "
-                         f"{LAMBDA_RANGE[1]}], got {lam}")
-    if beta is not None and not math.isfinite(beta):
-        raise InputError(f"--beta: expected a finite number, got {beta}")
+    check_confidence_options(lam, beta)
     if plot is not None and plot.suffix.lower() != ".png":
         raise InputError(f"--plot: expected a .png file name, got {str(plot)!r}")
     model = load_model(model_dir).model
