@@ -11,6 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from line_domain import LINE_BINDINGS, LINE_DOMAIN, LINE_STREAMS
 
 MakeProblem = Callable[..., Path]
 REPO = Path(__file__).resolve().parents[2]
@@ -91,33 +92,6 @@ def test_pddl_problem_file_with_domain_option(tmp_path: Path) -> None:
     assert_bad_input(ltamp(problem), "needs its domain folder")
 
 
-LINE_DOMAIN = """
-(define (domain line)
-  (:predicates (Pos ?p) (At ?p) (Step ?p ?q) (Goal ?p))
-  (:action move
-    :parameters (?p ?q)
-    :precondition (and (At ?p) (Step ?p ?q))
-    :effect (and (At ?q) (not (At ?p)))))
-"""
-LINE_STREAMS = """
-(define (stream line)
-  (:stream next
-    :inputs (?p)
-    :domain (Pos ?p)
-    :outputs (?q)
-    :certified (and (Pos ?q) (Step ?p ?q)))
-  (:stream test-goal
-    :inputs (?p)
-    :domain (Pos ?p)
-    :certified (Goal ?p)))
-"""
-LINE_BINDINGS = """
-def make_streams(world, rng):
-    def next_(p):
-        if world["top"] is None or p + 1 <= world["top"]:
-            yield (p + 1,)
-    return {"next": next_, "test-goal": lambda p: p == world["goal"]}
-"""
 
 
 def line_yaml(top: str, goal: int, extra: str = "") -> str:

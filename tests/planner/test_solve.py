@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from line_domain import LINE_BINDINGS, LINE_DOMAIN, LINE_STREAMS
 
 from ltamp_cli.planner.algorithms.common import ALGORITHMS, PlannerConfig
 from ltamp_cli.planner.api import solve
@@ -120,34 +121,6 @@ SYMBOLIC_DOMAIN = """
     :parameters (?x ?y)
     :precondition (and (P ?x) (Q ?x ?y))
     :effect (and (P ?y) (not (P ?x)))))
-"""
-LINE_DOMAIN = """
-(define (domain line)
-  (:predicates (Pos ?p) (At ?p) (Step ?p ?q) (Goal ?p))
-  (:action move
-    :parameters (?p ?q)
-    :precondition (and (At ?p) (Step ?p ?q))
-    :effect (and (At ?q) (not (At ?p)))))
-"""
-LINE_STREAMS = """
-(define (stream line)
-  (:stream next
-    :inputs (?p)
-    :domain (Pos ?p)
-    :outputs (?q)
-    :certified (and (Pos ?q) (Step ?p ?q)))
-  (:stream test-goal
-    :inputs (?p)
-    :domain (Pos ?p)
-    :certified (Goal ?p)))
-"""
-# next(p) = p + 1 while below world["top"]; a goal pose is world["goal"].
-LINE_BINDINGS = """
-def make_streams(world, rng):
-    def next_(p):
-        if world["top"] is None or p + 1 <= world["top"]:
-            yield (p + 1,)
-    return {"next": next_, "test-goal": lambda p: p == world["goal"]}
 """
 
 

@@ -1,0 +1,30 @@
+"""A tiny stream domain shared by the planner tests: values on a line."""
+
+LINE_DOMAIN = """
+(define (domain line)
+  (:predicates (Pos ?p) (At ?p) (Step ?p ?q) (Goal ?p))
+  (:action move
+    :parameters (?p ?q)
+    :precondition (and (At ?p) (Step ?p ?q))
+    :effect (and (At ?q) (not (At ?p)))))
+"""
+LINE_STREAMS = """
+(define (stream line)
+  (:stream next
+    :inputs (?p)
+    :domain (Pos ?p)
+    :outputs (?q)
+    :certified (and (Pos ?q) (Step ?p ?q)))
+  (:stream test-goal
+    :inputs (?p)
+    :domain (Pos ?p)
+    :certified (Goal ?p)))
+"""
+# next(p) = p + 1 while below world["top"]; a goal pose is world["goal"].
+LINE_BINDINGS = """
+def make_streams(world, rng):
+    def next_(p):
+        if world["top"] is None or p + 1 <= world["top"]:
+            yield (p + 1,)
+    return {"next": next_, "test-goal": lambda p: p == world["goal"]}
+"""
