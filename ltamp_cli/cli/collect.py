@@ -19,21 +19,35 @@ def collect_command(
     n: Annotated[int, typer.Option("-n", help="Total number of trials wanted in the file.")],
     out: Annotated[Path, typer.Option("--out", help="JSONL file to append to (resumes).")],
     backend: Annotated[str, typer.Option("--backend", help="Physics backend.")] = "box2d",
-    workers: Annotated[int, typer.Option("--workers", help="Worker processes.")] = 1,
+    workers: Annotated[
+        int | None,
+        typer.Option(
+            "--workers",
+            help="Worker processes (default 1); with --ray, Ray actors (default: all CPUs).",
+        ),
+    ] = None,
     seed: Annotated[int, typer.Option("--seed", help="Base seed; trial i uses (seed, i).")] = 0,
     valid_only: Annotated[
         bool, typer.Option("--valid-only", help="Redraw controls until one is valid.")
     ] = False,
+    ray: Annotated[
+        str | None,
+        typer.Option(
+            "--ray",
+            help="Run trials on Ray: 'local' (a local cluster) or a cluster address. "
+            "Needs the ltamp[ray] extra.",
+        ),
+    ] = None,
 ) -> None:
     """Collect N random trials (uniform control; context from the backend), resumably."""
     from ltamp_cli.trials.collect import CollectJob, collect
 
     if n < 0:
         raise InputError(f"-n: expected a number >= 0, got {n}")
-    if workers < 1:
+    if workers is not None and workers < 1:
         raise InputError(f"--workers: expected a number >= 1, got {workers}")
     if out.exists() and out.is_dir():
         raise InputError(f"--out: {out} is a directory, expected a .jsonl file path")
     job = CollectJob(skill=skill, backend=backend, n=n, seed=seed, valid_only=valid_only)
-    added = collect(job, out, workers=workers)
+    added = collect(job, out, workers=workers, ray_address=ray)
     typer.echo(f"{added} new trials; {out} now holds trials 0..{n - 1}", err=True)

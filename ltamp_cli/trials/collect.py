@@ -5,13 +5,20 @@ Trial ``i`` of a job with base seed ``s`` draws everything from
 control (uniform in the control box, optionally re-drawn until valid) and the seed passed
 to ``run_trial``. So trial ``i`` is the same whether it runs first time, after a resume, or
 in any worker. Finished trials are appended to the :class:`TrialDataset` one by one as they
-arrive; a resumed job skips the indices already in the file, so a killed job loses at most
-the trials that were running and never duplicates one.
+arrive (by the driver process only, each tagged with its index); a resumed job skips the
+indices already in the file, so a killed job loses at most the trials that were running and
+never duplicates one. Trials run in this process (``workers=1``), in forked worker processes
+(``workers>1``) or on Ray actors (``ray_address``, see :mod:`.ray_collect`).
+
+A trial whose physics raises, or whose result is not finite, is recorded as invalid with the
+skill's invalid score and the reason in ``info["reason"]``; collection goes on (with a
+freshly built backend, since a world left mid-trial is not trusted).
 """
 
 from __future__ import annotations
 
 import json
+import math
 import multiprocessing as mp
 import queue
 import signal
@@ -25,12 +32,14 @@ import numpy as np
 from tqdm import tqdm
 
 from ltamp_cli.backends import load_backend
-from ltamp_cli.backends.protocol import SkillBackend, skill_spec
+from ltamp_cli.backends.protocol import SkillBackend, TrialResult, skill_spec
 from ltamp_cli.errors import InputError
 from ltamp_cli.trials.record import TrialDataset, TrialRecord
 
 VALID_DRAW_BATCH = 256
 VALID_DRAW_ROUNDS = 40
+# Longest error message kept in a failed trial's record (one line).
+REASON_CHARS = 300
 
 
 @dataclass(frozen=True)
@@ -80,10 +89,32 @@ def trial_input(
 
 
 def run_one(backend: SkillBackend, job: CollectJob, index: int) -> TrialRecord:
-    """Run trial ``index`` of ``job`` on ``backend`` and make its record."""
+    """Run trial ``index`` of ``job`` on ``backend`` and make its record.
+
+    Exceptions from the trial's physics are recorded (invalid trial), not raised.
+    """
+    return _run_guarded(backend, job, index)[0]
+
+
+def failed_result(spec_invalid_score: float, reason: str) -> TrialResult:
+    """An invalid trial with the skill's invalid score and a one-line ``reason``."""
+    line = " ".join(reason.split())[:REASON_CHARS]
+    return TrialResult(spec_invalid_score, False, {"reason": line})
+
+
+def _run_guarded(backend: SkillBackend, job: CollectJob, index: int) -> tuple[TrialRecord, bool]:
+    """``(record, crashed)``: ``crashed`` when ``run_trial`` raised (the backend may be dirty)."""
     item = trial_input(backend, job.skill, job.seed, index, job.valid_only)
+    invalid_score = skill_spec(backend, job.skill).invalid_score
+    crashed = False
     start = time.perf_counter()
-    result = backend.run_trial(job.skill, item.context, item.control, item.seed)
+    try:
+        result = backend.run_trial(job.skill, item.context, item.control, item.seed)
+    except Exception as error:  # one trial's physics must not end the whole collection
+        crashed = True
+        result = failed_result(invalid_score, f"trial raised {type(error).__name__}: {error}")
+    if not math.isfinite(float(result.score)):
+        result = failed_result(invalid_score, f"non-finite score {result.score}")
     return TrialRecord(
         skill=job.skill,
         context=tuple(float(v) for v in item.context),
@@ -95,7 +126,32 @@ def run_one(backend: SkillBackend, job: CollectJob, index: int) -> TrialRecord:
         wall_time_s=time.perf_counter() - start,
         index=index,
         info=dict(result.info),
-    )
+    ), crashed
+
+
+class TrialRunner:
+    """Runs trials of one job on a backend it keeps across trials (one per worker).
+
+    After a trial whose physics raised, the backend is closed and rebuilt before the next
+    trial, so a half-finished world cannot change later trials.
+    """
+
+    def __init__(self, job: CollectJob) -> None:
+        self.job = job
+        self._backend: SkillBackend | None = None
+
+    def run(self, index: int) -> TrialRecord:
+        if self._backend is None:
+            self._backend = load_backend(self.job.backend, **dict(self.job.backend_options or {}))
+        record, crashed = _run_guarded(self._backend, self.job, index)
+        if crashed:
+            self.close()
+        return record
+
+    def close(self) -> None:
+        if self._backend is not None:
+            backend, self._backend = self._backend, None
+            backend.close()
 
 
 def pending_indices(dataset: TrialDataset, job: CollectJob) -> list[int]:
@@ -119,24 +175,24 @@ def pending_indices(dataset: TrialDataset, job: CollectJob) -> list[int]:
 def _worker(job: CollectJob, tasks: Any, results: Any) -> None:
     # Ctrl-C goes to the whole process group: the parent decides what happens.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    backend = load_backend(job.backend, **dict(job.backend_options or {}))
+    runner = TrialRunner(job)
     try:
         while (index := tasks.get()) is not None:
             try:
-                results.put(("ok", run_one(backend, job, index).to_json()))
+                results.put(("ok", runner.run(index).to_json()))
             except Exception as error:  # report, don't hang the parent
                 results.put(("error", f"trial {index}: {type(error).__name__}: {error}"))
     finally:
-        backend.close()
+        runner.close()
 
 
 def _serial(job: CollectJob, indices: list[int]) -> Iterator[TrialRecord]:
-    backend = load_backend(job.backend, **dict(job.backend_options or {}))
+    runner = TrialRunner(job)
     try:
         for index in indices:
-            yield run_one(backend, job, index)
+            yield runner.run(index)
     finally:
-        backend.close()
+        runner.close()
 
 
 def _parallel(job: CollectJob, indices: list[int], workers: int) -> Iterator[TrialRecord]:
@@ -179,18 +235,23 @@ def collect(
     job: CollectJob,
     out: str | Path,
     *,
-    workers: int = 1,
+    workers: int | None = 1,
     progress: bool = True,
+    ray_address: str | None = None,
 ) -> int:
     """Run the trials of ``job`` missing from ``out``; returns how many were added.
 
+    ``workers`` local processes (``None``: 1), or with ``ray_address`` that many Ray actors
+    (``"local"`` starts a local Ray cluster; ``None`` workers: every CPU of the cluster).
     Records are appended as they finish (possibly out of index order). Interrupting
     (Ctrl-C, kill) keeps every trial already appended; run again to resume.
     """
     if job.n < 0:
         raise InputError(f"-n must be >= 0, got {job.n}")
-    if workers < 1:
+    if workers is not None and workers < 1:
         raise InputError(f"--workers must be >= 1, got {workers}")
+    if ray_address is not None and not ray_address.strip():
+        raise InputError("--ray: expected 'local' or a Ray cluster address, got ''")
     dataset = TrialDataset(out)
     backend_check = load_backend(job.backend, **dict(job.backend_options or {}))
     try:
@@ -200,11 +261,15 @@ def collect(
     finally:
         backend_check.close()
     indices = pending_indices(dataset, job)
-    stream = (
-        _serial(job, indices)
-        if workers == 1 or len(indices) <= 1
-        else _parallel(job, indices, min(workers, len(indices)))
-    )
+    stream: Iterator[TrialRecord]
+    if ray_address is not None:
+        from ltamp_cli.trials.ray_collect import ray_stream
+
+        stream = ray_stream(job, indices, ray_address, workers)
+    elif (workers or 1) == 1 or len(indices) <= 1:
+        stream = _serial(job, indices)
+    else:
+        stream = _parallel(job, indices, min(workers or 1, len(indices)))
     added = 0
     with tqdm(
         total=job.n,
