@@ -13,7 +13,7 @@ import numpy as np
 
 from ltamp_cli.backends.protocol import SkillSpec, TrialResult, as_batch
 from ltamp_cli.backends.pybullet.render import Camera, FrameRecorder
-from ltamp_cli.backends.pybullet.skills.common import StepCallback
+from ltamp_cli.backends.pybullet.skills.common import PathCheck, StepCallback
 from ltamp_cli.backends.pybullet.skills.pour import (
     POUR_SPEC,
     PourSettings,
@@ -21,6 +21,14 @@ from ltamp_cli.backends.pybullet.skills.pour import (
     pour_is_valid,
     run_pour,
     sample_pour_context,
+)
+from ltamp_cli.backends.pybullet.skills.push import (
+    PUSH_SPEC,
+    PushSettings,
+    check_push,
+    push_is_valid,
+    run_push,
+    sample_push_context,
 )
 from ltamp_cli.backends.pybullet.skills.scoop import (
     SCOOP_SPEC,
@@ -30,9 +38,33 @@ from ltamp_cli.backends.pybullet.skills.scoop import (
     sample_scoop_context,
     scoop_is_valid,
 )
+from ltamp_cli.backends.pybullet.skills.stir import (
+    STIR_SPEC,
+    StirSettings,
+    check_stir,
+    run_stir,
+    sample_stir_context,
+    stir_is_valid,
+)
 from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig
 
-_SPECS: Mapping[str, SkillSpec] = MappingProxyType({"pour": POUR_SPEC, "scoop": SCOOP_SPEC})
+_SPECS: Mapping[str, SkillSpec] = MappingProxyType(
+    {"pour": POUR_SPEC, "scoop": SCOOP_SPEC, "push": PUSH_SPEC, "stir": STIR_SPEC}
+)
+#: The engine-independent parts of each skill: pre-check of one control, batch validity,
+#: context distribution (shared with the SAPIEN backend).
+_CHECKS: Mapping[str, Callable[[np.ndarray, np.ndarray], PathCheck]] = MappingProxyType(
+    {"pour": check_pour, "scoop": check_scoop, "push": check_push, "stir": check_stir}
+)
+_VALIDITY: Mapping[str, Callable[[np.ndarray, np.ndarray], np.ndarray]] = MappingProxyType(
+    {"pour": pour_is_valid, "scoop": scoop_is_valid, "push": push_is_valid,
+     "stir": stir_is_valid}
+)
+_CONTEXTS: Mapping[str, Callable[[np.random.Generator], np.ndarray]] = MappingProxyType(
+    {"pour": sample_pour_context, "scoop": sample_scoop_context, "push": sample_push_context,
+     "stir": sample_stir_context}
+)
+KNOWN_SKILLS = ", ".join(_SPECS)
 
 
 def precheck_trial(spec: SkillSpec, context: np.ndarray, control: np.ndarray
@@ -47,7 +79,7 @@ def precheck_trial(spec: SkillSpec, context: np.ndarray, control: np.ndarray
             f"{spec.name}: expected context of {spec.context.dim} and control of "
             f"{spec.control.dim} values, got {context.size} and {control.size}"
         )
-    verdict = (check_pour if spec.name == "pour" else check_scoop)(context, control)
+    verdict = _CHECKS[spec.name](context, control)
     if not verdict.valid:
         return context, control, TrialResult(spec.invalid_score, False,
                                               {"reason": verdict.reason})
@@ -55,10 +87,12 @@ def precheck_trial(spec: SkillSpec, context: np.ndarray, control: np.ndarray
 
 
 class Kitchen3DBackend:
-    """PyBullet Kitchen3D: skills ``pour`` and ``scoop``.
+    """PyBullet Kitchen3D: skills ``pour``, ``scoop`` (learned in the paper), ``push`` and
+    ``stir`` (engineered, but trials and scores work the same way).
 
     Options: ``gui`` (open a PyBullet window instead of ``DIRECT``), ``solver_iterations``,
-    and per-skill timing via ``pour_settings``/``scoop_settings``.
+    and per-skill timing via ``pour_settings``/``scoop_settings``/``push_settings``/
+    ``stir_settings``.
     """
 
     name = "pybullet"
@@ -69,10 +103,14 @@ class Kitchen3DBackend:
         solver_iterations: int = 5,
         pour_settings: PourSettings | None = None,
         scoop_settings: ScoopSettings | None = None,
+        push_settings: PushSettings | None = None,
+        stir_settings: StirSettings | None = None,
     ) -> None:
         self.config = WorldConfig(gui=bool(gui), solver_iterations=int(solver_iterations))
         self.pour_settings = pour_settings or PourSettings()
         self.scoop_settings = scoop_settings or ScoopSettings()
+        self.push_settings = push_settings or PushSettings()
+        self.stir_settings = stir_settings or StirSettings()
         self._world: PhysicsWorld | None = None
 
     @property
@@ -87,20 +125,21 @@ class Kitchen3DBackend:
 
     def _spec(self, skill: str) -> SkillSpec:
         if skill not in _SPECS:
-            raise KeyError(f"backend 'pybullet' has no skill {skill!r} (known: pour, scoop)")
+            raise KeyError(f"backend 'pybullet' has no skill {skill!r} (known: {KNOWN_SKILLS})")
         return _SPECS[skill]
 
     def sample_context(self, skill: str, rng: np.random.Generator) -> np.ndarray:
-        """Randomly scaled kitchenware dimensions, shape ``(d_context,)`` metres."""
+        """Randomly scaled kitchenware dimensions (push: block and distance), shape
+        ``(d_context,)`` in the units of the skill's context space."""
         self._spec(skill)
-        return sample_pour_context(rng) if skill == "pour" else sample_scoop_context(rng)
+        return _CONTEXTS[skill](rng)
 
     def is_valid(self, skill: str, context: np.ndarray, controls: np.ndarray) -> np.ndarray:
-        """The tool path (cup tilt or spoon path) stays clear of the bowl and table: ``(n,)``."""
+        """The tool path (cup tilt, spoon path, stirrer circles, fingertip pad) stays clear of
+        the vessel and the table: ``(n,)``."""
         spec = self._spec(skill)
         batch = as_batch(controls, spec.control.dim)
-        check = pour_is_valid if skill == "pour" else scoop_is_valid
-        return check(np.asarray(context, dtype=float), batch)
+        return _VALIDITY[skill](np.asarray(context, dtype=float), batch)
 
     def run_trial(
         self, skill: str, context: np.ndarray, control: np.ndarray, seed: int
@@ -134,11 +173,13 @@ class Kitchen3DBackend:
         context, control, rejected = precheck_trial(self._spec(skill), context, control)
         if rejected is not None:
             return rejected
-        run: Callable[..., TrialResult]
-        if skill == "pour":
-            run, settings = run_pour, self.pour_settings
-        else:
-            run, settings = run_scoop, self.scoop_settings
+        runs: dict[str, tuple[Callable[..., TrialResult], object]] = {
+            "pour": (run_pour, self.pour_settings),
+            "scoop": (run_scoop, self.scoop_settings),
+            "push": (run_push, self.push_settings),
+            "stir": (run_stir, self.stir_settings),
+        }
+        run, settings = runs[skill]
         return run(self.world, context, control, int(seed), settings, on_step, check=False)
 
     def close(self) -> None:

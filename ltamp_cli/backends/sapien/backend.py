@@ -12,9 +12,11 @@ from collections.abc import Callable, Mapping
 import numpy as np
 
 from ltamp_cli.backends.protocol import SkillSpec, TrialResult, as_batch
-from ltamp_cli.backends.pybullet.backend import Kitchen3DBackend, precheck_trial
+from ltamp_cli.backends.pybullet.backend import KNOWN_SKILLS, Kitchen3DBackend, precheck_trial
 from ltamp_cli.backends.pybullet.skills.pour import PourSettings
+from ltamp_cli.backends.pybullet.skills.push import PushSettings
 from ltamp_cli.backends.pybullet.skills.scoop import ScoopSettings
+from ltamp_cli.backends.pybullet.skills.stir import StirSettings
 from ltamp_cli.backends.sapien.render import (
     CameraView,
     FrameRecorder,
@@ -23,16 +25,23 @@ from ltamp_cli.backends.sapien.render import (
     probe_render_device,
     require_renderer,
 )
-from ltamp_cli.backends.sapien.skills import StepCallback, run_pour, run_scoop
+from ltamp_cli.backends.sapien.skills import (
+    StepCallback,
+    run_pour,
+    run_push,
+    run_scoop,
+    run_stir,
+)
 from ltamp_cli.backends.sapien.world import SapienWorld, SapienWorldConfig
 
 
 class SapienKitchen3DBackend:
-    """SAPIEN Kitchen3D: skills ``pour`` and ``scoop``, headless on the CPU.
+    """SAPIEN Kitchen3D: skills ``pour``, ``scoop``, ``push`` and ``stir``, headless on the CPU.
 
     Options: ``solver_iterations`` (PhysX position iterations, default 5 as in PyBullet),
     ``contact_offset`` (m), ``bead_friction_scale`` (see :class:`~.world.SapienWorldConfig`),
-    and per-skill timing via ``pour_settings``/``scoop_settings``.
+    and per-skill timing via ``pour_settings``/``scoop_settings``/``push_settings``/
+    ``stir_settings``.
     """
 
     name = "sapien"
@@ -44,6 +53,8 @@ class SapienKitchen3DBackend:
         bead_friction_scale: float | None = None,
         pour_settings: PourSettings | None = None,
         scoop_settings: ScoopSettings | None = None,
+        push_settings: PushSettings | None = None,
+        stir_settings: StirSettings | None = None,
     ) -> None:
         self.config = SapienWorldConfig(
             solver_position_iterations=int(solver_iterations),
@@ -56,6 +67,8 @@ class SapienKitchen3DBackend:
         )
         self.pour_settings = pour_settings or PourSettings()
         self.scoop_settings = scoop_settings or ScoopSettings()
+        self.push_settings = push_settings or PushSettings()
+        self.stir_settings = stir_settings or StirSettings()
         # The pre-checks, specs and contexts are the PyBullet backend's, never its physics.
         self._kinematics = Kitchen3DBackend()
         self._world: SapienWorld | None = None
@@ -75,7 +88,7 @@ class SapienKitchen3DBackend:
     def _spec(self, skill: str) -> SkillSpec:
         specs = self.skills()
         if skill not in specs:
-            raise KeyError(f"backend 'sapien' has no skill {skill!r} (known: pour, scoop)")
+            raise KeyError(f"backend 'sapien' has no skill {skill!r} (known: {KNOWN_SKILLS})")
         return specs[skill]
 
     def sample_context(self, skill: str, rng: np.random.Generator) -> np.ndarray:
@@ -132,11 +145,13 @@ class SapienKitchen3DBackend:
         context, control, rejected = precheck_trial(self._spec(skill), context, control)
         if rejected is not None:
             return rejected
-        run: Callable[..., TrialResult]
-        if skill == "pour":
-            run, settings = run_pour, self.pour_settings
-        else:
-            run, settings = run_scoop, self.scoop_settings
+        runs: dict[str, tuple[Callable[..., TrialResult], object]] = {
+            "pour": (run_pour, self.pour_settings),
+            "scoop": (run_scoop, self.scoop_settings),
+            "push": (run_push, self.push_settings),
+            "stir": (run_stir, self.stir_settings),
+        }
+        run, settings = runs[skill]
         return run(world, context, control, int(seed), settings, on_step, check=False)
 
     def close(self) -> None:

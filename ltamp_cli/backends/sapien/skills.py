@@ -1,4 +1,4 @@
-"""Kitchen3D pour and scoop trials in SAPIEN.
+"""Kitchen3D pour, scoop, push and stir trials in SAPIEN.
 
 Same scenes, latents, tool paths, pre-checks and scores as the PyBullet skills
 (:mod:`ltamp_cli.backends.pybullet.skills.pour` / ``.scoop``, whose pure parts are imported,
@@ -6,7 +6,8 @@ not copied): the seed draws the same bead count, sizes and materials, the beads 
 same grid, and the tool follows the same timed path. Only the physics engine differs, so the
 two backends agree on clearly good and clearly bad controls (borderline ones may differ).
 
-The tool (cup or spoon) is a kinematic body driven by per-step targets; the bowl is static.
+The tool (cup, spoon, fingertip pad, stirrer) is a kinematic body driven by per-step targets;
+the bowl is static; the pushed block and the stirred cup are dynamic.
 """
 
 from __future__ import annotations
@@ -15,11 +16,20 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ltamp_cli.backends.kitchenware_geometry import spoon_geometry, vessel_geometry
+from ltamp_cli.backends.kitchenware_geometry import (
+    block_geometry,
+    spoon_geometry,
+    stirrer_geometry,
+    vessel_geometry,
+)
 from ltamp_cli.backends.protocol import TrialResult
 from ltamp_cli.backends.pybullet.particles import count_lost
 from ltamp_cli.backends.pybullet.paths import PosePath, timed_poses
-from ltamp_cli.backends.pybullet.skills.common import check_tool_path
+from ltamp_cli.backends.pybullet.skills.common import (
+    check_tool_path,
+    sample_beads,
+    sample_material,
+)
 from ltamp_cli.backends.pybullet.skills.pour import (
     MIN_BEADS_IN_CUP,
     POUR_SPEC,
@@ -28,6 +38,16 @@ from ltamp_cli.backends.pybullet.skills.pour import (
     PourSettings,
     pour_path,
     sample_pour_latents,
+)
+from ltamp_cli.backends.pybullet.skills.push import (
+    PUSH_SPEC,
+    PushContext,
+    PushSettings,
+    block_material,
+    check_push,
+    pad_geometry,
+    push_outcome,
+    push_path,
 )
 from ltamp_cli.backends.pybullet.skills.scoop import (
     SCOOP_SPEC,
@@ -39,11 +59,21 @@ from ltamp_cli.backends.pybullet.skills.scoop import (
     spoon_capacity,
 )
 from ltamp_cli.backends.pybullet.skills.scoring import piecewise_linear_score
+from ltamp_cli.backends.pybullet.skills.stir import (
+    STIR_SPEC,
+    STIRRER_LENGTH_M,
+    StirSettings,
+    TipTracker,
+    cup_of,
+    stir_outcome,
+    stir_path,
+)
 from ltamp_cli.backends.sapien.bodies import (
     SapienBody,
     contained_mask,
     create_kitchenware,
     spawn_beads_in,
+    world_to_object,
 )
 from ltamp_cli.backends.sapien.world import SapienWorld
 
@@ -212,3 +242,88 @@ def run_scoop(
         "sim_time_s": steps * world.config.time_step,
     }
     return TrialResult(piecewise_linear_score(fraction, SCOOP_TAU), True, info)
+
+
+def run_push(
+    world: SapienWorld,
+    context: np.ndarray,
+    control: np.ndarray,
+    seed: int,
+    settings: PushSettings | None = None,
+    on_step: StepCallback | None = None,
+    check: bool = True,
+) -> TrialResult:
+    """Simulate one push in ``world`` (reset first); deterministic given ``seed``. Same
+    block, pad path, draws and score as the PyBullet push."""
+    settings = settings or PushSettings()
+    scene = PushContext.from_array(context)
+    control = np.asarray(control, dtype=float).reshape(4)
+    if check:
+        verdict = check_push(context, control)
+        if not verdict.valid:
+            return TrialResult(PUSH_SPEC.invalid_score, False, {"reason": verdict.reason})
+    rng = np.random.default_rng(seed)
+    world.reset()
+    size = scene.size
+    block = create_kitchenware(world, block_geometry((size, size, size)),
+                               material=block_material(scene, rng), body_type="dynamic")
+    path = push_path(scene, control)
+    pad = create_kitchenware(world, pad_geometry(), path.positions[0], path.quaternions[0],
+                             body_type="kinematic")
+    steps = hold(world, world.steps_for(settings.settle_s), on_step)
+    timed = timed_poses(path, speed=float(control[1]), angular_speed=1.0,
+                        dt=world.config.time_step)
+    steps += follow_path(world, pad, timed, on_step, steps)
+    steps += hold(world, world.steps_for(settings.after_s), on_step, steps)
+    position, quaternion = block.pose()
+    return push_outcome(scene, position, quaternion, steps, world.config.time_step)
+
+
+def run_stir(
+    world: SapienWorld,
+    context: np.ndarray,
+    control: np.ndarray,
+    seed: int,
+    settings: StirSettings | None = None,
+    on_step: StepCallback | None = None,
+    check: bool = True,
+) -> TrialResult:
+    """Simulate one stir in ``world`` (reset first); deterministic given ``seed``. Same
+    cup, beads, stirrer path, draws, tip rule and score as the PyBullet stir."""
+    settings = settings or StirSettings()
+    cup_dims = cup_of(context)
+    control = np.asarray(control, dtype=float).reshape(4)
+    path = stir_path(cup_dims, control)
+    rod = stirrer_geometry(STIRRER_LENGTH_M)
+    if check:
+        verdict = check_tool_path(rod, path, cup_dims)
+        if not verdict.valid:
+            return TrialResult(STIR_SPEC.invalid_score, False, {"reason": verdict.reason})
+    rng = np.random.default_rng(seed)
+    beads_spec = sample_beads(rng, settings.bead_count_mean, 8.0, 40.0, 80.0)
+    cup_material = sample_material(rng, (0.9, 0.5, 0.2, 1.0), mass=(0.15, 0.03, 0.08, 0.25))
+    world.reset()
+    cup_geometry = vessel_geometry(cup_dims, "cup")
+    cup = create_kitchenware(world, cup_geometry, material=cup_material, body_type="dynamic")
+    stirrer = create_kitchenware(world, rod, path.positions[0], path.quaternions[0],
+                                 body_type="kinematic")
+    beads = spawn_beads_in(world, cup, beads_spec, rng)
+    dt = world.config.time_step
+    steps = hold(world, world.steps_for(settings.settle_s), on_step)
+    start = beads.positions()
+    in_start = contained_mask(cup, start)
+    assert cup_geometry.cavity is not None
+    tracker = TipTracker(cup_geometry.cavity, dt)
+
+    def track(step: int) -> None:
+        tip, _ = stirrer.pose()
+        tracker.add(world_to_object(tip[None, :], *cup.pose())[0])
+        if on_step is not None:
+            on_step(step)
+
+    timed = timed_poses(path, speed=float(control[3]), angular_speed=1.0, dt=dt)
+    steps += follow_path(world, stirrer, timed, track, steps)
+    steps += hold(world, world.steps_for(settings.after_s), on_step, steps)
+    end = beads.positions()
+    return stir_outcome(start, end, in_start, contained_mask(cup, end), tracker, steps,
+                        count_lost(end))

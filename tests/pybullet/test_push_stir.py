@@ -1,0 +1,145 @@
+"""Push and stir trials on the PyBullet Kitchen3D backend: scores, validity, conservation."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from ltamp_cli.backends import load_backend
+from ltamp_cli.backends.kitchenware_geometry import ContainmentPrism
+from ltamp_cli.backends.protocol import SkillBackend
+from ltamp_cli.backends.pybullet.skills.pour import NOMINAL_CUP
+from ltamp_cli.backends.pybullet.skills.push import (
+    PUSH_TOLERANCE_M,
+    PushContext,
+    push_path,
+    push_score,
+)
+from ltamp_cli.backends.pybullet.skills.stir import (
+    STIR_MIN_TIME_S,
+    TipTracker,
+    cup_of,
+    stir_path,
+)
+
+# A 5 cm, 0.3 kg cube (friction 0.5) pushed 15 cm.
+PUSH_CONTEXT = np.array([0.05, 0.3, 0.5, 0.15])
+# Centred, at mid height, slowly, stopping where the block's centre is on the target.
+PUSH_GOOD = np.array([0.5, 0.1, 0.0, 0.0])
+# The same push stopping 5 cm short.
+PUSH_SHORT = np.array([0.5, 0.1, 0.0, -0.05])
+# Pad centre 1.5 cm above a 5 cm block's base: the 3 cm pad would touch the table.
+PUSH_LOW = np.array([0.3, 0.1, 0.0, 0.0])
+
+STIR_CONTEXT = np.array([NOMINAL_CUP.top_diameter, NOMINAL_CUP.height, NOMINAL_CUP.base_diameter])
+# Two turns of radius 1.8 cm, tip 2 cm above the cup's base (inside the beads).
+STIR_GOOD = np.array([0.018, 0.02, 2.0, 0.1])
+# The same circles with the tip 1 cm above the rim: nothing is stirred.
+STIR_ABOVE = np.array([0.018, 0.11, 2.0, 0.1])
+# Circles wider than the cup: the rod would cut through the wall.
+STIR_WIDE = np.array([0.045, 0.02, 2.0, 0.1])
+
+
+@pytest.fixture(scope="module")
+def backend() -> SkillBackend:
+    backend = load_backend("pybullet")
+    yield backend
+    backend.close()
+
+
+def test_push_and_stir_are_registered_with_their_spaces(backend: SkillBackend) -> None:
+    skills = backend.skills()
+    assert skills["push"].context.dim == 4 and skills["push"].control.dim == 4
+    assert skills["stir"].context.dim == 3 and skills["stir"].control.dim == 4
+    rng = np.random.default_rng(0)
+    context = backend.sample_context("push", rng)
+    spec = skills["push"]
+    assert np.all(context >= spec.context.low_array()) and np.all(
+        context <= spec.context.high_array())
+
+
+def test_push_score_crosses_zero_at_the_tolerance_and_toppling_fails() -> None:
+    assert push_score(0.0, 0.0) == 1.0
+    assert push_score(PUSH_TOLERANCE_M, 0.0) == pytest.approx(0.0)
+    assert push_score(2 * PUSH_TOLERANCE_M, 0.0) == pytest.approx(-1.0)
+    assert push_score(10.0, 0.0) == -1.0
+    assert push_score(0.0, math.radians(60)) == -1.0
+
+
+def test_push_path_is_a_straight_line_along_x_ending_at_the_contact_point() -> None:
+    scene = PushContext.from_array(PUSH_CONTEXT)
+    path = push_path(scene, PUSH_GOOD)
+    assert np.allclose(path.positions[:, 1:], path.positions[0, 1:])
+    # The pad's front face ends where the block's back face is when its centre is on target.
+    front = path.positions[-1, 0] + 0.008
+    assert front == pytest.approx(scene.distance - scene.size / 2)
+
+
+def test_push_validity_rejects_a_pad_that_would_touch_the_table(backend: SkillBackend) -> None:
+    valid = backend.is_valid("push", PUSH_CONTEXT, np.stack([PUSH_GOOD, PUSH_LOW]))
+    assert valid.tolist() == [True, False]
+    result = backend.run_trial("push", PUSH_CONTEXT, PUSH_LOW, seed=0)
+    assert not result.valid and result.score == -1.0
+
+
+def test_good_push_reaches_the_target_and_a_short_one_fails(backend: SkillBackend) -> None:
+    good = backend.run_trial("push", PUSH_CONTEXT, PUSH_GOOD, seed=0)
+    short = backend.run_trial("push", PUSH_CONTEXT, PUSH_SHORT, seed=0)
+    assert good.valid and good.info["error_m"] < 0.01 and good.score > 0.4
+    assert not good.info["toppled"]
+    # Stopping 5 cm short leaves the block about 5 cm short.
+    assert short.score == -1.0 and 0.04 < short.info["error_m"] < 0.06
+    assert short.info["final_xy"][0] < good.info["final_xy"][0] - 0.04
+
+
+def test_push_is_deterministic_given_the_seed(backend: SkillBackend) -> None:
+    a = backend.run_trial("push", PUSH_CONTEXT, PUSH_GOOD, seed=3)
+    b = backend.run_trial("push", PUSH_CONTEXT, PUSH_GOOD, seed=3)
+    assert a.info["final_xy"] == b.info["final_xy"]
+
+
+def test_stir_path_circles_about_the_cup_axis_at_the_tip_height() -> None:
+    path = stir_path(cup_of(STIR_CONTEXT), STIR_GOOD)
+    circle = path.positions[2:-2]
+    assert np.allclose(np.hypot(circle[:, 0], circle[:, 1]), STIR_GOOD[0])
+    assert np.allclose(circle[:, 2], STIR_GOOD[1])
+    assert path.positions[0, 2] > NOMINAL_CUP.height and path.positions[-1, 2] > NOMINAL_CUP.height
+
+
+def test_tip_tracker_needs_time_and_travel_inside() -> None:
+    prism = ContainmentPrism((-0.03, -0.03, 0.003), (0.03, 0.03, 0.1))
+    dt = 1.0 / 240.0
+    still = TipTracker(prism, dt)
+    for _ in range(int(STIR_MIN_TIME_S / dt) + 10):
+        still.add(np.array([0.0, 0.0, 0.02]))  # inside, but not moving
+    assert not still.stirred
+    outside = TipTracker(prism, dt)
+    for angle in np.linspace(0, 4 * math.pi, 400):
+        outside.add(np.array([0.05 * math.cos(angle), 0.05 * math.sin(angle), 0.02]))
+    assert not outside.stirred and outside.time_inside_s == 0.0
+    moving = TipTracker(prism, dt)
+    for angle in np.linspace(0, 4 * math.pi, 400):
+        moving.add(np.array([0.02 * math.cos(angle), 0.02 * math.sin(angle), 0.02]))
+    assert moving.stirred
+
+
+def test_stir_validity_rejects_circles_through_the_wall(backend: SkillBackend) -> None:
+    valid = backend.is_valid("stir", STIR_CONTEXT, np.stack([STIR_GOOD, STIR_ABOVE, STIR_WIDE]))
+    assert valid.tolist() == [True, True, False]
+
+
+@pytest.mark.slow
+def test_stir_keeps_every_bead_in_the_cup_and_displaces_them(backend: SkillBackend) -> None:
+    good = backend.run_trial("stir", STIR_CONTEXT, STIR_GOOD, seed=0)
+    above = backend.run_trial("stir", STIR_CONTEXT, STIR_ABOVE, seed=0)
+    # Conservation: every bead that started in the cup is still in it, none lost.
+    for result in (good, above):
+        assert result.info["beads_in_cup_start"] == result.info["beads_total"]
+        assert result.info["beads_in_cup_end"] == result.info["beads_total"]
+        assert result.info["fraction_kept"] == 1.0 and result.info["beads_lost"] == 0
+    assert good.info["stirred"] and good.score > 0
+    # Stirring moved the beads several times further than settling alone did.
+    assert good.info["mean_displacement_m"] > 3 * above.info["mean_displacement_m"]
+    assert not above.info["stirred"] and above.score == -1.0
