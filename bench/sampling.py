@@ -45,10 +45,12 @@ def trained_model(backend, skill: str, budget: int, cache: Path) -> LevelSetMode
     return result.model
 
 
-def bench_skill(backend, skill: str, model: LevelSetModel, runs: int, lam: float) -> dict:
+def bench_skill(backend, skill: str, model: LevelSetModel, runs: int, lam: float,
+                validate: bool | None = None) -> dict:
+    """``validate``: apply ``backend.is_valid`` inside the samplers (default: skill8d only)."""
     spec = model.spec
     validity = None
-    if skill == "skill8d":
+    if validate or (validate is None and skill == "skill8d"):
         def validity(context, controls):
             return backend.is_valid(skill, context, controls)
     rows: dict[str, list] = {name: [] for name in SAMPLERS}
