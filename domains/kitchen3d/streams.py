@@ -1,40 +1,85 @@
-"""Python bindings of the kitchen3d streams (PyBullet Kitchen3D geometry + GoodPour).
+"""Python bindings of the kitchen3d streams (PyBullet Kitchen3D geometry + GoodPour/GoodScoop).
 
 The scene's shapes come from ``world`` (:mod:`ltamp_cli.backends.pybullet.tamp.scene`);
-movable objects' poses are planner values ``(x, y)``. One headless PyBullet world per
-planning run answers IK, motion and collision queries
-(:class:`~ltamp_cli.backends.pybullet.tamp.planning.PlanningWorld`).
+movable objects' poses are planner values ``(x, y)``; arms are planner objects whose value
+is the arm index (``r0: 0``). One headless PyBullet world per planning run answers IK,
+motion and collision queries (:class:`~ltamp_cli.backends.pybullet.tamp.planning.PlanningWorld`).
 
-GoodPour is learned: ``world.learned_streams.sample-pour`` (``model`` relative to this
-folder; default ``../../models/kitchen3d/pour`` with the ``adaptive`` sampler) yields
-controls from the GP level-set model's confident set, each passing the skill's geometric
-pre-check; each control's cup path is followed by the arm (``follow-obj-path``) or skipped.
+GoodPour and GoodScoop are learned: ``world.learned_streams.sample-pour`` /
+``sample-scoop`` (``model`` relative to this folder; defaults ``../../models/kitchen3d/pour``
+and ``.../scoop`` with the ``adaptive`` sampler) yield controls from the GP level-set model's
+confident set, each passing the skill's geometric pre-check; each control's tool path is
+followed by the arm (``follow-obj-path``) or skipped. Dump, stir and push are engineered
+paths (:mod:`ltamp_cli.backends.pybullet.tamp.skill_paths`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+import math
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ltamp_cli.backends.pybullet.skills.pour import pour_is_valid
+from ltamp_cli.backends.pybullet.skills.scoop import scoop_is_valid
+from ltamp_cli.backends.pybullet.tamp import skill_paths
 from ltamp_cli.backends.pybullet.tamp.planning import PlanningWorld
 from ltamp_cli.backends.pybullet.tamp.scene import scene_from_world
-from ltamp_cli.backends.pybullet.tamp.skill_paths import pour_context, pour_tool_poses
 from ltamp_cli.backends.pybullet.tamp.values import ArmConf, ArmPath, GraspValue, as_conf
-from ltamp_cli.learned_streams.stream import LearnedStream, learned_stream_configs
+from ltamp_cli.learned_streams.stream import (
+    LearnedStream,
+    LearnedStreamConfig,
+    learned_stream_configs,
+)
 from ltamp_cli.planner.streams import Binding, StreamInfo
 
 HERE = Path(__file__).resolve().parent
-#: Controls a GoodPour call tries before reporting "nothing this call".
-POUR_TRIES_PER_CALL = 8
-DEFAULT_LEARNED = {"sample-pour": {"model": "../../models/kitchen3d/pour", "sampler": "adaptive"}}
+#: Controls a learned stream call tries before reporting "nothing this call".
+TRIES_PER_CALL = 8
+DEFAULT_LEARNED = {
+    "sample-pour": {"model": "../../models/kitchen3d/pour", "sampler": "adaptive"},
+    "sample-scoop": {"model": "../../models/kitchen3d/scoop", "sampler": "adaptive"},
+}
+#: Skill-frame yaws tried around a target, as offsets from the heading of the arm's base
+#: to the target (radians): facing the arm first, then further round.
+YAW_OFFSETS = tuple(k * math.pi / 4 for k in (0, 1, -1, 2, -2, 3, -3, 4))
 
 
 def _xy(value: Any) -> tuple[float, float]:
     return (round(float(value[0]), 4), round(float(value[1]), 4))
+
+
+class _LearnedSkill:
+    """A learned stream loaded on first use, with the planner's feedback wired to it, whose
+    calls try a few controls before giving the planner back control."""
+
+    def __init__(self, config: LearnedStreamConfig, to_context: Callable[..., np.ndarray],
+                 to_outputs: Callable[..., tuple[Any, ...] | None],
+                 rng: np.random.Generator) -> None:
+        self._args = (config, to_context, to_outputs, rng)
+        self.stream: LearnedStream | None = None
+
+    def __call__(self, *inputs: Any) -> Iterator[list[tuple[Any, ...]]]:
+        if self.stream is None:  # the model is loaded on first use only
+            self.stream = LearnedStream(*self._args)
+        misses = 0
+        for outputs in self.stream(*inputs):
+            if outputs:
+                misses = 0
+                yield [outputs]
+            else:
+                misses += 1
+                # The most confident controls are often out of the arm's reach: try a few
+                # per call so that one call usually succeeds, but give the planner back
+                # control now and then.
+                if misses % TRIES_PER_CALL == 0:
+                    yield []
+
+    def feedback(self, inputs: tuple[Any, ...], outputs: tuple[Any, ...]) -> None:
+        if self.stream is not None:
+            self.stream.on_unusable(inputs, outputs)
 
 
 def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str, Any]:
@@ -44,6 +89,14 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
     configs = learned_stream_configs({"learned_streams": learned}, HERE)
     table_z = planning.table_z
     motion_seed = iter(range(1, 1_000_000))
+
+    def arm_of(r: Any) -> int | None:
+        arm = int(r)
+        return arm if 0 <= arm < scene.n_arms else None
+
+    def yaws(arm: int, xy: tuple[float, float]) -> list[float]:
+        heading = planning.base_yaw(arm, xy)
+        return [heading + offset for offset in YAW_OFFSETS]
 
     def sample_placement(name: str, region: str) -> Iterator[tuple[tuple[float, float]]]:
         area = scene.regions[region]
@@ -58,70 +111,128 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         for value in planning.grasp_values(name):
             yield (value,)
 
-    def inverse_kinematics(name: str, pose: Any, grasp: GraspValue
+    def inverse_kinematics(r: Any, name: str, pose: Any, grasp: GraspValue
                            ) -> Iterator[list[tuple[ArmConf, ArmPath]]]:
-        yield list(planning.pick_kinematics(name, _xy(pose), tuple(grasp), rng))  # type: ignore[arg-type]
+        arm = arm_of(r)
+        if arm is None:
+            return
+        yield list(planning.pick_kinematics(name, _xy(pose), tuple(grasp), rng,  # type: ignore[arg-type]
+                                            arms=(arm,)))
 
-    def plan_free_motion(q1: ArmConf, q2: ArmConf) -> tuple[ArmPath] | None:
-        path = planning.plan_motion(as_conf(q1), as_conf(q2), None, next(motion_seed))
+    def plan_free_motion(r: Any, q1: ArmConf, q2: ArmConf) -> tuple[ArmPath] | None:
+        a, b = as_conf(q1), as_conf(q2)
+        if a.arm != arm_of(r):
+            return None
+        path = planning.plan_motion(a, b, None, next(motion_seed))
         return None if path is None else (path,)
 
-    def plan_holding_motion(name: str, grasp: GraspValue, q1: ArmConf, q2: ArmConf
+    def plan_holding_motion(r: Any, name: str, grasp: GraspValue, q1: ArmConf, q2: ArmConf
                             ) -> tuple[ArmPath] | None:
-        path = planning.plan_motion(as_conf(q1), as_conf(q2), (name, tuple(grasp)),  # type: ignore[arg-type]
-                                    next(motion_seed))
+        a, b = as_conf(q1), as_conf(q2)
+        if a.arm != arm_of(r):
+            return None
+        path = planning.plan_motion(a, b, (name, tuple(grasp)), next(motion_seed))  # type: ignore[arg-type]
         return None if path is None else (path,)
 
-    def pour_outputs(control: np.ndarray, cup: str, grasp: GraspValue, bowl: str, pose: Any
-                     ) -> tuple[Any, ...] | None:
+    # Learned skills ----------------------------------------------------------------------
+
+    def pour_outputs(control: np.ndarray, r: Any, cup: str, grasp: GraspValue, bowl: str,
+                     pose: Any) -> tuple[Any, ...] | None:
+        arm = arm_of(r)
         g: GraspValue = tuple(grasp)  # type: ignore[assignment]
-        context = pour_context(scene.object(cup), scene.object(bowl))
+        context = skill_paths.pour_context(scene.object(cup), scene.object(bowl))
         # The skill's pre-check (~50 ms) runs on the sampled control only, not inside the
         # sampler on its thousands of candidates; None makes the learned stream draw again.
-        if not bool(pour_is_valid(context, control[None, :])[0]):
+        if arm is None or not bool(pour_is_valid(context, control[None, :])[0]):
             return None
-        for arm in range(scene.n_arms):
-            for psi, phi in planning.skill_yaws(cup, g, arm):
-                poses = pour_tool_poses(scene.object(cup), scene.object(bowl), _xy(pose),
-                                        table_z, control, psi, phi)
-                path = planning.follow_object_path(cup, g, poses, arm, rng, "pour")
-                if path is not None:
-                    return (path.start, path, tuple(round(float(v), 6) for v in control))
+        for psi, phi in planning.skill_yaws(cup, g, arm):
+            poses = skill_paths.pour_tool_poses(scene.object(cup), scene.object(bowl), _xy(pose),
+                                                table_z, control, psi, phi)
+            path = planning.follow_object_path(cup, g, poses, arm, rng, "pour")
+            if path is not None:
+                return (path.start, path, tuple(round(float(v), 6) for v in control))
         # Not None: the learned stream would silently draw again; an empty tuple lets the
         # planner's call end ("nothing this call") and try other streams meanwhile.
         return ()
 
-    learned_streams: dict[str, LearnedStream] = {}
+    def scoop_outputs(control: np.ndarray, r: Any, spoon: str, grasp: GraspValue, bowl: str,
+                      pose: Any) -> tuple[Any, ...] | None:
+        arm = arm_of(r)
+        g: GraspValue = tuple(grasp)  # type: ignore[assignment]
+        context = skill_paths.scoop_context(scene.object(bowl), scene.object(spoon))
+        if arm is None or not bool(scoop_is_valid(context, control[None, :])[0]):
+            return None
+        for psi in yaws(arm, _xy(pose)):
+            poses = skill_paths.scoop_tool_poses(scene.object(bowl), scene.object(spoon),
+                                                 _xy(pose), table_z, control, psi)
+            path = planning.follow_object_path(spoon, g, poses, arm, rng, "scoop", target=bowl)
+            if path is not None:
+                return (path.start, path.end, path, tuple(round(float(v), 6) for v in control))
+        return ()
 
-    def pour_stream() -> LearnedStream:
-        if "sample-pour" not in learned_streams:  # the model is loaded on first use only
-            learned_streams["sample-pour"] = LearnedStream(
-                configs["sample-pour"],
-                lambda cup, grasp, bowl, pose: pour_context(scene.object(cup),
-                                                            scene.object(bowl)),
-                pour_outputs, rng)
-        return learned_streams["sample-pour"]
+    pour = _LearnedSkill(
+        configs["sample-pour"],
+        lambda r, cup, grasp, bowl, pose: skill_paths.pour_context(scene.object(cup),
+                                                                   scene.object(bowl)),
+        pour_outputs, rng)
+    scoop = _LearnedSkill(
+        configs["sample-scoop"],
+        lambda r, spoon, grasp, bowl, pose: skill_paths.scoop_context(scene.object(bowl),
+                                                                      scene.object(spoon)),
+        scoop_outputs, rng)
 
-    def pour_feedback(inputs: tuple[Any, ...], outputs: tuple[Any, ...]) -> None:
-        if "sample-pour" in learned_streams:
-            learned_streams["sample-pour"].on_unusable(inputs, outputs)
-
-    def sample_pour(cup: str, grasp: GraspValue, bowl: str, pose: Any
+    def sample_pour(r: Any, cup: str, grasp: GraspValue, bowl: str, pose: Any
                     ) -> Iterator[list[tuple[Any, ...]]]:
         if scene.object(cup).kind != "cup" or scene.object(bowl).kind not in ("bowl", "cup"):
             return
-        misses = 0
-        for outputs in pour_stream()(cup, grasp, bowl, pose):
-            if outputs:
-                misses = 0
-                yield [outputs]
-            else:
-                misses += 1
-                # Most confident controls often put the hand into the bowl's rim: try a few
-                # per call so that one call usually succeeds, but give the planner back
-                # control now and then.
-                if misses % POUR_TRIES_PER_CALL == 0:
-                    yield []
+        yield from pour(r, cup, grasp, bowl, pose)
+
+    def sample_scoop(r: Any, spoon: str, grasp: GraspValue, bowl: str, pose: Any
+                     ) -> Iterator[list[tuple[Any, ...]]]:
+        if scene.object(spoon).kind != "spoon" or scene.object(bowl).kind != "bowl":
+            return
+        yield from scoop(r, spoon, grasp, bowl, pose)
+
+    # Engineered skills -------------------------------------------------------------------
+
+    def sample_dump(r: Any, spoon: str, grasp: GraspValue, cup: str, pose: Any
+                    ) -> Iterator[list[tuple[ArmConf, ArmPath]]]:
+        arm = arm_of(r)
+        if arm is None or scene.object(spoon).kind != "spoon" or scene.object(cup).kind not in (
+                "bowl", "cup"):
+            return
+        g: GraspValue = tuple(grasp)  # type: ignore[assignment]
+        for psi in yaws(arm, _xy(pose)):
+            for sign in (1.0, -1.0):
+                poses = skill_paths.dump_tool_poses(scene.object(spoon), scene.object(cup),
+                                                    _xy(pose), table_z, psi, sign)
+                path = planning.follow_object_path(spoon, g, poses, arm, rng, "dump")
+                yield [] if path is None else [(path.start, path)]
+
+    def sample_stir(r: Any, stirrer: str, grasp: GraspValue, cup: str, pose: Any
+                    ) -> Iterator[list[tuple[ArmConf, ArmPath]]]:
+        arm = arm_of(r)
+        if arm is None or scene.object(stirrer).kind != "stirrer" or scene.object(
+                cup).kind not in ("bowl", "cup"):
+            return
+        g: GraspValue = tuple(grasp)  # type: ignore[assignment]
+        for phi in YAW_OFFSETS:  # the rod is symmetric: its spin only changes the wrist
+            poses = skill_paths.stir_tool_poses(scene.object(stirrer), scene.object(cup),
+                                                _xy(pose), table_z, phi)
+            path = planning.follow_object_path(stirrer, g, poses, arm, rng, "stir")
+            yield [] if path is None else [(path.start, path)]
+
+    def sample_push(r: Any, name: str, start: Any, goal: Any
+                    ) -> Iterator[list[tuple[ArmConf, ArmConf, ArmPath]]]:
+        arm = arm_of(r)
+        a, b = _xy(start), _xy(goal)
+        if arm is None or a == b:
+            return
+        heading = math.atan2(b[1] - a[1], b[0] - a[0])
+        for hand_yaw in (heading, heading + math.pi / 2):  # fingers across or along the line
+            poses = skill_paths.push_hand_poses(scene.object(name), a, b, table_z, hand_yaw)
+            path = planning.follow_hand_path(poses, arm, rng, "push", touching=name)
+            yield [] if path is None else [(path.start, path.end, path)]
 
     def test_cfree(a: str, pa: Any, b: str, pb: Any) -> bool:
         return not planning.footprints_overlap(a, _xy(pa), b, _xy(pb))
@@ -129,7 +240,7 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
     def test_cfree_traj(path: ArmPath, name: str, pose: Any) -> bool:
         return not planning.path_collides(path, name, _xy(pose))
 
-    def distance(q1: ArmConf, q2: ArmConf) -> float:
+    def distance(r: Any, q1: ArmConf, q2: ArmConf) -> float:
         return round(1.0 + float(np.linalg.norm(as_conf(q1).array - as_conf(q2).array)), 4)
 
     return {
@@ -140,7 +251,12 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         "plan-free-motion": Binding(plan_free_motion, StreamInfo(overhead=0.2)),
         "plan-holding-motion": Binding(plan_holding_motion, StreamInfo(overhead=0.2)),
         "sample-pour": Binding(sample_pour, StreamInfo(p_success=0.5, overhead=1.0),
-                               on_unusable=pour_feedback),
+                               on_unusable=pour.feedback),
+        "sample-scoop": Binding(sample_scoop, StreamInfo(p_success=0.5, overhead=1.0),
+                                on_unusable=scoop.feedback),
+        "sample-dump": Binding(sample_dump, StreamInfo(p_success=0.5, overhead=0.5)),
+        "sample-stir": Binding(sample_stir, StreamInfo(p_success=0.5, overhead=0.5)),
+        "sample-push": Binding(sample_push, StreamInfo(p_success=0.5, overhead=0.5)),
         "test-cfree": Binding(test_cfree, StreamInfo(eager=True, overhead=0.001)),
         "test-cfree-traj": Binding(test_cfree_traj, StreamInfo(eager=True, overhead=0.01)),
         "distance": distance,

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import weakref
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -98,42 +98,50 @@ class PlanningWorld:
         index = self._park_slot[name] if slot is None else slot
         self.bodies[name].set_pose((PARK_DISTANCE_M + 2.0 * index, PARK_DISTANCE_M, 0.0))
 
-    def fixed_bodies(self) -> tuple[int, ...]:
-        return tuple(self.bodies[n].body for n, o in self.spec.objects.items() if o.fixed)
+    def fixed_bodies(self, exclude: Sequence[str] = ()) -> tuple[int, ...]:
+        return tuple(self.bodies[n].body for n, o in self.spec.objects.items()
+                     if o.fixed and n not in exclude)
 
-    def obstacles(self, arm: int, extra: Sequence[str] = ()) -> tuple[int, ...]:
-        """Static scenery, the other arm, the fixed objects and the named movable ones."""
-        bodies = (*self.fixed_bodies(), *(self.bodies[name].body for name in extra))
+    def obstacles(self, arm: int, extra: Sequence[str] = (), exclude: Sequence[str] = ()
+                  ) -> tuple[int, ...]:
+        """Static scenery, the other arm, the fixed objects (but ``exclude``) and the named
+        movable ones."""
+        bodies = (*self.fixed_bodies(exclude), *(self.bodies[name].body for name in extra))
         return self.scene.obstacles_for(arm, bodies)
 
     def grasp(self, name: str, grasp: GraspValue) -> Grasp:
         return self.grasps[name][grasp[1]]
 
     def checker(self, arm: int, held: tuple[str, GraspValue] | None = None,
-                extra: Sequence[str] = (), carries_contents: bool = True) -> ArmCollisionChecker:
+                extra: Sequence[str] = (), carries_contents: bool = True,
+                exclude: Sequence[str] = ()) -> ArmCollisionChecker:
         attached = None
         if held is not None:
             name, g = held
-            carrying = carries_contents and self.spec.objects[name].contents is not None
+            # A spoon may carry a spoonful (the stream cannot know the fluent): keep it level.
+            spec = self.spec.objects[name]
+            carrying = carries_contents and (spec.contents is not None or spec.kind == "spoon")
             attached = AttachedBody(self.bodies[name].body, self.grasp(name, g).tool_in_gripper,
                                     carrying)
-        return ArmCollisionChecker(self.scene.arms[arm], self.obstacles(arm, extra), attached)
+        return ArmCollisionChecker(self.scene.arms[arm], self.obstacles(arm, extra, exclude),
+                                   attached)
 
     # Stream queries ----------------------------------------------------------------------
 
     def grasp_values(self, name: str) -> list[GraspValue]:
         return [(g.kind, i) for i, g in enumerate(self.grasps[name])]
 
-    def pick_kinematics(self, name: str, xy: XY, grasp: GraspValue, rng: np.random.Generator
-                        ) -> Iterator[tuple[ArmConf, ArmPath]]:
-        """For each arm that reaches it: the pre-grasp conf and the approach path to the
-        grasp (checked with ``name`` at ``xy`` as an obstacle, and carrying it back out)."""
+    def pick_kinematics(self, name: str, xy: XY, grasp: GraspValue, rng: np.random.Generator,
+                        arms: Sequence[int] | None = None) -> Iterator[tuple[ArmConf, ArmPath]]:
+        """For each of ``arms`` (default: all) that reaches it: the pre-grasp conf and the
+        approach path to the grasp (checked with ``name`` at ``xy`` as an obstacle, and
+        carrying it back out)."""
         g = self.grasp(name, grasp)
         object_pose = pose_of(xy, self.table_z)
         at_grasp = g.gripper_pose(object_pose)
         above = Pose(at_grasp.position + np.array([0.0, 0.0, LIFT_M]), at_grasp.quaternion)
         back = above @ Pose(np.array([0.0, 0.0, -RETREAT_M]))
-        for arm in range(self.spec.n_arms):
+        for arm in range(self.spec.n_arms) if arms is None else arms:
             self.place(name, xy)
             try:
                 into = follow_tool_path(self.scene.arms[arm], [back, above, at_grasp], Pose(), rng,
@@ -171,20 +179,55 @@ class PlanningWorld:
         return ArmPath(q1.arm, plan.path, "holding" if held else "free", held)
 
     def follow_object_path(self, name: str, grasp: GraspValue, poses: Sequence[Pose], arm: int,
-                           rng: np.random.Generator, kind: str) -> ArmPath | None:
+                           rng: np.random.Generator, kind: str, target: str | None = None
+                           ) -> ArmPath | None:
         """``follow-obj-path``: arm configurations carrying ``name`` along ``poses``
-        (world), collision-free with the fixed scenery; no tilt limit (the skill tilts)."""
+        (world), collision-free with the fixed scenery; no tilt limit (the skill tilts).
+
+        ``target``: a fixed object the *held tool* may touch (a spoon dragged through a
+        bowl; the skill's own geometric pre-check has validated that path against it); the
+        arm must still clear it."""
         g = self.grasp(name, grasp)
-        checker = self.checker(arm, held=(name, grasp), carries_contents=False)
+        touchable = (target,) if target is not None and self.spec.objects[target].fixed else ()
+        checker = self.checker(arm, held=(name, grasp), carries_contents=False,
+                               exclude=touchable)
+        is_valid: Callable[[np.ndarray], bool] = checker
+        if touchable:
+            target_body = self.bodies[touchable[0]].body
+            robot = self.scene.arms[arm].body_id
+
+            def is_valid(q: np.ndarray) -> bool:  # the arm alone against the target
+                if not checker(q):
+                    return False
+                points = p.getClosestPoints(robot, target_body, 0.0, physicsClientId=self.client)
+                return not any(c[8] < -1e-3 for c in points)
+
         try:
             found = follow_tool_path(self.scene.arms[arm], poses, g.tool_in_gripper, rng,
-                                     is_valid=checker, config=self.cartesian)
+                                     is_valid=is_valid, config=self.cartesian)
         finally:
             self.park(name)
         if not found.success:
             return None
         assert found.configurations is not None
         return ArmPath(arm, found.configurations, kind, (name, grasp))
+
+    def follow_hand_path(self, poses: Sequence[Pose], arm: int, rng: np.random.Generator,
+                         kind: str, touching: str | None = None) -> ArmPath | None:
+        """Arm configurations moving the empty hand's grasp target along ``poses`` (world),
+        collision-free with the fixed scenery (movable objects: ``CFreeTraj``)."""
+        found = follow_tool_path(self.scene.arms[arm], poses, Pose(), rng,
+                                 is_valid=self.checker(arm), config=self.cartesian)
+        if not found.success:
+            return None
+        assert found.configurations is not None
+        return ArmPath(arm, found.configurations, kind, None, touching=touching)
+
+    def base_yaw(self, arm: int, xy: XY) -> float:
+        """Heading (radians) from arm ``arm``'s base to the table point ``xy``."""
+        base = np.asarray(p.getBasePositionAndOrientation(
+            self.scene.arms[arm].body_id, physicsClientId=self.client)[0])
+        return math.atan2(float(xy[1]) - float(base[1]), float(xy[0]) - float(base[0]))
 
     def skill_yaws(self, name: str, grasp: GraspValue, arm: int) -> list[tuple[float, float]]:
         """``(ψ, φ)`` pairs for a skill whose tool tilts about its skill-frame ``y`` axis:

@@ -1,19 +1,47 @@
-"""Learned-skill tool paths placed in the kitchen: the skill-frame path of a control, turned
-and moved onto the target object standing on the table.
+"""Skill tool paths placed in the kitchen: the skill-frame path of a control (learned pour and
+scoop) or an engineered tool path (dump, stir, push), turned and moved onto the target object
+standing on the table.
 
-The skills are symmetric about the target's vertical axis (revolved bowls) and about the
-tool's own axis (revolved cups), so a skill path may be turned by ``ψ`` about the target and
-the tool by ``φ`` about its axis without changing the physics the skill model learned.
+The learned skills are symmetric about the target's vertical axis (revolved bowls), so a skill
+path may be turned by ``ψ`` about the target without changing the physics the skill model
+learned; pours may also turn the (revolved) cup by ``φ`` about its own axis. All functions
+return world poses of the tool's object frame (the spoon, stirrer or cup base frame; for push,
+the gripper's grasp-target frame).
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from ltamp_cli.backends.kitchenware_geometry import SpoonDims
+from ltamp_cli.backends.pybullet.paths import rotation_about_axis
 from ltamp_cli.backends.pybullet.robot.pose import Pose
 from ltamp_cli.backends.pybullet.skills.pour import PourContext, pour_path
+from ltamp_cli.backends.pybullet.skills.scoop import ScoopContext, scoop_path
 from ltamp_cli.backends.pybullet.tamp.planning import pose_of
 from ltamp_cli.backends.pybullet.tamp.scene import XY, ObjectSpec
+
+#: Height (m) above a container's rim of an upright spoon or stirrer entering/leaving it.
+ABOVE_RIM_M = 0.05
+#: How far the spoon rolls (radians about its own ``y`` axis, along the handle) to dump its
+#: contents: past the side, so that the shallow head empties, while the hand stays beside
+#: the spoon rather than under it.
+DUMP_ANGLE_RAD = math.radians(110.0)
+#: Stirrer: its tip this high (m) above the cup's floor, circling this fraction of the
+#: inner radius, with this many waypoints per turn and this many turns.
+STIR_TIP_CLEARANCE_M = 0.015
+STIR_RADIUS_FRACTION = 0.45
+STIR_WAYPOINTS = 8
+STIR_TURNS = 2
+#: Push: hand height (m) above the table, clearance (m) behind the object before contact,
+#: and the lift (m) before and after.
+PUSH_HEIGHT_M = 0.035
+PUSH_GAP_M = 0.03
+PUSH_LIFT_M = 0.1
+#: Half the closed fingers' thickness along the push direction (m).
+FINGER_HALF_M = 0.012
 
 
 def pour_context(cup: ObjectSpec, bowl: ObjectSpec) -> np.ndarray:
@@ -29,3 +57,85 @@ def pour_tool_poses(cup: ObjectSpec, bowl: ObjectSpec, bowl_xy: XY, table_z: flo
     spin = Pose.from_euler(np.zeros(3), yaw=phi)
     return [frame @ Pose(position, quaternion) @ spin
             for position, quaternion in zip(path.positions, path.quaternions, strict=True)]
+
+
+def scoop_context(bowl: ObjectSpec, spoon: ObjectSpec) -> np.ndarray:
+    """The GoodScoop context ``(4,)`` of scooping from ``bowl`` with ``spoon``."""
+    return ScoopContext(bowl.vessel(), SpoonDims(float(spoon.dims["length"]))).to_array()
+
+
+def scoop_tool_poses(bowl: ObjectSpec, spoon: ObjectSpec, bowl_xy: XY, table_z: float,
+                     control: np.ndarray, psi: float) -> list[Pose]:
+    """World poses of the spoon frame along the scoop of ``control`` (5,), preceded by the
+    spoon upright above the entry point (so that the arm reaches the scoop carrying the spoon
+    level, and tilts it over the bowl)."""
+    context = ScoopContext(bowl.vessel(), SpoonDims(float(spoon.dims["length"])))
+    path = scoop_path(context, np.asarray(control, dtype=float))
+    frame = pose_of(bowl_xy, table_z, yaw=psi)
+    poses = [frame @ Pose(position, quaternion)
+             for position, quaternion in zip(path.positions, path.quaternions, strict=True)]
+    upright = frame @ Pose(path.positions[0] + np.array([0.0, 0.0, ABOVE_RIM_M]))
+    return [upright, *poses]
+
+
+def dump_tool_poses(spoon: ObjectSpec, cup: ObjectSpec, cup_xy: XY, table_z: float,
+                    psi: float, sign: float = 1.0, steps: int = 6) -> list[Pose]:
+    """World poses of the spoon frame turning over above ``cup``: the head's centre stays
+    ``ABOVE_RIM_M`` over the cup's axis while the spoon rolls by ``sign * DUMP_ANGLE_RAD``
+    about its own ``y`` axis (the handle's direction), in ``steps``; the spoon's yaw about
+    the cup is ``psi``."""
+    head = SpoonDims(float(spoon.dims["length"])).head()
+    pivot = np.array([0.0, 0.0, head.height / 2.0])  # the head's centre, spoon frame
+    frame = pose_of(cup_xy, table_z, yaw=psi)
+    centre = np.array([0.0, 0.0, cup.height + ABOVE_RIM_M + head.height])
+    poses = []
+    for angle in np.linspace(0.0, sign * DUMP_ANGLE_RAD, steps + 1):
+        rotation = rotation_about_axis("y", float(angle))
+        turned = Pose(np.zeros(3), rotation)
+        # Place so that the pivot sits at ``centre``: p = centre - R @ pivot.
+        position = centre - turned.rotation() @ pivot
+        poses.append(frame @ Pose(position, rotation))
+    return poses
+
+
+def stir_tool_poses(stirrer: ObjectSpec, cup: ObjectSpec, cup_xy: XY, table_z: float,
+                    phi: float) -> list[Pose]:
+    """World poses of the upright stirrer (rod base frame, turned ``phi`` about the rod):
+    above the cup's centre, down to near its floor, ``STIR_TURNS`` circles, back to the
+    centre. The executor follows them forward and then backward (up out of the cup)."""
+    dims = cup.vessel()
+    tip_z = dims.thickness + STIR_TIP_CLEARANCE_M
+    radius = STIR_RADIUS_FRACTION * (float(dims.outer_radius_at(tip_z)) - dims.thickness)
+    spin = Pose.from_euler(np.zeros(3), yaw=phi)
+    frame = pose_of(cup_xy, table_z)
+    above = cup.height + ABOVE_RIM_M
+    points = [np.array([0.0, 0.0, above]), np.array([0.0, 0.0, tip_z])]
+    for k in range(STIR_TURNS * STIR_WAYPOINTS + 1):
+        angle = 2.0 * math.pi * k / STIR_WAYPOINTS
+        points.append(np.array([radius * math.cos(angle), radius * math.sin(angle), tip_z]))
+    points.append(np.array([0.0, 0.0, tip_z]))
+    return [frame @ Pose(point) @ spin for point in points]
+
+
+def push_hand_poses(obj: ObjectSpec, start: XY, goal: XY, table_z: float, hand_yaw: float
+                    ) -> list[Pose]:
+    """World poses of the gripper (palm down, closed fingers) pushing ``obj`` in a straight
+    line from ``start`` to ``goal``: above the point behind it, down, along the line until the
+    object's centre reaches ``goal``, back off by ``PUSH_GAP_M`` and up (away from the
+    object, so the hand does not hover over it). ``hand_yaw`` turns the hand about the
+    vertical."""
+    s, g = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
+    direction = (g - s) / max(float(np.linalg.norm(g - s)), 1e-9)
+    behind = float(obj.footprint()[0]) + FINGER_HALF_M
+    down = Pose.from_euler(np.zeros(3), roll=math.pi, yaw=0.0)
+    turn = Pose.from_euler(np.zeros(3), yaw=hand_yaw)
+    z = table_z + PUSH_HEIGHT_M
+
+    def at(xy: np.ndarray, height: float) -> Pose:
+        return Pose(np.array([xy[0], xy[1], height])) @ turn @ down
+
+    first = s - direction * (behind + PUSH_GAP_M)
+    last = g - direction * behind
+    back = last - direction * PUSH_GAP_M
+    return [at(first, z + PUSH_LIFT_M), at(first, z), at(last, z), at(back, z),
+            at(back, z + PUSH_LIFT_M)]
