@@ -49,11 +49,10 @@ from ltamp_cli.planner.pddl.syntax import (
     StreamFile,
     TypedName,
 )
+from ltamp_cli.planner.problem_schema import validate_problem_document
 from ltamp_cli.yamlfile import YamlDocument
 
 BINDINGS_FACTORY = "make_streams"
-_TOP_LEVEL_KEYS = ("name", "domain", "bindings", "world", "objects", "init", "goal",
-                   "pddl_problem", "planner", "streams", "backend", "description")
 
 
 @dataclass
@@ -197,17 +196,12 @@ def load_problem(path: str | Path, domain_dir: str | Path | None = None) -> Plan
                              "bindings", SourceLocation(str(path)))
         return _from_pddl_problem(path, domain, str(path), {})
     doc = YamlDocument(path)
-    if not isinstance(doc.data, dict):
-        raise doc.error("a problem file must be a YAML mapping with at least 'domain' and "
-                        "'goal'")
-    for key in doc.data:
-        if key not in _TOP_LEVEL_KEYS:
-            raise doc.error(f"unknown field {key!r}: expected one of "
-                            f"{', '.join(_TOP_LEVEL_KEYS)}", key)
+    if isinstance(doc.data, dict) and not isinstance(doc.get("domain"), str):
+        raise doc.error("'domain' must name the domain folder (with domain.pddl)", "domain")
+    # Structure first (unknown keys, types, required fields), then the meaning of the values.
+    validate_problem_document(doc)
     base = path.parent
     domain_field = doc.get("domain")
-    if not isinstance(domain_field, str):
-        raise doc.error("'domain' must name the domain folder (with domain.pddl)", "domain")
     domain, stream_file = load_domain((base / domain_field), doc.location("domain"))
     planner_options = doc.get("planner", default={}) or {}
     if not isinstance(planner_options, dict):
