@@ -48,6 +48,7 @@ def solve(problem: PlanningProblem, config: PlannerConfig | None = None) -> Plan
         raise InputError(f"max time must be positive, got {config.max_time}")
     statistics = StreamStatistics.load(config.statistics_dir, problem.domain.name)
     state = initial_state(problem, config)
+    state.history = statistics.totals
     run = _algorithm(config.algorithm)
     best = run(state)
     improvements = [best.cost] if best.solved else []

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ltamp_cli.errors import InputError
+from ltamp_cli.planner.algorithms.effort import Effort, estimate_effort
 from ltamp_cli.planner.objects import ObjectTable
 from ltamp_cli.planner.pddl.syntax import (
     OBJECT_TYPE,
@@ -125,6 +126,13 @@ class PlannerState:
     # (:fluents stream, inputs) -> the contexts in which a call of it failed.
     failed_contexts: dict[tuple[str, tuple[str, ...]], list[Context]] = field(
         default_factory=dict)
+    # Per-stream totals persisted by earlier runs of this domain (calls, successes, time_s).
+    history: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
+
+    def effort(self, name: str) -> Effort:
+        """Expected success probability and overhead of a call of stream ``name``."""
+        return estimate_effort(self.bindings[name].info, self.history.get(name),
+                               self.stream_stats.get(name))
 
     def record_failure(self, instance: StreamInstance) -> None:
         external = instance.external

@@ -17,6 +17,7 @@ from ltamp_cli.planner.algorithms.common import (
     external_inputs,
     instantiate_atoms,
 )
+from ltamp_cli.planner.algorithms.effort import order_by_effort
 from ltamp_cli.planner.pddl.syntax import OBJECT_TYPE, Stream, StreamFunction
 from ltamp_cli.planner.search.ground import Context, Fact, FactIndex
 from ltamp_cli.planner.search.solve import DiscreteResult
@@ -121,25 +122,30 @@ def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: 
 
 def stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
                 needed: Iterable[Fact]) -> list[InstanceKey]:
-    """Instances to call, dependencies first, to make the needed optimistic facts real."""
-    ordered: list[InstanceKey] = []
-    visited: set[InstanceKey] = set()
+    """Instances to call to make the needed optimistic facts real: dependencies first, and
+    among independent instances the cheapest-to-fail first (:mod:`.effort`)."""
+    found: list[InstanceKey] = []
+    dependencies: dict[InstanceKey, set[InstanceKey]] = {}
 
     def visit(key: InstanceKey) -> None:
-        if key in visited:
+        if key in dependencies:
             return
-        visited.add(key)
+        before: set[InstanceKey] = set()
+        dependencies[key] = before
         name, inputs = key
         for value in inputs:
             producer = evaluation.object_producer.get(value)
             if producer is not None:
                 visit(producer)
+                before.add(producer)
         external = state.externals[name]
         mapping = dict(zip(external_inputs(external), inputs, strict=True))
         for fact in instantiate_atoms(external.domain, mapping):
             if fact not in state.facts.members and fact in evaluation.fact_producer:
-                visit(evaluation.fact_producer[fact])
-        ordered.append(key)
+                producer = evaluation.fact_producer[fact]
+                visit(producer)
+                before.add(producer)
+        found.append(key)
 
     for fact in sorted(needed):
         if fact in state.facts.members:
@@ -147,7 +153,8 @@ def stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
         key = evaluation.fact_producer.get(fact) or evaluation.fact_producer.get(("=", *fact))
         if key is not None:
             visit(key)
-    return ordered
+    effort = {name: state.effort(name) for name in {key[0] for key in found}}
+    return order_by_effort(found, dependencies, effort)
 
 
 def report_unusable(state: PlannerState, consumed: tuple[str, ...],

@@ -1,0 +1,63 @@
+"""Stream effort estimates and the effort order of stream plans."""
+
+from __future__ import annotations
+
+import pytest
+
+from ltamp_cli.planner.algorithms.effort import Effort, estimate_effort, order_by_effort
+from ltamp_cli.planner.streams import StreamInfo, StreamStats
+
+
+def test_prior_alone_gives_the_binding_hints() -> None:
+    effort = estimate_effort(StreamInfo(p_success=0.25, overhead=3.0), None, None)
+    assert effort.p_success == pytest.approx(0.25)
+    assert effort.overhead_s == pytest.approx(3.0)
+
+
+def test_history_and_run_outweigh_the_prior() -> None:
+    history = {"calls": 98.0, "successes": 49.0, "time_s": 0.98}
+    run = StreamStats(calls=100, successes=50, outputs=50, time_s=1.0)
+    effort = estimate_effort(StreamInfo(), history, run)
+    # 2 prior calls (p = 1, 1 s each) + 198 observed calls (p = 0.5, 0.01 s each).
+    assert effort.p_success == pytest.approx((2 + 99) / 200)
+    assert effort.overhead_s == pytest.approx((2 + 1.98) / 200)
+
+
+def test_cheap_likely_failures_go_first_but_never_before_their_inputs() -> None:
+    sample = ("sample", ("a",))
+    slow_test = ("slow-test", ("a",))
+    cheap_test = ("cheap-test", ("#p0",))
+    reliable = ("reliable", ("b",))
+    effort = {
+        "sample": Effort(0.9, 1.0),
+        "slow-test": Effort(0.5, 10.0),
+        "cheap-test": Effort(0.5, 0.01),
+        "reliable": Effort(1.0, 0.015),
+    }
+    dependencies = {cheap_test: {sample}}
+    order = order_by_effort([reliable, slow_test, sample, cheap_test], dependencies, effort)
+    assert order.index(sample) < order.index(cheap_test)
+    # Keys: sample 1 / 0.1 = 10, reliable 0.015 / 1e-3 = 15, slow-test 10 / 0.5 = 20; the
+    # cheap test (0.02) runs as soon as its input exists.
+    assert order == [sample, cheap_test, reliable, slow_test]
+
+
+def test_equal_efforts_keep_the_given_order() -> None:
+    keys = [("s", (str(i),)) for i in range(5)]
+    assert order_by_effort(keys, {}, {"s": Effort(1.0, 1.0)}) == keys
+
+
+def test_planner_state_blends_persisted_history(tmp_path) -> None:
+    from pathlib import Path
+
+    from ltamp_cli.planner.algorithms.common import PlannerConfig, initial_state
+    from ltamp_cli.planner.problem import load_problem
+
+    repo = Path(__file__).resolve().parents[2]
+    problem = load_problem(repo / "problems" / "examples" / "tamp2d_blocked.yaml")
+    state = initial_state(problem, PlannerConfig(seed=0))
+    fresh = state.effort("test-cfree")
+    state.history = {"test-cfree": {"calls": 1000.0, "successes": 100.0, "time_s": 0.5}}
+    informed = state.effort("test-cfree")
+    assert informed.p_success < 0.15 < fresh.p_success
+    assert informed.order_key < fresh.order_key
