@@ -59,7 +59,7 @@ def test_sapien_backend_implements_the_protocol_like_pybullet(
     assert isinstance(sapien_backend, SkillBackend)
     assert sapien_backend.name == "sapien"
     assert dict(sapien_backend.skills()) == dict(pybullet_backend.skills())
-    for skill in ("pour", "scoop"):
+    for skill in ("pour", "scoop", "push", "stir"):
         a = sapien_backend.sample_context(skill, np.random.default_rng(3))
         b = pybullet_backend.sample_context(skill, np.random.default_rng(3))
         assert np.array_equal(a, b)
@@ -68,8 +68,8 @@ def test_sapien_backend_implements_the_protocol_like_pybullet(
     valid = sapien_backend.is_valid("pour", POUR_CONTEXT, controls)
     assert valid.shape == (30,) and 0 < valid.sum() < 30
     assert np.array_equal(valid, pybullet_backend.is_valid("pour", POUR_CONTEXT, controls))
-    with pytest.raises(KeyError, match="stir"):
-        sapien_backend.sample_context("stir", rng)
+    with pytest.raises(KeyError, match="fly"):
+        sapien_backend.sample_context("fly", rng)
     with pytest.raises(ValueError, match="control of 5"):
         sapien_backend.run_trial("pour", POUR_CONTEXT, GOOD_POUR[:3], seed=0)
 

@@ -7,6 +7,26 @@ way the pour trials do. Cups, blocks and beads are dynamic: a released object fa
 settles, beads slosh and pour under gravity. Picks verify that both fingers are at the
 object before carrying it; places verify where the object came to rest. The goal is checked
 from bead positions and object poses, never from the plan.
+
+Actions (the arm is the last argument; every path value carries its arm index, so two-arm
+plans need nothing more): ``move-free``, ``move-holding``, ``pick``, ``place``, ``pour``,
+``scoop`` (forward only: the spoon ends above the rim holding a spoonful), ``dump`` (like
+``pour``: turn over, hold, turn back), ``stir`` (forward into the cup and circles, then back
+out) and ``push`` (hand empty, fingers closed, forward only; the object must come to rest
+within :data:`PUSH_TOLERANCE_M` of its target). Tools (spoons, stirrers) that are not held
+stand pinned where they were placed (a rod on its tip would fall over).
+
+Goal facts checked physically:
+
+* ``(Contains c m)``: a poured material (it started in a container): at least
+  :data:`CONTAINS_FRACTION` of the beads that started inside a container are in ``c``. A
+  scooped material: ``c`` holds at least :data:`SCOOP_CONTAINS_FRACTION` of the last
+  spoonful of ``m`` (beads in the spoon's head once the scoop had settled), and at least
+  :data:`SCOOP_CONTAINS_MIN_BEADS` beads.
+* ``(Stirred c)``: during some ``stir`` the stirrer's tip was inside ``c``'s containment
+  prism for :data:`~.skills.stir.STIR_MIN_TIME_S` s while travelling
+  :data:`~.skills.stir.STIR_MIN_TRAVEL_M` m inside it (the stir skill's rule).
+* ``(On o r)``: ``o``'s base centre is in region ``r``; ``(Holding o)``: ``o`` is carried.
 """
 
 from __future__ import annotations
@@ -25,6 +45,7 @@ from ltamp_cli.backends.pybullet.kitchenware import (
     BodyMaterial,
     KitchenwareBody,
     create_kitchenware,
+    world_to_object,
 )
 from ltamp_cli.backends.pybullet.particles import (
     BeadSpec,
@@ -34,9 +55,14 @@ from ltamp_cli.backends.pybullet.particles import (
     spawn_beads_in,
 )
 from ltamp_cli.backends.pybullet.render import Camera, FrameRecorder
-from ltamp_cli.backends.pybullet.robot.arm import PANDA_FINGER_JOINTS, PANDA_HOME
+from ltamp_cli.backends.pybullet.robot.arm import (
+    PANDA_ARM_JOINTS,
+    PANDA_FINGER_JOINTS,
+    PANDA_HOME,
+)
 from ltamp_cli.backends.pybullet.robot.pose import Pose
 from ltamp_cli.backends.pybullet.robot.scene import KitchenScene, build_kitchen_scene
+from ltamp_cli.backends.pybullet.skills.stir import TipTracker
 from ltamp_cli.backends.pybullet.tamp.grasping import object_grasps
 from ltamp_cli.backends.pybullet.tamp.planning import pose_of
 from ltamp_cli.backends.pybullet.tamp.scene import SceneSpec, scene_from_world
@@ -50,6 +76,16 @@ CONTAINS_FRACTION = 0.8
 PLACE_TOLERANCE_M = 0.02
 #: A pick needs both fingers within this distance (m) of the object.
 FINGER_CONTACT_M = 0.01
+#: A pushed object must come to rest this close (m) to its target pose.
+PUSH_TOLERANCE_M = 0.03
+#: ``(Contains c m)`` of a scooped material: this fraction of the last spoonful, and at
+#: least this many beads, in ``c``.
+SCOOP_CONTAINS_FRACTION = 0.5
+SCOOP_CONTAINS_MIN_BEADS = 3
+#: Joint motor force (N·m) holding a driven arm's joint velocities during a push step.
+DRIVE_FORCE_N = 500.0
+#: Object kinds that are tools: pinned where they stand while not held.
+TOOL_KINDS = ("spoon", "stirrer")
 
 
 class ActionFailed(RuntimeError):
@@ -63,6 +99,9 @@ class ExecutionSettings:
     free_speed: float = 1.5
     carry_speed: float = 0.8
     pour_speed: float = 1.2
+    scoop_speed: float = 0.6
+    stir_speed: float = 0.8
+    push_speed: float = 0.4
     settle_s: float = 0.4
     pour_hold_s: float = 0.8
     render_every: int = 12
@@ -89,6 +128,11 @@ def _goal_atoms(formula: Any) -> list[tuple[str, tuple[str, ...]]]:
 
 class Kitchen3DRun:
     """One execution: the live PyBullet kitchen plus what the actions achieved."""
+
+    #: Called after every step of :meth:`follow` while set (the stir's tip tracking).
+    probe: Callable[[], None] | None = None
+    #: Whether :meth:`follow` is driving the arm with joint velocities (a push).
+    driving: bool = False
 
     def __init__(self, spec: SceneSpec, poses: dict[str, tuple[float, float]], seed: int,
                  settings: ExecutionSettings, recorder_camera: Camera | None) -> None:
@@ -126,8 +170,20 @@ class Kitchen3DRun:
             p.setJointMotorControlArray(arm.body_id, PANDA_FINGER_JOINTS, p.VELOCITY_CONTROL,
                                         forces=[0.0, 0.0], physicsClientId=self.world.client)
         self.held: dict[int, tuple[str, Pose]] = {}
+        self._init_records()
+        self.pinned = {name: self.bodies[name].pose() for name in self._tools()}
         self.step_n(self.world.steps_for(settings.settle_s))
         self.initial_counts = self.counts()
+
+    def _init_records(self) -> None:
+        """What actions achieved, beyond bead counts: tools pinned at rest (name -> pose),
+        the last spoonful of each scooped material (beads), each cup's stir records."""
+        self.pinned: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self.spoonfuls: dict[str, int] = {}
+        self.stirs: dict[str, list[dict[str, Any]]] = {}
+
+    def _tools(self) -> list[str]:
+        return [n for n, o in self.spec.objects.items() if o.kind in TOOL_KINDS and not o.fixed]
 
     def close(self) -> None:
         self.world.close()
@@ -135,6 +191,8 @@ class Kitchen3DRun:
     # Simulation --------------------------------------------------------------------------
 
     def _step(self) -> None:
+        for name, (position, quaternion) in self.pinned.items():
+            self.bodies[name].set_pose(position, quaternion)
         self.world.step()
         if self.recorder is not None:
             self.recorder(self.steps)
@@ -162,11 +220,40 @@ class Kitchen3DRun:
                 angular = sign * axis / norm * angle / dt
         self.bodies[name].set_pose(tool.position, tool.quaternion, linear, angular)
 
-    def follow(self, arm_index: int, configurations: np.ndarray, speed: float) -> None:
-        """Drive the arm through ``configurations`` (n, 7) at ``speed`` rad/s (max joint)."""
+    def follow(self, arm_index: int, configurations: np.ndarray, speed: float,
+               drive: bool = False) -> None:
+        """Drive the arm through ``configurations`` (n, 7) at ``speed`` rad/s (max joint).
+
+        ``drive`` (pushes): the links also get the joint velocities that reach the next
+        configuration, so contacts see a moving hand; a merely teleported hand sinks into
+        what it pushes and leaves it behind."""
         arm = self.scene.arms[arm_index]
         dense = densify_path(np.asarray(configurations), speed * self.world.config.time_step)
         held = self.held.get(arm_index)
+        self.driving = drive
+        try:
+            self._follow_dense(arm_index, dense, held, drive)
+        finally:
+            self.driving = False
+            if drive:
+                self._drive_joints(arm_index, np.zeros(arm.dof))
+
+    def _drive_joints(self, arm_index: int, velocities: np.ndarray) -> None:
+        """Joint velocities (rad/s) for the coming step, held by the joint motors."""
+        arm = self.scene.arms[arm_index]
+        p.resetJointStatesMultiDof(arm.body_id, PANDA_ARM_JOINTS,
+                                   [[float(v)] for v in arm.get_configuration()],
+                                   targetVelocities=[[float(v)] for v in velocities],
+                                   physicsClientId=arm.client_id)
+        p.setJointMotorControlArray(arm.body_id, PANDA_ARM_JOINTS, p.VELOCITY_CONTROL,
+                                    targetVelocities=[float(v) for v in velocities],
+                                    forces=[DRIVE_FORCE_N] * len(PANDA_ARM_JOINTS),
+                                    physicsClientId=arm.client_id)
+
+    def _follow_dense(self, arm_index: int, dense: np.ndarray, held: tuple[str, Pose] | None,
+                      drive: bool) -> None:
+        arm = self.scene.arms[arm_index]
+        dt = self.world.config.time_step
         for i, q in enumerate(dense):
             if held is not None:
                 nxt = None
@@ -177,10 +264,14 @@ class Kitchen3DRun:
                 self._carry(arm_index, held[0], held[1], nxt)
             else:
                 arm.set_configuration(q)
+            if drive and i + 1 < len(dense):
+                self._drive_joints(arm_index, (dense[i + 1] - q) / dt)
             for other, (name, grasp) in self.held.items():
                 if other != arm_index:
                     self._carry(other, name, grasp, None)
             self._step()
+            if self.probe is not None:
+                self.probe()
 
     # Measurements ------------------------------------------------------------------------
 
@@ -201,6 +292,14 @@ class Kitchen3DRun:
         position, _ = self.bodies[name].pose()
         return float(position[0]), float(position[1])
 
+    def material_positions(self, material: str) -> np.ndarray:
+        """World positions ``(n, 3)`` of the beads of ``material``."""
+        return bead_positions(self.world.client, self.beads[material])
+
+    def inside(self, name: str, positions: np.ndarray) -> np.ndarray:
+        """Which of ``positions`` ``(n, 3)`` lie in ``name``'s containment prism: ``(n,)``."""
+        return contained_mask(self.bodies[name], positions)
+
     # Actions -----------------------------------------------------------------------------
 
     def grasp_pose(self, name: str, grasp: Any) -> Pose:
@@ -208,7 +307,8 @@ class Kitchen3DRun:
         return grasps[int(grasp[1])].tool_in_gripper
 
     def move(self, path: ArmPath) -> None:
-        carrying = any(self.spec.objects[n].contents is not None for n, _ in self.held.values())
+        carrying = any(self.spec.objects[n].contents is not None or self.spec.objects[n].kind
+                       == "spoon" for n, _ in self.held.values())
         speed = self.settings.carry_speed if carrying else self.settings.free_speed
         self.follow(path.arm, path.configurations, speed)
 
@@ -224,6 +324,7 @@ class Kitchen3DRun:
         if max(gaps) > FINGER_CONTACT_M:
             raise ActionFailed(f"pick {name}: fingers {np.round(gaps, 4).tolist()} m from it")
         self.held[path.arm] = (name, self.grasp_pose(name, grasp))
+        self.pinned.pop(name, None)
         self.follow(path.arm, path.configurations[::-1], self.settings.free_speed / 2)
         self.log.append({"action": "pick", "object": name, "finger_gaps_m": gaps})
 
@@ -233,6 +334,8 @@ class Kitchen3DRun:
         arm = self.scene.arms[path.arm]
         arm.open_gripper()
         self.bodies[name].set_pose(*self.bodies[name].pose())  # released at rest
+        if self.spec.objects[name].kind in TOOL_KINDS:
+            self.pinned[name] = self.bodies[name].pose()
         self.follow(path.arm, path.configurations[::-1], self.settings.free_speed / 2)
         self.step_n(self.world.steps_for(self.settings.settle_s))
         rest = self.object_xy(name)
@@ -248,14 +351,93 @@ class Kitchen3DRun:
         self.step_n(self.world.steps_for(self.settings.settle_s))
         self.log.append({"action": "pour", "counts": self.counts()})
 
-    def run_step(self, name: str, values: Sequence[Any]) -> None:
+    def scoop(self, spoon: str, bowl: str, material: str, path: ArmPath) -> None:
+        """Drag the held spoon through ``bowl`` and lift it out (forward only); record the
+        spoonful of ``material`` once the beads in the head have settled."""
+        if material not in self.beads:
+            raise ActionFailed(f"scoop: no beads of {material!r} in the kitchen")
+        self.follow(path.arm, path.configurations, self.settings.scoop_speed)
+        self.step_n(self.world.steps_for(self.settings.settle_s))
+        spoonful = int(self.inside(spoon, self.material_positions(material)).sum())
+        self.spoonfuls[material] = spoonful
+        self.log.append({"action": "scoop", "spoon": spoon, "bowl": bowl, "material": material,
+                         "spoonful": spoonful})
+        if spoonful < SCOOP_CONTAINS_MIN_BEADS:
+            raise ActionFailed(f"scoop: the spoon lifted only {spoonful} beads of {material}")
+
+    def dump(self, spoon: str, cup: str, material: str, path: ArmPath) -> None:
+        """Turn the held spoon over above ``cup``, hold, turn it back."""
+        self.follow(path.arm, path.configurations, self.settings.pour_speed)
+        self.step_n(self.world.steps_for(self.settings.pour_hold_s))
+        self.follow(path.arm, path.configurations[::-1], self.settings.carry_speed)
+        self.step_n(self.world.steps_for(self.settings.settle_s))
+        left = (int(self.inside(spoon, self.material_positions(material)).sum())
+                if material in self.beads else 0)
+        self.log.append({"action": "dump", "spoon": spoon, "cup": cup, "material": material,
+                         "left_in_spoon": left, "counts": self.counts()})
+
+    def stir(self, stirrer: str, cup: str, path: ArmPath) -> None:
+        """Follow the stir path into ``cup`` and back out, tracking the stirrer's tip (its
+        object frame's origin) in the cup's frame at every step."""
+        cavity = self.bodies[cup].geometry.cavity
+        if cavity is None:
+            raise ActionFailed(f"stir: {cup} is not a container")
+        tracker = TipTracker(cavity, self.world.config.time_step)
+        before = self.counts()
+
+        def track() -> None:
+            tip, _ = self.bodies[stirrer].pose()
+            tracker.add(world_to_object(tip[None, :], *self.bodies[cup].pose())[0])
+
+        self.probe = track
+        try:
+            self.follow(path.arm, path.configurations, self.settings.stir_speed)
+            self.follow(path.arm, path.configurations[::-1], self.settings.stir_speed)
+        finally:
+            self.probe = None
+        self.step_n(self.world.steps_for(self.settings.settle_s))
+        record = {"action": "stir", "stirrer": stirrer, "cup": cup, **tracker.to_json(),
+                  "counts_before": before, "counts_after": self.counts()}
+        self.stirs.setdefault(cup, []).append(record)
+        self.log.append(record)
+
+    def push(self, name: str, goal: tuple[float, float], path: ArmPath) -> None:
+        """Close the empty hand and follow the push path (forward only); ``name`` must come
+        to rest within :data:`PUSH_TOLERANCE_M` of ``goal``."""
+        if path.arm in self.held:
+            raise ActionFailed(f"push {name}: arm {path.arm} is holding something")
+        self.scene.arms[path.arm].set_finger_opening(0.0)
+        start = self.object_xy(name)
+        self.follow(path.arm, path.configurations, self.settings.push_speed, drive=True)
+        self.step_n(self.world.steps_for(self.settings.settle_s))
+        rest = self.object_xy(name)
+        error = float(np.hypot(rest[0] - goal[0], rest[1] - goal[1]))
+        self.log.append({"action": "push", "object": name, "start_xy": start, "rest_xy": rest,
+                         "error_m": error})
+        if error > PUSH_TOLERANCE_M:
+            raise ActionFailed(f"push {name}: came to rest {error:.3f} m from its target")
+
+    def run_step(self, name: str, values: Sequence[Any],
+                 args: Sequence[str] | None = None) -> None:
+        """Execute one plan step: ``values`` are its argument values, ``args`` (optional)
+        its argument objects' names (symbolic objects such as materials are named there)."""
+
+        def obj(i: int) -> str:
+            return str(args[i] if args is not None else values[i]).lower()
+
+        def xy(i: int) -> tuple[float, float]:
+            return float(values[i][0]), float(values[i][1])
+
         actions: dict[str, Callable[[], None]] = {
             "move-free": lambda: self.move(values[1]),
             "move-holding": lambda: self.move(values[3]),
-            "pick": lambda: self.pick(values[0], values[2], values[4]),
-            "place": lambda: self.place(values[0], (float(values[1][0]), float(values[1][1])),
-                                        values[4]),
+            "pick": lambda: self.pick(obj(0), values[2], values[4]),
+            "place": lambda: self.place(obj(0), xy(1), values[4]),
             "pour": lambda: self.pour(values[5]),
+            "scoop": lambda: self.scoop(obj(0), obj(2), obj(8), values[6]),
+            "dump": lambda: self.dump(obj(0), obj(2), obj(6), values[5]),
+            "stir": lambda: self.stir(obj(0), obj(2), values[5]),
+            "push": lambda: self.push(obj(0), xy(2), values[5]),
         }
         if name not in actions:
             raise ActionFailed(f"cannot execute action {name!r}")
@@ -269,6 +451,12 @@ class Kitchen3DRun:
             counts = self.counts().get(material)
             if counts is None:
                 return False, {"reason": f"no beads of {material}"}
+            if material in self.spoonfuls:
+                spoonful = self.spoonfuls[material]
+                held = counts.get(container, 0)
+                need = max(SCOOP_CONTAINS_MIN_BEADS,
+                           math.ceil(SCOOP_CONTAINS_FRACTION * spoonful))
+                return held >= need, {"beads": held, "spoonful": spoonful, "counts": counts}
             start = self.initial_counts[material]
             inside_start = max(v for k, v in start.items() if k not in ("total", "off_table"))
             fraction = counts.get(container, 0) / max(inside_start, 1)
@@ -280,6 +468,11 @@ class Kitchen3DRun:
             return area.contains(xy), {"xy": xy}
         if predicate == "holding":
             return any(n == args[0] for n, _ in self.held.values()), {}
+        if predicate == "stirred":
+            records = self.stirs.get(args[0], [])
+            return any(r["stirred"] for r in records), {
+                "stirs": [{k: r[k] for k in ("tip_time_inside_s", "tip_travel_inside_m")}
+                          for r in records]}
         raise ActionFailed(f"cannot check goal fact ({predicate} {' '.join(args)}) physically")
 
 
@@ -312,7 +505,7 @@ class Kitchen3DExecutor:
         try:
             for index, step in enumerate(plan_result.plan or ()):
                 try:
-                    run.run_step(step.name, step.values)
+                    run.run_step(step.name, step.values, step.args)
                     steps.append({"index": index, "action": step.name, "ok": True})
                 except ActionFailed as error:
                     steps.append({"index": index, "action": step.name, "ok": False,

@@ -29,6 +29,7 @@ import pybullet as p
 from ltamp_cli.backends.pybullet.executor import (
     FINGER_CONTACT_M,
     PLACE_TOLERANCE_M,
+    TOOL_KINDS,
     ActionFailed,
     ExecutionSettings,
     Kitchen3DExecutor,
@@ -145,11 +146,18 @@ class SapienArm:
             position, quaternion = state[0], state[1]
         return to_sapien_pose(position, quaternion)
 
-    def follow_model(self) -> None:
+    def follow_model(self, drive: bool = False) -> None:
         """Place every mirrored link at the model's current link pose (see the module
-        docstring for why they are teleported rather than given kinematic targets)."""
-        for link, _, entity in self.links:
-            entity.set_pose(self._link_pose(link))
+        docstring for why they are teleported rather than given kinematic targets).
+
+        ``drive`` (pushes): give them kinematic targets instead, reached at the end of the
+        next step, so PhysX moves them with velocity, wakes what they touch and pushes it
+        (a teleported link next to a sleeping block does not move it)."""
+        for link, component, entity in self.links:
+            if drive:
+                component.set_kinematic_target(self._link_pose(link))
+            else:
+                entity.set_pose(self._link_pose(link))
 
 
 class SapienKitchen3DRun(Kitchen3DRun):
@@ -218,7 +226,8 @@ class SapienKitchen3DRun(Kitchen3DRun):
                 pose.position,
                 pose.quaternion,
                 object_material(obj.kind, self.rng, obj.fixed),
-                body_type="static" if obj.fixed else "dynamic",
+                body_type=("static" if obj.fixed else
+                           "kinematic" if obj.kind in TOOL_KINDS else "dynamic"),
             )
             self.mirrors[name] = create_mirror(
                 self.model.client, geometry, pose.position, pose.quaternion,
@@ -241,6 +250,7 @@ class SapienKitchen3DRun(Kitchen3DRun):
             arm.set_configuration(np.asarray(PANDA_HOME))
         self.sapien_arms = [SapienArm(self.world, arm) for arm in self.scene.arms]  # type: ignore[arg-type]
         self.held: dict[int, tuple[str, Pose]] = {}
+        self._init_records()  # tools are kinematic bodies here: nothing to pin
         self._grip_widths: dict[int, float] = {}
         self.step_n(self.world.steps_for(settings.settle_s))
         self.initial_counts = self.counts()
@@ -275,7 +285,7 @@ class SapienKitchen3DRun(Kitchen3DRun):
 
     def _step(self) -> None:
         for arm in self.sapien_arms:
-            arm.follow_model()
+            arm.follow_model(self.driving)
         self.world.step()
         if self.recorder is not None:
             self.recorder(self.steps)
@@ -308,6 +318,12 @@ class SapienKitchen3DRun(Kitchen3DRun):
     def object_xy(self, name: str) -> tuple[float, float]:
         position, _ = self.bodies[name].pose()
         return float(position[0]), float(position[1])
+
+    def material_positions(self, material: str) -> np.ndarray:
+        return self.beads[material].positions()  # type: ignore[attr-defined, no-any-return]
+
+    def inside(self, name: str, positions: np.ndarray) -> np.ndarray:
+        return contained_mask(self.bodies[name], positions)  # type: ignore[arg-type]
 
     def finger_gaps(self, arm_index: int, name: str) -> list[float]:
         """Distances (m) from each finger to the object, in the kinematic model with the
@@ -348,7 +364,8 @@ class SapienKitchen3DRun(Kitchen3DRun):
         self.follow(path.arm, path.configurations, self.settings.free_speed / 2)
         del self.held[path.arm]
         self._preshape(path.arm, self._grip_widths.pop(path.arm))
-        self.bodies[name].set_kinematic(False)  # type: ignore[attr-defined]
+        if self.spec.objects[name].kind not in TOOL_KINDS:  # tools stay kinematic at rest
+            self.bodies[name].set_kinematic(False)  # type: ignore[attr-defined]
         self.follow(path.arm, path.configurations[::-1], self.settings.free_speed / 2)
         self.step_n(self.world.steps_for(self.settings.settle_s))
         rest = self.object_xy(name)
