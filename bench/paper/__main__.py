@@ -1,0 +1,121 @@
+"""``python -m bench.paper --quick|--full|--smoke [--out DIR] [--only NAME,...]``.
+
+Regenerates the seed paper's experiments (one module each, listed in :data:`EXPERIMENTS`) into
+``--out`` (JSON + PNG; regenerable trial pools under ``--out/cache``), then writes the report
+(``docs/RESULTS.md`` for quick/full, ``<out>/RESULTS.md`` for smoke unless ``--report`` says
+otherwise). ``--jobs 2`` runs two experiments at a time in separate processes. An experiment
+that fails is recorded as failed in its JSON (with the error line) and the others still run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import os
+import sys
+import time
+import traceback
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+
+for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_variable, "1")
+
+from bench.paper.common import REPO, Context  # noqa: E402
+
+# name -> module; the order is the report's (and the paper's) order.
+EXPERIMENTS = {
+    "al2d": "bench.paper.al2d",
+    "supervised3d": "bench.paper.supervised3d",
+    "active3d": "bench.paper.active3d",
+    "sampling": "bench.paper.sampling_table",
+    "kernel_learning": "bench.paper.kernel_learning",
+    "confident": "bench.paper.confident",
+    "coffee": "bench.paper.coffee",
+}
+# Longest first so that two workers finish close together.
+COST_ORDER = ["supervised3d", "al2d", "active3d", "confident", "kernel_learning", "sampling",
+              "coffee"]
+
+
+def run_one(name: str, ctx: Context) -> tuple[str, float, str]:
+    """Run one experiment; returns ``(name, wall seconds, error line or "")``."""
+    import torch
+
+    torch.set_num_threads(1)
+    started = time.perf_counter()
+    try:
+        importlib.import_module(EXPERIMENTS[name]).run(ctx)
+        return name, time.perf_counter() - started, ""
+    except Exception as error:
+        traceback.print_exc()
+        message = f"{type(error).__name__}: {error}".splitlines()[0][:300]
+        (ctx.out / f"{name}.json").write_text(json.dumps(
+            {"experiment": name, "mode": ctx.mode, "failed": True, "error": message}, indent=2))
+        return name, time.perf_counter() - started, message
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m bench.paper", description=__doc__)
+    mode = parser.add_mutually_exclusive_group(required=True)
+    mode.add_argument("--quick", action="store_const", dest="mode", const="quick")
+    mode.add_argument("--full", action="store_const", dest="mode", const="full")
+    mode.add_argument("--smoke", action="store_const", dest="mode", const="smoke")
+    parser.add_argument("--out", type=Path, default=REPO / "bench" / "results" / "paper")
+    parser.add_argument("--only", default="", help="comma-separated experiment names")
+    parser.add_argument("--jobs", type=int, default=2, help="experiments run at once")
+    parser.add_argument("--workers", type=int, default=2, help="trial-collection workers")
+    parser.add_argument("--report", type=Path, default=None,
+                        help="Markdown report path (default: docs/RESULTS.md; smoke: OUT)")
+    parser.add_argument("--no-report", action="store_true")
+    args = parser.parse_args(argv)
+    names = [n.strip() for n in args.only.split(",") if n.strip()] or list(EXPERIMENTS)
+    unknown = [n for n in names if n not in EXPERIMENTS]
+    if unknown:
+        print(f"--only: unknown experiment {unknown[0]!r}: expected one of "
+              f"{', '.join(EXPERIMENTS)}", file=sys.stderr)
+        return 2
+    args.out.mkdir(parents=True, exist_ok=True)
+    ctx = Context(args.mode, args.out.resolve(), sys.stderr.isatty(), args.workers)
+    started = time.perf_counter()
+    ordered = [n for n in COST_ORDER if n in names]
+    pooled = [n for n in ("supervised3d", "active3d", "confident") if n in names]
+    if pooled:
+        from bench.paper.pools import prepare_pools
+
+        t0 = time.perf_counter()
+        prepare_pools(ctx, [ctx.sizes(importlib.import_module(EXPERIMENTS[n]).SIZES)
+                            for n in pooled])
+        print(f"[{time.perf_counter() - started:7.1f} s] trial pools ready "
+              f"({time.perf_counter() - t0:.1f} s)", flush=True)
+    results: list[tuple[str, float, str]] = []
+    if args.jobs <= 1 or len(ordered) == 1:
+        results = [run_one(name, ctx) for name in ordered]
+    else:
+        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+            futures = [pool.submit(run_one, name, ctx) for name in ordered]
+            for future in as_completed(futures):
+                results.append(future.result())
+                name, seconds, error = results[-1]
+                print(f"[{time.perf_counter() - started:7.1f} s] {name}: "
+                      f"{'FAILED ' + error if error else f'done in {seconds:.1f} s'}",
+                      flush=True)
+    total = time.perf_counter() - started
+    (ctx.out / "run.json").write_text(json.dumps(
+        {"mode": args.mode, "total_wall_s": round(total, 1), "jobs": args.jobs,
+         "experiments": {n: {"wall_s": round(s, 1), "error": e} for n, s, e in results}},
+        indent=2))
+    print(f"{args.mode}: {len(results)} experiment(s) in {total:.1f} s wall", flush=True)
+    if not args.no_report:
+        from bench.paper.report import write_report
+
+        report = args.report or (args.out / "RESULTS.md" if args.mode == "smoke"
+                                 else REPO / "docs" / "RESULTS.md")
+        write_report(ctx.out, report)
+        print(f"wrote {report}")
+    return 1 if any(e for _, _, e in results) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

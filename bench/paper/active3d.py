@@ -1,0 +1,102 @@
+"""Experiment 3 — Kitchen3D active learning: GP vs GP-LSE vs GP-LSE2 (the paper's
+``fig:context-400`` and ``fig:context-100``), all with the MLP kernel.
+
+Pool mode, as the paper's "discrete" active learning: the learners pick each next trial from
+the random pool without replacement (``gp``: random order; ``lse``: largest straddle over the
+whole pool; ``lse2``: largest straddle among the trials whose context is nearest a randomly
+drawn one). Curves: success rate of the most confident valid control (simulated) and
+held-out F1. Repeated protocol: 50 random trials then 50 chosen by each learner, F1 every 10
+trials, repeated ``reps`` times (the paper: 200).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+from tqdm import tqdm
+
+from bench.paper.common import Context, curve_series, live_score, plot_panels, write_json
+from bench.paper.poollearn import CheckpointEvaluator, held_out_contexts, pool_curve
+from bench.paper.pools import get_pool
+from ltamp_cli.backends import load_backend
+from ltamp_cli.learning.active import LearningConfig
+from ltamp_cli.learning.curves import summarize
+
+NAME = "active3d"
+LEARNERS = ["gp", "lse", "lse2"]
+LABELS = {"gp": "GP", "lse": "GP-LSE", "lse2": "GP-LSE2"}
+SIZES: dict[str, dict[str, Any]] = {
+    "smoke": {"backend": "synthetic", "skills": ["skill8d"], "n_train": 60, "n_test": 40,
+              "budget": 30, "eval_every": 15, "seeds": 1, "contexts": 3, "success_at": [30],
+              "candidates": 1000, "rep_init": 15, "rep_budget": 25, "rep_every": 5,
+              "reps": 1},
+    "quick": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 120,
+              "n_test": 80, "budget": 120, "eval_every": 20, "seeds": 1, "contexts": 3,
+              "success_at": [120], "candidates": 1000, "rep_init": 50, "rep_budget": 100,
+              "rep_every": 10, "reps": 2},
+    "full": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 9000,
+             "n_test": 1000, "budget": 400, "eval_every": 10, "seeds": 10, "contexts": 45,
+             "success_at": list(range(10, 201, 10)), "candidates": 1000, "rep_init": 50,
+             "rep_budget": 100, "rep_every": 10, "reps": 200},
+}
+
+
+def run(ctx: Context) -> dict[str, Any]:
+    """Writes ``active3d.json``, ``active3d.png`` (400-style curves), ``active3d_100.png``."""
+    started = time.perf_counter()
+    sizes = ctx.sizes(SIZES)
+    backend = load_backend(sizes["backend"])
+    skills: dict[str, Any] = {}
+    try:
+        for skill in sizes["skills"]:
+            pool = get_pool(ctx, sizes["backend"], skill, sizes["n_train"], sizes["n_test"])
+            spec = backend.skills()[skill]
+            contexts = held_out_contexts(backend, skill, sizes["contexts"], seed=3)
+
+            def is_valid(context: Any, controls: Any, skill: str = skill) -> Any:
+                return backend.is_valid(skill, context, controls)
+
+            rows: list[dict[str, Any]] = []
+            rep_rows: list[dict[str, Any]] = []
+            for learner in tqdm(LEARNERS, desc=f"active3d {skill}", disable=not ctx.progress):
+                for seed in range(sizes["seeds"]):
+                    evaluator = CheckpointEvaluator(
+                        spec, pool.heldout(), live_score(backend, skill, 700 + seed), contexts,
+                        is_valid, set(sizes["success_at"]), seed, sizes["candidates"])
+                    config = LearningConfig(strategy=learner, kernel="mlp",
+                                            budget=sizes["budget"], seed=seed)
+                    curve, _ = pool_curve(pool, spec, config, sizes["eval_every"], evaluator)
+                    rows += [{"learner": learner, **row} for row in curve]
+                for rep in range(sizes["reps"]):
+                    evaluator = CheckpointEvaluator(spec, pool.heldout(), None, None, None,
+                                                    set(), rep, sizes["candidates"])
+                    config = LearningConfig(strategy=learner, kernel="mlp",
+                                            budget=sizes["rep_budget"],
+                                            init=sizes["rep_init"], seed=100 + rep)
+                    curve, _ = pool_curve(pool, spec, config, sizes["rep_every"], evaluator)
+                    rep_rows += [{"learner": learner, **row} for row in curve
+                                 if row["n_trials"] >= sizes["rep_init"]]
+            skills[skill] = {"pool": pool.stats(), "summary": summarize(rows),
+                             "repeated_summary": summarize(rep_rows), "runs": rows,
+                             "repeated_runs": rep_rows}
+    finally:
+        backend.close()
+    names = sizes["skills"]
+    panels = [{"title": f"{skill}: success rate of θ*", "ylabel": "success rate",
+               "series": curve_series(skills[skill]["summary"], "success_rate", LEARNERS,
+                                      LABELS)} for skill in names]
+    panels += [{"title": f"{skill}: held-out F1", "ylabel": "F1",
+                "series": curve_series(skills[skill]["summary"], "f1", LEARNERS, LABELS)}
+               for skill in names]
+    plot_panels(panels, ctx.out / f"{NAME}.png",
+                title=f"Active learning, pool mode ({sizes['backend']}, {ctx.mode})")
+    plot_panels([{"title": f"{skill}: F1, {sizes['rep_init']}→{sizes['rep_budget']} trials "
+                           f"x{sizes['reps']}", "ylabel": "F1",
+                  "series": curve_series(skills[skill]["repeated_summary"], "f1", LEARNERS,
+                                         LABELS)} for skill in names],
+                ctx.out / f"{NAME}_100.png", title=f"Repeated protocol ({ctx.mode})")
+    payload = {"sizes": sizes, "backend": sizes["backend"], "skills": skills,
+               "pngs": [f"{NAME}.png", f"{NAME}_100.png"]}
+    write_json(ctx, NAME, payload, started)
+    return payload

@@ -1,0 +1,178 @@
+"""What every paper experiment shares: the run context, JSON/PNG output and live scoring.
+
+Nothing here holds state between experiments: each ``run(ctx)`` gets a :class:`Context`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import sys
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ltamp_cli.backends.protocol import SkillBackend
+
+REPO = Path(__file__).resolve().parents[2]
+MODES = ("smoke", "quick", "full")
+
+
+@dataclass(frozen=True)
+class Context:
+    """One experiment run: ``mode`` (smoke/quick/full), output folder, progress bars."""
+
+    mode: str
+    out: Path
+    progress: bool
+    workers: int = 2
+
+    def sizes(self, table: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
+        """The row of a module's ``SIZES`` table for this mode."""
+        return dict(table[self.mode])
+
+    @property
+    def cache(self) -> Path:
+        """Regenerable data (trial pools, trained models) lives here, under ``out``."""
+        path = self.out / "cache"
+        path.mkdir(parents=True, exist_ok=True)
+        return path
+
+
+def machine() -> dict[str, Any]:
+    """Where the numbers were measured (the report states it)."""
+    return {
+        "python": platform.python_version(),
+        "platform": platform.platform(terse=True),
+        "cpus": os.cpu_count(),
+        "load_1min": round(os.getloadavg()[0], 2),
+        "omp_num_threads": os.environ.get("OMP_NUM_THREADS"),
+    }
+
+
+def write_json(ctx: Context, name: str, payload: dict[str, Any], started: float) -> Path:
+    """Write ``<out>/<name>.json`` with the mode, machine and elapsed wall/CPU seconds."""
+    payload = {
+        "experiment": name,
+        "mode": ctx.mode,
+        "machine": machine(),
+        "wall_s": round(time.perf_counter() - started, 1),
+        **payload,
+    }
+    path = ctx.out / f"{name}.json"
+    path.write_text(json.dumps(payload, indent=2, default=_jsonable) + "\n")
+    return path
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, Path):
+        return str(value)
+    raise TypeError(f"not JSON-serialisable: {type(value).__name__}")
+
+
+def progress_enabled() -> bool:
+    return sys.stderr.isatty()
+
+
+def live_score(
+    backend: SkillBackend, skill: str, seed: int, key: str | None = None
+) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """True score by simulation: ``(contexts (k, dα), controls (k, dθ)) -> scores (k,)``.
+
+    Each call runs ``k`` real trials on ``backend`` (seeded by ``seed`` and a call counter, so
+    a run is reproducible); ``key`` (e.g. ``fraction_in_bowl``) is collected into
+    ``scorer.infos`` for metrics other than the score.
+    """
+    counter = iter(range(10**9))
+    infos: list[dict[str, Any]] = []
+
+    def score(contexts: np.ndarray, controls: np.ndarray) -> np.ndarray:
+        contexts = np.atleast_2d(np.asarray(contexts, dtype=float))
+        controls = np.atleast_2d(np.asarray(controls, dtype=float))
+        if len(contexts) == 1 and len(controls) > 1:
+            contexts = np.repeat(contexts, len(controls), axis=0)
+        out = np.empty(len(controls))
+        for i, (context, control) in enumerate(zip(contexts, controls, strict=True)):
+            trial_seed = int(np.random.SeedSequence([seed, next(counter)]).generate_state(1)[0])
+            result = backend.run_trial(skill, context, control, trial_seed & 0x7FFFFFFF)
+            out[i] = result.score if np.isfinite(result.score) else -1.0
+            infos.append({"score": out[i], "valid": bool(result.valid),
+                          **({key: result.info.get(key)} if key else {})})
+        return out
+
+    score.infos = infos  # type: ignore[attr-defined]
+    return score
+
+
+def unavailable(what: str) -> dict[str, Any]:
+    """A row for something this checkout does not have (reported, never a crash)."""
+    return {"available": False, "note": f"{what}: not available in this checkout"}
+
+
+def mean_std(values: list[float] | np.ndarray) -> dict[str, float | None]:
+    array = np.asarray([v for v in values if v is not None], dtype=float)
+    if array.size == 0:
+        return {"mean": None, "std": None, "n": 0}
+    return {"mean": float(array.mean()), "std": float(array.std()), "n": int(array.size)}
+
+
+def plot_panels(
+    panels: list[dict[str, Any]], path: Path, title: str = "", ylabel: str = ""
+) -> Path:
+    """One PNG with a panel per entry: ``{"title", "series": {label: (x, mean, err)}}``.
+
+    ``err`` is drawn as a shaded band (the paper shades a fraction of the standard error).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, axes = plt.subplots(1, len(panels), figsize=(4.6 * len(panels), 3.6), squeeze=False)
+    for axis, panel in zip(axes[0], panels, strict=True):
+        for label, (x, mean, err) in panel["series"].items():
+            x, mean, err = (np.asarray(v, dtype=float) for v in (x, mean, err))
+            axis.plot(x, mean, marker="o", markersize=3, label=label)
+            axis.fill_between(x, mean - err, mean + err, alpha=0.2)
+        axis.set_title(panel["title"], fontsize=10)
+        axis.set_xlabel(panel.get("xlabel", "number of trials"))
+        axis.set_ylabel(panel.get("ylabel", ylabel))
+        if panel.get("unit_range", True):
+            axis.set_ylim(-0.02, 1.02)
+        axis.grid(alpha=0.3)
+        if panel["series"]:
+            axis.legend(fontsize=8)
+        else:
+            axis.text(0.5, 0.5, panel.get("empty", "not available"), ha="center",
+                      transform=axis.transAxes)
+    if title:
+        figure.suptitle(title, fontsize=11)
+    figure.tight_layout()
+    figure.savefig(path, dpi=90)
+    plt.close(figure)
+    return path
+
+
+def curve_series(
+    summary: list[dict[str, Any]], metric: str, learners: list[str], labels: Mapping[str, str]
+) -> dict[str, tuple[list[float], list[float], list[float]]]:
+    """``summarize`` rows -> ``{label: (n_trials, mean, stderr)}`` for ``plot_panels``."""
+    series = {}
+    for learner in learners:
+        points = [e for e in summary if e["learner"] == learner and e[f"{metric}_mean"] is not None]
+        if points:
+            series[labels.get(learner, learner)] = (
+                [e["n_trials"] for e in points],
+                [e[f"{metric}_mean"] for e in points],
+                [e[f"{metric}_stderr"] for e in points],
+            )
+    return series

@@ -1,0 +1,47 @@
+"""Learning curves over a trial pool (experiments 2 and 3): F1 at every checkpoint, the
+success rate of the most confident control (simulated) at the chosen ones."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from bench.paper.pools import Pool
+from ltamp_cli.backends.protocol import SkillBackend, SkillSpec
+from ltamp_cli.learning.active import LearningConfig, LearningResult, learn_from_pool
+from ltamp_cli.learning.metrics import Evaluation, HeldOutSet, SkillEvaluator
+from ltamp_cli.learning.model import PhysicalValidity, SkillModel
+
+
+class CheckpointEvaluator(SkillEvaluator):
+    """F1 at every checkpoint; the (expensive, simulated) success rate only at ``success_at``."""
+
+    def __init__(self, spec: SkillSpec, heldout: HeldOutSet | None,
+                 true_score: Callable[[np.ndarray, np.ndarray], np.ndarray] | None,
+                 contexts: np.ndarray | None, is_valid: PhysicalValidity | None,
+                 success_at: set[int], seed: int, n_candidates: int) -> None:
+        super().__init__(spec, heldout, true_score, contexts, is_valid, seed, n_candidates)
+        self.success_at = success_at
+
+    def evaluate(self, model: SkillModel, n_trials: int, success: bool = True) -> Evaluation:
+        return super().evaluate(model, n_trials, success and n_trials in self.success_at)
+
+
+def held_out_contexts(backend: SkillBackend, skill: str, n: int, seed: int) -> np.ndarray:
+    """``n`` contexts ``(n, dα)`` from a stream no pool trial uses (held-out objects)."""
+    spec = backend.skills()[skill]
+    rng = np.random.default_rng([seed, 77])
+    return np.array([backend.sample_context(skill, rng) for _ in range(n)]).reshape(
+        n, spec.context.dim)
+
+
+def pool_curve(pool: Pool, spec: SkillSpec, config: LearningConfig, eval_every: int,
+               evaluator: SkillEvaluator) -> tuple[list[dict[str, Any]], LearningResult]:
+    """Learn ``config`` over ``pool.train``; one row per checkpoint (``n_trials``, F1, SR)."""
+    result = learn_from_pool(spec, pool.train, config, evaluator=evaluator,
+                             eval_every=eval_every)
+    rows = [{"n_trials": p.n_trials, "f1": p.f1, "success_rate": p.success_rate,
+             "seed": config.seed} for p in result.curve]
+    return rows, result
