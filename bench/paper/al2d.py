@@ -28,7 +28,7 @@ NAME = "al2d"
 LEARNERS = ["random", "nn-r", "nn-c", "lse"]
 LABELS = {"random": "Random", "nn-r": "NN_r", "nn-c": "NN_c", "lse": "GP-LSE"}
 SIZES: dict[str, dict[str, Any]] = {
-    "smoke": {"skills": ["push"], "budget": 12, "init": 6, "eval_every": 6, "contexts": 3,
+    "smoke": {"skills": ["push"], "budget": 10, "init": 5, "eval_every": 5, "contexts": 2,
               "seeds": 1, "candidates": 2000},
     "quick": {"skills": ["pour", "scoop", "push"], "budget": 30, "init": 10, "eval_every": 10,
               "contexts": 5, "seeds": 1, "candidates": 5000},

@@ -34,8 +34,8 @@ LABELS = {"nn-c": "NNc", "nn-r": "NNr", "rf-c": "RFc", "rf-r": "RFr", "gp": "GP-
 SIZES: dict[str, dict[str, Any]] = {
     # smoke: the synthetic 8-D skill stands in for the PyBullet skills (plumbing check only).
     "smoke": {"backend": "synthetic", "skills": ["skill8d"], "n_train": 60, "n_test": 40,
-              "budget": 40, "eval_every": 20, "seeds": 1, "contexts": 3,
-              "success_at": [40], "candidates": 1000},
+              "budget": 30, "eval_every": 15, "seeds": 1, "contexts": 3,
+              "success_at": [30], "candidates": 1000},
     "quick": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 120,
               "n_test": 80, "budget": 120, "eval_every": 20, "seeds": 1, "contexts": 3,
               "success_at": [120], "candidates": 1000},
