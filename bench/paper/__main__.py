@@ -13,6 +13,7 @@ import argparse
 import importlib
 import json
 import os
+import resource
 import sys
 import time
 import traceback
@@ -39,21 +40,21 @@ COST_ORDER = ["supervised3d", "al2d", "active3d", "confident", "kernel_learning"
               "coffee"]
 
 
-def run_one(name: str, ctx: Context) -> tuple[str, float, str]:
-    """Run one experiment; returns ``(name, wall seconds, error line or "")``."""
+def run_one(name: str, ctx: Context) -> tuple[str, float, float, str]:
+    """Run one experiment; returns ``(name, wall s, CPU s of this process, error or "")``."""
     import torch
 
     torch.set_num_threads(1)
-    started = time.perf_counter()
+    started, cpu = time.perf_counter(), time.process_time()
     try:
         importlib.import_module(EXPERIMENTS[name]).run(ctx)
-        return name, time.perf_counter() - started, ""
+        return name, time.perf_counter() - started, time.process_time() - cpu, ""
     except Exception as error:
         traceback.print_exc()
         message = f"{type(error).__name__}: {error}".splitlines()[0][:300]
         (ctx.out / f"{name}.json").write_text(json.dumps(
             {"experiment": name, "mode": ctx.mode, "failed": True, "error": message}, indent=2))
-        return name, time.perf_counter() - started, message
+        return name, time.perf_counter() - started, time.process_time() - cpu, message
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -89,7 +90,7 @@ def main(argv: list[str] | None = None) -> int:
                             for n in pooled])
         print(f"[{time.perf_counter() - started:7.1f} s] trial pools ready "
               f"({time.perf_counter() - t0:.1f} s)", flush=True)
-    results: list[tuple[str, float, str]] = []
+    results: list[tuple[str, float, float, str]] = []
     if args.jobs <= 1 or len(ordered) == 1:
         results = [run_one(name, ctx) for name in ordered]
     else:
@@ -97,16 +98,23 @@ def main(argv: list[str] | None = None) -> int:
             futures = [pool.submit(run_one, name, ctx) for name in ordered]
             for future in as_completed(futures):
                 results.append(future.result())
-                name, seconds, error = results[-1]
+                name, seconds, _, error = results[-1]
                 print(f"[{time.perf_counter() - started:7.1f} s] {name}: "
                       f"{'FAILED ' + error if error else f'done in {seconds:.1f} s'}",
                       flush=True)
     total = time.perf_counter() - started
+    # CPU of this process and of every finished child (experiment and collection workers):
+    # what the run would cost on dedicated cores, whatever else shares the machine.
+    usage = [resource.getrusage(who) for who in (resource.RUSAGE_SELF,
+                                                 resource.RUSAGE_CHILDREN)]
+    total_cpu = sum(u.ru_utime + u.ru_stime for u in usage)
     (ctx.out / "run.json").write_text(json.dumps(
-        {"mode": args.mode, "total_wall_s": round(total, 1), "jobs": args.jobs,
-         "experiments": {n: {"wall_s": round(s, 1), "error": e} for n, s, e in results}},
+        {"mode": args.mode, "total_wall_s": round(total, 1), "total_cpu_s": round(total_cpu, 1),
+         "jobs": args.jobs, "experiments": {n: {"wall_s": round(s, 1), "cpu_s": round(c, 1),
+                                                "error": e} for n, s, c, e in results}},
         indent=2))
-    print(f"{args.mode}: {len(results)} experiment(s) in {total:.1f} s wall", flush=True)
+    print(f"{args.mode}: {len(results)} experiment(s) in {total:.1f} s wall, "
+          f"{total_cpu:.1f} s CPU", flush=True)
     if not args.no_report:
         from bench.paper.report import write_report
 
@@ -114,7 +122,7 @@ def main(argv: list[str] | None = None) -> int:
                                  else REPO / "docs" / "RESULTS.md")
         write_report(ctx.out, report)
         print(f"wrote {report}")
-    return 1 if any(e for _, _, e in results) else 0
+    return 1 if any(e for *_, e in results) else 0
 
 
 if __name__ == "__main__":

@@ -176,3 +176,31 @@ def curve_series(
                 [e[f"{metric}_stderr"] for e in points],
             )
     return series
+
+
+def first_valid_lazy(
+    is_valid: Callable[[np.ndarray, np.ndarray], np.ndarray], chunk: int = 8, need: int = 3
+) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """A validity test for callers that only use the *first few* valid controls of a batch
+    sorted by preference.
+
+    ``SkillModel.most_confident_control`` takes the first valid candidate of a sorted block of
+    256, the GP's takes the first ``n_restarts = 3`` valid ones (blocks of 64) as L-BFGS-B
+    starts. On PyBullet the check costs ~40 ms per control, so a full block is 2.5–10 s. This
+    wrapper checks ``chunk`` controls at a time and stops once ``need`` valid ones are found,
+    reporting the unchecked rest as invalid: the first ``need`` ``True`` entries are the same
+    as with the full test, so the chosen control is unchanged (for ``need`` ≥ the number the
+    caller uses).
+    """
+
+    def lazy(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
+        controls = np.atleast_2d(np.asarray(controls, dtype=float))
+        result = np.zeros(len(controls), dtype=bool)
+        for start in range(0, len(controls), chunk):
+            ok = np.asarray(is_valid(context, controls[start : start + chunk]), dtype=bool)
+            result[start : start + len(ok)] = ok
+            if result.sum() >= need:
+                break
+        return result
+
+    return lazy

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import json
 import time
 from pathlib import Path
 from typing import Any
@@ -145,6 +146,11 @@ def run(ctx: Context) -> dict[str, Any]:
                 eval_seeds, desc=f"{label} {sampler}", disable=not ctx.progress)]
             row["samplers"][sampler] = {**summarize_runs(runs, long_s, short_s),
                                         "detail": runs, "training": train_runs}
+        # What Diverse-LK learned (inverse lengthscales per control), if it got feedback.
+        slug = label.lower().replace(" ", "_")
+        row["learned_kernels"] = {
+            path.stem: json.loads(path.read_text()).get("inverse_lengthscales")
+            for path in sorted(kernel_dir.glob(f"{slug}_*.json"))}
         rows.append(row)
     _plot(rows, ctx)
     payload = {"sizes": sizes, "sampler_labels": SAMPLERS, "rows": rows,

@@ -434,13 +434,15 @@ def write_report(out: Path, report: Path) -> Path:
         "everything runs and a first look, not a statistically meaningful replication; "
         "`--full` uses the paper's repetitions).",
         f"- Total wall time: {run.get('total_wall_s', '?')} s with {run.get('jobs', '?')} "
-        "experiments at a time.",
+        f"experiments at a time; total CPU time {run.get('total_cpu_s', '?')} s (all "
+        "processes: what the run costs on otherwise idle cores).",
         f"- Machine: Python {machine.get('python', '?')}, {machine.get('platform', '?')}, "
         f"{machine.get('cpus', '?')} CPUs shared with other jobs (1-min load "
         f"{machine.get('load_1min', '?')} when an experiment finished), "
         f"OMP_NUM_THREADS={machine.get('omp_num_threads', '?')}.",
         "- Per-experiment wall time: " + ", ".join(
-            f"{n} {e['wall_s']:.0f} s" + (" (FAILED)" if e["error"] else "")
+            f"{n} {e['wall_s']:.0f} s wall / {e.get('cpu_s', float('nan')):.0f} s CPU"
+            + (" (FAILED)" if e["error"] else "")
             for n, e in run.get("experiments", {}).items()),
         "",
     ]
