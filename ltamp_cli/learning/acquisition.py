@@ -16,7 +16,7 @@ import numpy as np
 import torch
 from scipy.optimize import minimize
 
-from ltamp_cli.learning.gp import DTYPE, PREDICT_CHUNK, GaussianProcess
+from ltamp_cli.learning.gp import DTYPE, GaussianProcess
 
 STRADDLE_WIDTH = 1.96
 
@@ -46,13 +46,9 @@ class Maximum:
 
 def evaluate(gp: GaussianProcess, objective: Objective, x: np.ndarray) -> np.ndarray:
     """Objective on a batch ``(m, d)`` in scaled-score units, chunked and without autograd."""
-    values = np.empty(len(x))
     with torch.no_grad():
-        for start in range(0, len(x), PREDICT_CHUNK):
-            block = torch.as_tensor(x[start : start + PREDICT_CHUNK], dtype=DTYPE)
-            mean, variance = gp.posterior_torch(block)
-            values[start : start + PREDICT_CHUNK] = objective(mean, variance.sqrt()).numpy()
-    return values
+        mean, variance = gp.posterior_blocks(torch.as_tensor(x, dtype=DTYPE))
+        return objective(mean, variance.sqrt_()).numpy().astype(float, copy=False)
 
 
 def first_valid(

@@ -19,10 +19,11 @@ import numpy as np
 import torch
 from scipy.optimize import minimize
 
-from ltamp_cli.learning.kernels import KERNEL_NAMES, to_gpytorch, unit_kernel
+from ltamp_cli.learning.kernels import KERNEL_NAMES, CrossCovariance, to_gpytorch, unit_kernel
 
 DTYPE = torch.float64
-PREDICT_CHUNK = 1000
+# Candidates per block: (n, 500) float64 work matrices stay cache-friendly for n ~ 100-400.
+PREDICT_CHUNK = 500
 
 
 class CholeskyError(RuntimeError):
@@ -151,6 +152,8 @@ class GaussianProcess:
             self._factor = robust_cholesky(covariance)
             residual = torch.as_tensor(self.y_np / self.y_scale - self._mean, dtype=DTYPE)
             self._alpha = torch.cholesky_solve(residual.unsqueeze(-1), self._factor).squeeze(-1)
+            # Training-side kernel features for the no-autograd prediction path.
+            self._cross = CrossCovariance(kernel, self._x, self._params)
 
     # ---- hyperparameters in readable form -------------------------------------------------
     @property
@@ -206,7 +209,14 @@ class GaussianProcess:
 
     # ---- prediction --------------------------------------------------------------------------
     def posterior_torch(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """Differentiable latent ``(mean (m,), variance (m,))`` (scaled units) at ``x (m, d)``."""
+        """Latent ``(mean (m,), variance (m,))`` (scaled units) at ``x (m, d)``.
+
+        Differentiable when autograd is on; under ``torch.no_grad()`` it takes the fast path
+        of :meth:`posterior_blocks` (same values up to rounding).
+        """
+        if not torch.is_grad_enabled():
+            means, variances = self.posterior_blocks(x)
+            return means, variances
         # The outputscale s is folded into scalars: k = s·u, so μ = m + s·uᵀα and
         # σ² = s·u(x, x) − s²‖L⁻¹u‖² — no full-size rescaled copy of the cross-covariance.
         scale = self._outputscale
@@ -217,18 +227,46 @@ class GaussianProcess:
         variance = scale * prior - (scale * scale) * solved.square().sum(0)
         return mean, variance.clamp_min(1e-12 * scale)
 
+    def posterior_blocks(
+        self, x: torch.Tensor, chunk: int = PREDICT_CHUNK
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Latent ``(mean (m,), variance (m,))`` (scaled units) at ``x (m, d)``, no autograd.
+
+        Per block of ``chunk`` candidates: the transposed cross-covariance ``U (n, b)`` in one
+        GEMM (:class:`CrossCovariance`), ``μ = m + s·αᵀU`` and ``σ² = s·u** − s²‖L⁻¹U‖²``
+        from the cached Cholesky factor ``L`` and ``α = K⁻¹(y − m)``; the three ``(n, b)``
+        work matrices are allocated once per call.
+        """
+        with torch.no_grad():
+            x = x.to(DTYPE).reshape(-1, self.dim)
+            m, n = x.shape[0], self.n
+            scale = self._outputscale
+            means = torch.empty(m, dtype=DTYPE)
+            variances = torch.empty(m, dtype=DTYPE)
+            size = n * min(chunk, max(m, 1))
+            cross_buffer, solved_buffer, work_buffer = (
+                torch.empty(size, dtype=DTYPE) for _ in range(3)
+            )
+            for start in range(0, m, chunk):
+                block = x[start : start + chunk]
+                b = block.shape[0]
+                cross = self._cross.transposed(
+                    block, cross_buffer[: n * b].view(n, b), work_buffer[: n * b].view(n, b)
+                )
+                torch.mv(cross.T, self._alpha, out=means[start : start + b])
+                solved = solved_buffer[: n * b].view(n, b)
+                torch.linalg.solve_triangular(self._factor, cross, upper=False, out=solved)
+                quadratic = solved.mul_(solved).sum(0)
+                prior = unit_kernel(self.kernel, block, block, self._params, diag=True)
+                variances[start : start + b] = prior.mul_(scale).sub_(quadratic, alpha=scale**2)
+            means.mul_(scale).add_(self._mean)
+            return means, variances.clamp_min_(1e-12 * scale)
+
     def predict(self, x: np.ndarray, chunk: int = PREDICT_CHUNK) -> tuple[np.ndarray, np.ndarray]:
         """Latent posterior ``(mean (m,), std (m,))`` in score units for ``x (m, d)`` normalised."""
-        x = np.asarray(x, dtype=float).reshape(-1, self.dim)
-        means = np.empty(len(x))
-        stds = np.empty(len(x))
-        with torch.no_grad():
-            for start in range(0, len(x), chunk):
-                block = torch.as_tensor(x[start : start + chunk], dtype=DTYPE)
-                mean, variance = self.posterior_torch(block)
-                means[start : start + chunk] = mean.numpy()
-                stds[start : start + chunk] = variance.sqrt().numpy()
-        return means * self.y_scale, stds * self.y_scale
+        x_t = torch.as_tensor(np.asarray(x, dtype=float).reshape(-1, self.dim), dtype=DTYPE)
+        mean, variance = self.posterior_blocks(x_t, chunk)
+        return mean.numpy() * self.y_scale, variance.sqrt_().numpy() * self.y_scale
 
     def with_data(self, x: np.ndarray, y: np.ndarray) -> GaussianProcess:
         """Same hyperparameters (in score units) conditioned on new data; no optimisation."""
