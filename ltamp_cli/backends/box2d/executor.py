@@ -27,9 +27,9 @@ from ltamp_cli.backends.box2d.scene import (
 )
 from ltamp_cli.backends.box2d.skills import scoop as scoop_skill
 from ltamp_cli.backends.box2d.tamp import (
-    APPROACH_OPENING,
     KitchenGeometry,
     Point,
+    approach_opening,
     empty_hand_path,
 )
 from ltamp_cli.backends.execution import ExecutionReport
@@ -141,7 +141,7 @@ class Kitchen2DRun:
 
     def pick(self, name: str, pose: Point, grasp: Point, approach: Sequence[Point]) -> None:
         empty = empty_hand_path(approach)
-        self.gripper.move((*empty[0], 0.0), opening=APPROACH_OPENING)
+        self.gripper.move((*empty[0], 0.0), opening=approach_opening(self.spec.object(name)))
         self.follow(empty[1:-1])
         self.follow(empty[-1:], speed=SLOW)
         grasped = self.gripper.close()
@@ -154,13 +154,41 @@ class Kitchen2DRun:
         self.follow(approach[1:-1])
         self.follow(approach[-1:], speed=SLOW)
         self.gripper.release(open_fingers=False)
-        self.gripper.move(self.gripper.pose, opening=APPROACH_OPENING, speed=1.0)
+        self.gripper.move(self.gripper.pose, opening=approach_opening(self.spec.object(name)),
+                          speed=1.0)
         self.gripper.hold(0.2)
         self.follow(list(reversed(empty_hand_path(approach)[:-1])), speed=SLOW)
         x, y, angle = body_pose(self.scene.bodies[name])
         if abs(x - pose[0]) > 0.5 or abs(y - pose[1]) > 0.3 or abs(angle) > 0.1:
             raise ActionFailed(f"place {name}: it came to rest at ({x:.2f}, {y:.2f}, "
                                f"{angle:.2f}) instead of ({pose[0]:.2f}, {pose[1]:.2f}, 0)")
+
+    def push(self, name: str, approach: Sequence[Point], control: Sequence[float]) -> None:
+        """Close the fingers above the block, go down beside it and push along the table
+        like the skill's pusher: at ``PUSH_SPEED · cos(angle)`` for ``duration`` seconds
+        (the x part of the learned push, see :meth:`KitchenGeometry.push_setup`), then
+        come back up to the conf. Raises if the block did not move (the push missed it)."""
+        conf, start, end = approach
+        body = self.scene.bodies[name]
+        x_before = float(body.position[0])
+        self.gripper.move((*conf, 0.0), opening=0.0)
+        self.follow([start], speed=SLOW)
+        dt = self.scene.kitchen.config.dt
+        steps = max(1, round(float(control[3]) / dt))
+        # ``end`` is the start plus PUSH_SPEED · cos(angle) · duration; like the skill's
+        # pusher, the hand starts and stops at once (constant speed, no smooth profile).
+        for k in range(1, steps + 1):
+            x = start[0] + (end[0] - start[0]) * k / steps
+            self.gripper.command((x, start[1], 0.0))
+            self.scene.kitchen.step()
+        self.gripper.hold(1.5)  # the block slides on, tips over the edge and lands
+        self.follow([(self.gripper.pose[0], conf[1])], speed=SLOW)
+        self.follow([conf])
+        moved = abs(float(body.position[0]) - x_before)
+        self.log.append({"push": name, "moved_x": round(moved, 3),
+                         "end": [round(float(v), 3) for v in body.position]})
+        if moved < 0.05:
+            raise ActionFailed(f"push {name}: the pusher missed it (moved {moved:.3f})")
 
     def fill(self, name: str) -> None:
         faucet = self.scene.faucet
@@ -339,6 +367,30 @@ def goal_atoms(formula: Any) -> list[tuple[str, tuple[str, ...]]]:
     raise ActionFailed("only conjunctions of positive facts can be checked physically")
 
 
+def diagnose(steps: Sequence[dict[str, Any]], facts: dict[str, dict[str, Any]],
+             error: str) -> list[str]:
+    """One line per thing that went wrong: the failed action, then every goal fact that does
+    not hold with what was measured; a ``contains`` fact also gets the material's count in
+    the cup after each step that changes contents, so a missed pour reads differently from
+    grains lost later (e.g. ``cream in cup: pour#8=33, dump#21=33, stir#27=31``)."""
+    out = [f"action failed: {error}"] if error else []
+    for fact, measured in facts.items():
+        if measured.get("holds"):
+            continue
+        values = ", ".join(f"{k}={v}" for k, v in measured.items() if k != "holds")
+        line = f"{fact} does not hold ({values})" if values else f"{fact} does not hold"
+        parts = fact.strip("()").split()
+        if parts[0] == "contains" and len(parts) == 3:
+            cup, material = parts[1], parts[2]
+            trace = [f"{entry['action']}#{entry['step']}="
+                     f"{entry['contents'].get(cup, {}).get(material, 0)}"
+                     for entry in steps if "contents" in entry]
+            if trace:
+                line += f"; {material} in {cup} after: {', '.join(trace)}"
+        out.append(line)
+    return out
+
+
 def _value(step: Any, index: int) -> Any:
     return step.values[index]
 
@@ -389,6 +441,7 @@ class Kitchen2DExecutor:
         details: dict[str, Any] = {
             "steps": steps,
             "goal": facts,
+            "diagnosis": diagnose(steps, facts, error),
             "particles": conservation,
             "sim_time_s": round(run.scene.kitchen.time, 3),
             "log": run.log,
@@ -417,6 +470,9 @@ class Kitchen2DExecutor:
             action(obj, pose, tuple(v(2)), v(4))
         elif name == "fill":
             run.fill(args[0])
+        elif name == "push":
+            # push ?o ?p ?e ?q ?a ?u
+            run.push(args[0], v(4), v(5))
         elif name == "pour":
             # pour ?k ?g ?c ?p ?q ?a ?u ?m
             run.pour(args[0], args[2], resolve_pose(spec, args[2], v(3)), v(5), v(6))
