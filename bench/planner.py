@@ -1,8 +1,11 @@
 """Planner benchmark: every example problem × algorithm × seed, wall time per solve.
 
 Each run is one :func:`ltamp_cli.planner.api.solve` call on an already loaded problem (YAML
-and PDDL parsing excluded; the bindings' ``make_streams`` included) and every returned plan
-is checked by the independent validator. Reports per (example, algorithm): solved /
+and PDDL parsing excluded; the bindings' ``make_streams`` included) with the problem file's
+own ``planner:`` options (as ``ltamp solve`` uses them), and every returned plan is checked by
+the independent validator. Two stream histories: ``cold`` (no persisted statistics, the
+Python API's default) and ``warm`` (statistics persisted by one earlier run of the domain, as
+``ltamp solve`` keeps them in the user cache by default). Reports per (example, algorithm): solved /
 timeouts / infeasible counts, median and max wall time, median CPU time of this process
 (the machine is shared), median cost and how many plans validated.
 
@@ -10,7 +13,8 @@ Targets (median wall time, no timeouts, per algorithm): ``kitchen_symbolic`` ≤
 ``tamp2d_4blocks`` ≤ 0.1 s. Printed as PASS/FAIL lines; the exit code does not depend on them.
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/planner.py [--seeds 5] [--max-time 10]
-        [--examples a,b] [--algorithms incremental,focused] [--out bench/results/planner.json]
+        [--examples a,b] [--algorithms incremental,focused] [--histories cold,warm]
+        [--out bench/results/planner.json]
 """
 
 from __future__ import annotations
@@ -19,7 +23,9 @@ import argparse
 import json
 import statistics
 import sys
+import tempfile
 import time
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
@@ -36,8 +42,25 @@ DEFAULT_OUT = REPO / "bench" / "results" / "planner.json"
 TARGETS_S = {"kitchen_symbolic": 0.2, "tamp2d_4blocks": 0.1}  # median wall seconds
 
 
-def run_one(problem: Any, algorithm: str, seed: int, max_time: float) -> dict[str, Any]:
-    config = PlannerConfig(algorithm=algorithm, seed=seed, max_time=max_time)
+HISTORIES = ("cold", "warm")
+WARM_UP_SEED = 1000
+
+
+def config_for(problem: Any, algorithm: str, seed: int, max_time: float,
+               statistics_dir: str | None) -> PlannerConfig:
+    """The problem file's planner options, overridden by the benchmark's own."""
+    known = {f.name for f in fields(PlannerConfig)}
+    options = {k: v for k, v in problem.planner_options.items() if k in known}
+    if "skeleton" in options:
+        options["skeleton"] = tuple(options["skeleton"])
+    options.update(algorithm=algorithm, seed=seed, max_time=max_time,
+                   statistics_dir=statistics_dir)
+    return PlannerConfig(**options)
+
+
+def run_one(problem: Any, algorithm: str, seed: int, max_time: float,
+            statistics_dir: str | None = None) -> dict[str, Any]:
+    config = config_for(problem, algorithm, seed, max_time, statistics_dir)
     cpu = time.process_time()
     start = time.perf_counter()
     result = solve(problem, config)
@@ -57,11 +80,12 @@ def run_one(problem: Any, algorithm: str, seed: int, max_time: float) -> dict[st
     return row
 
 
-def summarise(example: str, algorithm: str, rows: list[dict[str, Any]]) -> dict[str, Any]:
+def summarise(example: str, algorithm: str, history: str, rows: list[dict[str, Any]]
+              ) -> dict[str, Any]:
     walls = [r["wall_s"] for r in rows]
     costs = [r["cost"] for r in rows if r["cost"] is not None]
     return {
-        "example": example, "algorithm": algorithm, "runs": len(rows),
+        "example": example, "algorithm": algorithm, "history": history, "runs": len(rows),
         "solved": sum(r["status"] == "solved" for r in rows),
         "timeouts": sum(r["status"] == "timeout" for r in rows),
         "infeasible": sum(r["status"] == "infeasible" for r in rows),
@@ -81,6 +105,7 @@ def check_targets(summary: list[dict[str, Any]]) -> list[dict[str, Any]]:
         passed = (row["median_wall_s"] <= limit and row["timeouts"] == 0
                   and row["solved"] == row["runs"] and row["valid"] == row["solved"])
         checks.append({"example": row["example"], "algorithm": row["algorithm"],
+                       "history": row["history"],
                        "target_median_s": limit, "median_wall_s": row["median_wall_s"],
                        "median_cpu_s": row["median_cpu_s"], "timeouts": row["timeouts"],
                        "passed": passed})
@@ -88,13 +113,14 @@ def check_targets(summary: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def print_table(summary: list[dict[str, Any]], out: Any = sys.stdout) -> None:
-    header = (f"{'example':<22} {'algorithm':<12} {'solved':>6} {'t/o':>4} {'inf':>4} "
-              f"{'valid':>5} {'median s':>9} {'max s':>8} {'cpu s':>8} {'cost':>9}")
+    header = (f"{'example':<22} {'algorithm':<12} {'history':<7} {'solved':>6} {'t/o':>4} "
+              f"{'inf':>4} {'valid':>5} {'median s':>9} {'max s':>8} {'cpu s':>8} {'cost':>9}")
     print(header, file=out)
     print("-" * len(header), file=out)
     for row in summary:
         cost = "-" if row["median_cost"] is None else f"{row['median_cost']:.4g}"
-        print(f"{row['example']:<22} {row['algorithm']:<12} {row['solved']:>3}/{row['runs']:<2} "
+        print(f"{row['example']:<22} {row['algorithm']:<12} {row['history']:<7} "
+              f"{row['solved']:>3}/{row['runs']:<2} "
               f"{row['timeouts']:>4} {row['infeasible']:>4} {row['valid']:>5} "
               f"{row['median_wall_s']:>9.4f} {row['max_wall_s']:>8.3f} "
               f"{row['median_cpu_s']:>8.4f} {cost:>9}", file=out)
@@ -109,27 +135,39 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--max-time", type=float, default=10.0,
                         help="time limit per solve in seconds (a timeout counts as a run)")
+    parser.add_argument("--histories", default=",".join(HISTORIES),
+                        help="cold (no persisted stream statistics) and/or warm (after one "
+                             "earlier run of the domain)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
     args = parser.parse_args(argv)
+    histories = [h for h in args.histories.split(",") if h]
+    if not set(histories) <= set(HISTORIES):
+        parser.error(f"--histories: expected a subset of {', '.join(HISTORIES)}")
 
     names = ([n for n in args.examples.split(",") if n] if args.examples
              else sorted(p.stem for p in EXAMPLES.glob("*.yaml")))
     algorithms = [a for a in args.algorithms.split(",") if a]
     runs: list[dict[str, Any]] = []
     summary: list[dict[str, Any]] = []
-    progress = tqdm(total=len(names) * len(algorithms) * args.seeds, file=sys.stderr,
-                    desc="planner", disable=not sys.stderr.isatty())
+    progress = tqdm(total=len(names) * len(algorithms) * len(histories) * args.seeds,
+                    file=sys.stderr, desc="planner", disable=not sys.stderr.isatty())
     for name in names:
         problem = load_problem(EXAMPLES / f"{name}.yaml")
-        for algorithm in algorithms:
-            rows = []
-            for seed in range(args.seeds):
-                progress.set_postfix_str(f"{name} {algorithm} seed {seed}")
-                row = run_one(problem, algorithm, seed, args.max_time)
-                rows.append(row)
-                runs.append({"example": name, **row})
-                progress.update()
-            summary.append(summarise(name, algorithm, rows))
+        for history in histories:
+            with tempfile.TemporaryDirectory() as cache:
+                statistics_dir = None
+                if history == "warm":
+                    statistics_dir = cache
+                    run_one(problem, "adaptive", WARM_UP_SEED, args.max_time, statistics_dir)
+                for algorithm in algorithms:
+                    rows = []
+                    for seed in range(args.seeds):
+                        progress.set_postfix_str(f"{name} {algorithm} {history} seed {seed}")
+                        row = run_one(problem, algorithm, seed, args.max_time, statistics_dir)
+                        rows.append(row)
+                        runs.append({"example": name, "history": history, **row})
+                        progress.update()
+                    summary.append(summarise(name, algorithm, history, rows))
     progress.close()
 
     print_table(summary)
@@ -137,7 +175,8 @@ def main(argv: list[str] | None = None) -> int:
     print()
     for check in checks:
         verdict = "PASS" if check["passed"] else "FAIL"
-        print(f"{verdict}: {check['example']} / {check['algorithm']}: median "
+        print(f"{verdict}: {check['example']} / {check['algorithm']} / {check['history']}: "
+              f"median "
               f"{check['median_wall_s']:.4f} s wall (target ≤ {check['target_median_s']} s; "
               f"CPU {check['median_cpu_s']:.4f} s), {check['timeouts']} timeout(s)")
     invalid = [r for r in runs if r["valid"] is False]

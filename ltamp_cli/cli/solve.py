@@ -53,7 +53,7 @@ def solve_command(
     loaded = load_problem(problem, domain)
     options = dict(loaded.planner_options)
     known = {"algorithm", "max_time", "seed", "search", "unit_costs", "initial_complexity",
-             "max_complexity", "success_cost", "skeleton"}
+             "max_complexity", "success_cost", "skeleton", "eager_cheap_streams"}
     for key in options:
         if key not in known:
             raise InputError(f"{problem}: unknown planner option {key!r}: expected one of "

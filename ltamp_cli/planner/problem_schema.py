@@ -83,6 +83,7 @@ class PlannerOptions(BaseModel):
     max_complexity: int | None = Field(None, ge=0)
     success_cost: float | None = Field(None, ge=0.0)
     skeleton: list[str] | None = None
+    eager_cheap_streams: bool | None = None
 
 
 class ProblemFile(BaseModel):

@@ -61,3 +61,25 @@ def test_planner_state_blends_persisted_history(tmp_path) -> None:
     informed = state.effort("test-cfree")
     assert informed.p_success < 0.15 < fresh.p_success
     assert informed.order_key < fresh.order_key
+
+
+def test_statistics_make_cheap_samplers_eager_when_asked(tmp_path) -> None:
+    """The symbolic kitchen's slot sampler is cheap: once statistics show it, evaluating it
+    eagerly lets the first optimistic search find a plan (without the option, the plan
+    places objects on placeholder slots that later collide, and iterates)."""
+    from pathlib import Path
+
+    from ltamp_cli.planner.algorithms.common import PlannerConfig
+    from ltamp_cli.planner.api import solve
+    from ltamp_cli.planner.problem import load_problem
+
+    repo = Path(__file__).resolve().parents[2]
+    problem = load_problem(repo / "problems" / "examples" / "kitchen_symbolic.yaml")
+    history = str(tmp_path / "statistics")
+    warm_up = solve(problem, PlannerConfig(seed=7, max_time=60, statistics_dir=history))
+    assert warm_up.solved
+    plain = solve(problem, PlannerConfig(seed=0, max_time=60, statistics_dir=history))
+    eager = solve(problem, PlannerConfig(seed=0, max_time=60, statistics_dir=history,
+                                         eager_cheap_streams=True))
+    assert plain.solved and eager.solved
+    assert eager.stats["iterations"] == 1 < plain.stats["iterations"]

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ltamp_cli.errors import InputError
-from ltamp_cli.planner.algorithms.effort import Effort, estimate_effort
+from ltamp_cli.planner.algorithms.effort import Effort, estimate_effort, observed_cheap
 from ltamp_cli.planner.objects import ObjectTable
 from ltamp_cli.planner.pddl.syntax import (
     OBJECT_TYPE,
@@ -54,7 +54,10 @@ class PlannerConfig:
     most this or time runs out (``inf``: return the first plan). ``skeleton``: action
     patterns the plan must follow (see :mod:`ltamp_cli.planner.search.skeleton`).
     ``statistics_dir``: where per-domain stream statistics persist across runs (``None``:
-    nowhere).
+    nowhere). ``eager_cheap_streams``: also evaluate eagerly every stream that earlier calls
+    (persisted or in this run) showed to be cheap (:func:`.effort.observed_cheap`); worth it
+    for cheap finite samplers (discrete slots), not for continuous samplers that feed
+    quadratic eager streams such as motions between all configurations.
     """
 
     algorithm: str = "adaptive"
@@ -67,6 +70,7 @@ class PlannerConfig:
     success_cost: float = float("inf")
     skeleton: tuple[str, ...] = ()
     statistics_dir: str | None = None
+    eager_cheap_streams: bool = False
 
 
 def external_domain(external: External) -> tuple[Atom, ...]:
@@ -133,6 +137,18 @@ class PlannerState:
         """Expected success probability and overhead of a call of stream ``name``."""
         return estimate_effort(self.bindings[name].info, self.history.get(name),
                                self.stream_stats.get(name))
+
+    def eager(self, name: str) -> bool:
+        """Declared eager or, with ``config.eager_cheap_streams``, observed cheap (not for
+        :fluents streams, whose calls need a state)."""
+        if self.bindings[name].info.eager:
+            return True
+        if not self.config.eager_cheap_streams:
+            return False
+        external = self.externals[name]
+        if isinstance(external, Stream) and external.fluents:
+            return False
+        return observed_cheap(self.history.get(name), self.stream_stats.get(name))
 
     def record_failure(self, instance: StreamInstance) -> None:
         external = instance.external

@@ -22,6 +22,15 @@ PRIOR_CALLS = 2.0
 # Streams that never fail still need a finite key; their relative order stays by overhead.
 MIN_FAILURE_PROBABILITY = 1e-3
 
+# With ``PlannerConfig.eager_cheap_streams``, a stream observed this often to cost at most
+# this much per call is evaluated eagerly, as if declared ``eager``: calling it on every real
+# input is cheaper than the searches and failed stream plans its optimistic placeholders
+# would cause. The threshold is far above the cost of closed-form Python samplers
+# (~10-50 us) and below GP predictions and simulations, so measured time noise does not
+# flip the decision in practice.
+AUTO_EAGER_MIN_CALLS = 3
+AUTO_EAGER_MAX_OVERHEAD_S = 2.5e-4
+
 InstanceKey = tuple[str, tuple[str, ...]]
 
 
@@ -50,6 +59,16 @@ def estimate_effort(prior: StreamInfo, history: Mapping[str, float] | None,
         successes += float(source.get("successes", 0.0))
         seconds += float(source.get("time_s", 0.0))
     return Effort(min(1.0, successes / calls), seconds / calls)
+
+
+def observed_cheap(history: Mapping[str, float] | None, run: StreamStats | None) -> bool:
+    """Whether the observed calls (persisted ``history`` plus this ``run``) show a stream to
+    be cheap enough for eager evaluation; the prior does not count."""
+    calls, seconds = 0.0, 0.0
+    for source in (history or {}, _as_totals(run)):
+        calls += float(source.get("calls", 0.0))
+        seconds += float(source.get("time_s", 0.0))
+    return calls >= AUTO_EAGER_MIN_CALLS and seconds / calls <= AUTO_EAGER_MAX_OVERHEAD_S
 
 
 def _as_totals(run: StreamStats | None) -> dict[str, float]:

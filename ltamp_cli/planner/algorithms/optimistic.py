@@ -176,13 +176,14 @@ def evaluate_eager(state: PlannerState) -> None:
     """Call every eager stream (``StreamInfo.eager``) once on all real inputs, to a fixpoint.
 
     Cheap, decisive streams (collision tests, closed-form kinematics) are better evaluated
-    for real than assumed optimistically: it keeps optimistic placeholders few.
+    for real than assumed optimistically: it keeps optimistic placeholders few. Streams
+    observed to be cheap (:func:`.effort.observed_cheap`) count as eager too.
     """
     changed = True
     while changed and not state.timed_out():
         changed = False
         for external in state.externals.values():
-            if not state.bindings[external.name].info.eager:
+            if not state.eager(external.name):
                 continue
             for inputs in list(state.bindings_of(external, state.facts)):
                 instance = state.instance(external.name, inputs)
