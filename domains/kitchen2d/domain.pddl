@@ -1,19 +1,21 @@
 ; Kitchen2D: a free-flying gripper in a 2D kitchen (Box2D) with cups, a spoon, a stirrer,
 ; a faucet and a coaster. Continuous values come from streams (stream.pddl): poses and
 ; grasps, gripper confs above the reserved columns with their approach paths, RRT-Connect
-; motions, and learned pour/scoop controls.
+; motions, and learned pour/scoop/push controls. A block can be pushed off the table (push:
+; the closed gripper slides it over an edge; it ends on the floor).
 (define (domain kitchen2d)
   (:requirements :strips :equality :negative-preconditions :derived-predicates :action-costs)
   (:predicates
-    (Cup ?c) (Pitcher ?k) (Bowl ?b) (Spoon ?s) (Stirrer ?s) (Graspable ?o) (Region ?r)
+    (Cup ?c) (Pitcher ?k) (Bowl ?b) (Spoon ?s) (Stirrer ?s) (Block ?o) (Edge ?e)
+    (Graspable ?o) (Region ?r)
     (Stackable ?o ?r) (Workspace ?r) (Dispenses ?r ?m)
     (Pose ?o ?p) (Grasp ?o ?g) (Conf ?q) (HoldConf ?o ?g ?q) (Traj ?t)
     (Contained ?o ?p ?r) (Kin ?o ?p ?g ?q ?a)
     (FreeMotion ?q1 ?t ?q2) (HoldingMotion ?o ?g ?q1 ?t ?q2) (CFree ?o1 ?p1 ?o2 ?p2)
     (PourKin ?k ?g ?c ?p ?q ?a ?u) (ScoopKin ?s ?g ?b ?p ?q ?a ?u)
-    (DumpKin ?s ?g ?c ?p ?q ?a ?u) (StirKin ?s ?g ?c ?p ?q ?a ?u)
+    (DumpKin ?s ?g ?c ?p ?q ?a ?u) (StirKin ?s ?g ?c ?p ?q ?a ?u) (PushKin ?o ?p ?e ?q ?a ?u)
     (AtPose ?o ?p) (AtGrasp ?o ?g) (AtConf ?q) (HandEmpty) (CanMove)
-    (Contains ?o ?m) (Stirred ?c)
+    (Contains ?o ?m) (Stirred ?c) (OffTable ?o)
     (On ?o ?r) (Holding ?o) (UnsafePose ?o ?p))
   (:functions (Distance ?q1 ?q2) (HoldDistance ?o ?g ?q1 ?q2) (total-cost))
   (:derived (On ?o ?r)
@@ -46,6 +48,12 @@
                        (not (UnsafePose ?o ?p)))
     :effect (and (AtPose ?o ?p) (HandEmpty) (CanMove) (not (AtGrasp ?o ?g))
                  (increase (total-cost) 1)))
+  ; Push a block off the table over edge ?e with the empty, closed hand (learned GoodPush);
+  ; the hand comes back up to ?q.
+  (:action push
+    :parameters (?o ?p ?e ?q ?a ?u)
+    :precondition (and (PushKin ?o ?p ?e ?q ?a ?u) (AtPose ?o ?p) (HandEmpty) (AtConf ?q))
+    :effect (and (OffTable ?o) (not (AtPose ?o ?p)) (CanMove) (increase (total-cost) 1)))
   ; The faucet fills a cup standing under it (the hand is free and away).
   (:action fill
     :parameters (?c ?p ?r ?m)

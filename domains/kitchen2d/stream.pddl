@@ -40,6 +40,13 @@
     :domain (and (Spoon ?s) (Bowl ?b) (Pose ?b ?p))
     :outputs (?g ?q ?a ?u)
     :certified (and (Grasp ?s ?g) (HoldConf ?s ?g ?q) (ScoopKin ?s ?g ?b ?p ?q ?a ?u)))
+  ; Learned GoodPush: push block ?o at ?p off the table over edge ?e; ?q is the conf above
+  ; the pusher's start, ?a the descent and the push, ?u the push skill's control.
+  (:stream sample-push
+    :inputs (?o ?p ?e)
+    :domain (and (Block ?o) (Pose ?o ?p) (Edge ?e))
+    :outputs (?q ?a ?u)
+    :certified (and (Conf ?q) (PushKin ?o ?p ?e ?q ?a ?u)))
   ; Engineered dump and stir over a cup.
   (:stream sample-dump
     :inputs (?s ?g ?c ?p ?r)

@@ -21,6 +21,13 @@ fewer failed executions. At most ``world.precheck_limit`` (default 8) trials are
 stream call. Every check is logged on the ``ltamp.kitchen2d`` logger (INFO, with the record
 attribute ``precheck``: skill, score, verdict) so that callers can report how many controls
 the pre-check rejected.
+
+GoodPush (``sample-push``) is a generic :class:`~ltamp_cli.learned_streams.stream.LearnedStream`
+over the push model (``world.learned_streams.sample-push`` or the shipped
+``models/kitchen2d/push``): its context is the goal ``(goal_x, 0)`` a little past the table
+edge, its samples are restricted to the kitchen's section (pushes in line with the block,
+:func:`~ltamp_cli.backends.box2d.tamp.section_mask`) and the planner's "unusable" feedback
+goes back to its sampler.
 """
 
 from __future__ import annotations
@@ -34,15 +41,88 @@ import numpy as np
 
 from ltamp_cli.backends.box2d.scene import default_grasp, scene_from_world
 from ltamp_cli.backends.box2d.skills import pour as pour_skill
+from ltamp_cli.backends.box2d.skills import push as push_skill
 from ltamp_cli.backends.box2d.skills import scoop as scoop_skill
-from ltamp_cli.backends.box2d.tamp import KitchenGeometry, Point
+from ltamp_cli.backends.box2d.tamp import KitchenGeometry, Point, section_mask
 from ltamp_cli.errors import InputError
+from ltamp_cli.learned_streams.stream import (
+    LearnedStream,
+    LearnedStreamConfig,
+    learned_stream_configs,
+)
 from ltamp_cli.planner.streams import Binding, StreamInfo
 
 HERE = Path(__file__).resolve().parent
 LOG = logging.getLogger("ltamp.kitchen2d")
 PRECHECK_SKILLS = ("pour", "scoop")
 DEFAULT_MODELS = {"pour": "../../models/kitchen2d/pour", "scoop": "../../models/kitchen2d/scoop"}
+DEFAULT_PUSH = {"model": "../../models/kitchen2d/push", "sampler": "adaptive"}
+#: GoodPush gives up on one (block, pose, edge) after this many controls in a row that the
+#: kitchen cannot use (the sampler itself never ends while its level set has members).
+PUSH_REJECTS = 200
+
+
+class _GiveUp(Exception):
+    """Raised inside a learned stream's output mapping to end that stream call."""
+
+
+def push_stream(world: Mapping[str, Any], geometry: KitchenGeometry,
+                rng: np.random.Generator) -> tuple[LearnedStream, Callable[..., Any]]:
+    """GoodPush and the planner generator over it (inputs ``(block, pose, edge)``, outputs
+    ``(conf, approach, control)``). The model is loaded once, never refitted."""
+    configs = learned_stream_configs(world, HERE)
+    config = configs.get("sample-push") or LearnedStreamConfig.from_mapping(
+        DEFAULT_PUSH, HERE, "sample-push")
+    if not (config.model_dir / "model.json").is_file():
+        raise InputError(f"world: learned_streams.sample-push.model: no model directory at "
+                         f"{config.model_dir}")
+    push_config = push_skill.PushConfig()
+    rejected: dict[tuple[Any, ...], int] = {}  # per stream call (inputs)
+
+    def context(block: str, pose: Any, edge: str) -> np.ndarray:
+        found = geometry.push_context(block, _pose(geometry, block, pose), edge)
+        assert found is not None  # the generator below checks reach first
+        return found
+
+    def outputs(control: np.ndarray, block: str, pose: Any, edge: str
+                ) -> tuple[Any, ...] | None:
+        setup = geometry.push_setup(block, _pose(geometry, block, pose), edge, control)
+        key = (block, str(pose), edge)
+        if setup is None:
+            rejected[key] = rejected.get(key, 0) + 1
+            if rejected[key] >= PUSH_REJECTS:
+                raise _GiveUp
+            return None
+        rejected[key] = 0
+        conf, approach = setup
+        return (conf, approach, _tuple(control))
+
+    def valid(ctx: np.ndarray, controls: np.ndarray) -> np.ndarray:
+        return push_skill.valid_mask(ctx, controls, push_config) & section_mask(ctx, controls)
+
+    stream = LearnedStream(config, context, outputs, rng, valid)
+
+    def generate(block: str, pose: Any, edge: str) -> Iterator[tuple[Any, ...]]:
+        item = geometry.spec.object(block)
+        if item.kind != "block":
+            return
+        p = _pose(geometry, block, pose)
+        try:
+            geometry.edge_x(edge)
+        except ValueError as error:
+            raise InputError(f"sample-push: {error}") from None
+        # The block must reach the edge without meeting a curb, and the goal past the edge
+        # must lie in the skill's context box: otherwise no control can help.
+        if geometry.push_context(block, p, edge) is None or not geometry.push_path_clear(
+                block, p, edge):
+            return
+        rejected[(block, str(pose), edge)] = 0
+        try:
+            yield from stream(block, pose, edge)
+        except _GiveUp:
+            return
+
+    return stream, generate
 
 
 class LearnedControls:
@@ -235,6 +315,9 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
             grasp, conf, approach = setups[control.tobytes()]
             yield (grasp, conf, approach, _tuple(control))
 
+    push, sample_push = push_stream(world, geometry, rng) if any(
+        o.kind == "block" for o in scene.objects) else (None, None)
+
     def sample_dump(spoon: str, grasp: Point, target: str, pose: Any, region: str
                     ) -> Iterator[tuple[Any, ...]]:
         p = _pose(geometry, target, pose)
@@ -252,7 +335,13 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         return geometry.distance(tuple(q1), tuple(q2))
 
     cheap = StreamInfo(overhead=0.01)
-    return {
+    bindings: dict[str, Any] = {}
+    if push is not None:
+        bindings["sample-push"] = Binding(sample_push, StreamInfo(p_success=0.8, overhead=0.5),
+                                          on_unusable=push.on_unusable)
+    else:
+        bindings["sample-push"] = lambda block, pose, edge: iter(())
+    return bindings | {
         "sample-placement": Binding(sample_placement, cheap),
         "sample-grasp": Binding(sample_grasp, cheap),
         "inverse-kinematics": Binding(inverse_kinematics, cheap),

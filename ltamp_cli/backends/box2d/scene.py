@@ -20,6 +20,13 @@ arrangement the planner saw.
     faucet: {material: coffee, particles: 150}
     fixed: {sugar: 0.0}       # optional: home x of some objects (not shuffled)
     walls: [[x, width, height], ...]   # optional static obstacles standing on the table
+    curbs: {block: {side: either, height: 0.25, width: 0.6, gap: 0.1}}   # optional
+    holders: {pitcher: {height: 1.6}}  # optional: a fixed U-shaped holder around a cup
+
+A *curb* is a low static wall standing ``gap`` beside an object (``side``: ``left``,
+``right`` or ``either``, drawn by the seed), too close for a finger but low enough for a
+pusher to pass over. A *holder* is a fixed U (base plate in the table, a wall on each side)
+hugging a cup and its handle: fingers can only take the handle above its walls.
 """
 
 from __future__ import annotations
@@ -63,6 +70,25 @@ MATERIALS: Mapping[str, ParticleSpec] = {
 
 #: Clearance kept around every object's footprint (the fingers need room beside handles).
 CLEARANCE = 0.7
+#: A holder's walls: thickness, and their gaps to the handle bar (left; narrower than a
+#: finger) and to the cup's right wall.
+HOLDER_WALL = 0.3
+HOLDER_LEFT_GAP = 0.2
+HOLDER_RIGHT_GAP = 0.15
+
+
+@dataclass(frozen=True)
+class Holder:
+    """A fixed U-shaped holder around object ``name``: walls ``[x0, x1]`` (left, right) of
+    ``height`` standing on the table; the base plate lies in the table top between them."""
+
+    name: str
+    left: tuple[float, float]
+    right: tuple[float, float]
+    height: float
+
+    def walls(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        return (self.left, self.right)
 
 
 @dataclass(frozen=True)
@@ -104,6 +130,7 @@ class SceneSpec:
     faucet_particles: int = 150
     walls: tuple[tuple[float, float, float], ...] = ()
     gripper: GripperSpec = field(default_factory=GripperSpec)
+    holders: tuple[Holder, ...] = ()
 
     def object(self, name: str) -> SceneObject:
         for item in self.objects:
@@ -231,13 +258,76 @@ def scene_from_world(world: Mapping[str, Any], rng: np.random.Generator) -> Scen
     walls = tuple(tuple(float(v) for v in wall) for wall in world.get("walls", []) or [])
     if any(len(w) != 3 for w in walls):
         raise InputError("world: walls: expected a list of [x, width, height]")
+    # Curbs and holders come last so that problems without them keep their draws.
+    by_name = {o.name: o for o in placed}
+    walls += _curbs(world.get("curbs", {}) or {}, by_name, rng)
+    holders = _holders(world.get("holders", {}) or {}, by_name)
     return SceneSpec(
         placed,
         layout,
         material,
         int(faucet.get("particles", 150)),
         walls,  # type: ignore[arg-type]
+        holders=holders,
     )
+
+
+def _known(raw: Any, key: str, objects: Mapping[str, SceneObject]) -> Mapping[str, Any]:
+    if not isinstance(raw, Mapping):
+        raise InputError(f"world: {key}: expected a mapping of object names to settings")
+    for name, entry in raw.items():
+        if str(name).lower() not in objects:
+            raise InputError(f"world: {key}: unknown object {name!r}")
+        if not isinstance(entry, Mapping):
+            raise InputError(f"world: {key}.{name}: expected a mapping")
+    return raw
+
+
+def _curbs(raw: Any, objects: Mapping[str, SceneObject], rng: np.random.Generator
+           ) -> tuple[tuple[float, float, float], ...]:
+    """Walls ``(x, width, height)`` of the curbs beside objects (one draw per curb)."""
+    out = []
+    for name, entry in _known(raw, "curbs", objects).items():
+        item = objects[str(name).lower()]
+        where = f"curbs.{name}"
+        side = str(entry.get("side", "either"))
+        if side not in ("left", "right", "either"):
+            raise InputError(f"world: {where}.side: expected left, right or either, "
+                             f"got {side!r}")
+        draw = float(rng.uniform())
+        if side == "either":
+            side = "left" if draw < 0.5 else "right"
+        height = _number(entry.get("height", 0.25), f"{where}.height", rng)
+        width = _number(entry.get("width", 0.6), f"{where}.width", rng)
+        gap = _number(entry.get("gap", 0.1), f"{where}.gap", rng)
+        if not (height > 0 and width > 0 and gap >= 0):
+            raise InputError(f"world: {where}: expected height, width > 0 and gap >= 0")
+        left, right, _ = item.extent()
+        x = (item.home + right + gap + width / 2 if side == "right"
+             else item.home + left - gap - width / 2)
+        out.append((round(x, 4), width, height))
+    return tuple(out)
+
+
+def _holders(raw: Any, objects: Mapping[str, SceneObject]) -> tuple[Holder, ...]:
+    out = []
+    for name, entry in _known(raw, "holders", objects).items():
+        item = objects[str(name).lower()]
+        if item.kind != "cup":
+            raise InputError(f"world: holders.{name}: only cups stand in holders")
+        height = entry.get("height", 1.6)
+        if isinstance(height, bool) or not isinstance(height, int | float) or not (
+                0.3 <= height <= item.spec.height - 0.5):
+            raise InputError(f"world: holders.{name}.height: expected a number in [0.3, "
+                             f"{item.spec.height - 0.5:.2f}] (below the cup's rim)")
+        spec = item.spec
+        bar_left = item.home + spec.handle_x - spec.handle_width / 2
+        cup_right = item.home + spec.width / 2
+        left = bar_left - HOLDER_LEFT_GAP
+        right = cup_right + HOLDER_RIGHT_GAP
+        out.append(Holder(item.name, (round(left - HOLDER_WALL, 4), round(left, 4)),
+                          (round(right, 4), round(right + HOLDER_WALL, 4)), float(height)))
+    return tuple(out)
 
 
 @dataclass
@@ -279,6 +369,15 @@ def build_scene(spec: SceneSpec, seed: int, observer: Observer | None = None) ->
         wall = kitchen.world.CreateStaticBody(position=(x, top))
         wall.CreatePolygonFixture(box=(width / 2, height / 2, (0.0, height / 2), 0.0))
         wall.userData = {"name": "wall", "color": (120, 120, 120)}
+    for holder in spec.holders:
+        # One static U: the base plate lies in the table top (the cup stands on the table).
+        (a0, a1), (b0, b1) = holder.walls()
+        body = kitchen.world.CreateStaticBody(position=(0.0, top))
+        for x0, x1, y0, y1 in ((a0, a1, 0.0, holder.height), (b0, b1, 0.0, holder.height),
+                               (a0, b1, -0.2, 0.0)):
+            body.CreatePolygonFixture(box=((x1 - x0) / 2, (y1 - y0) / 2,
+                                           ((x0 + x1) / 2, (y0 + y1) / 2), 0.0))
+        body.userData = {"name": "holder", "color": (95, 95, 140)}
     for item in spec.objects:
         pose = (item.home, top, 0.0)
         if item.kind in ("cup", "bowl"):
@@ -325,7 +424,8 @@ def default_grasp(item: SceneObject) -> tuple[float, float]:
                 round(scoop_skill.grasp_height(scoop_skill.ScoopConfig(), 0.5), 6))
     if item.kind == "stirrer":
         return (0.0, round(item.spec.length - 1.5, 6))
-    return (0.0, round(item.spec.size + 0.3, 6))
+    # A block is pinched at mid-height, the fingers beside it.
+    return (0.0, round(item.spec.size / 2, 6))
 
 
 def grasp_opening(item: SceneObject) -> float:
@@ -354,6 +454,7 @@ def describe(spec: SceneSpec) -> dict[str, Any]:
 
 __all__ = [
     "MATERIALS",
+    "Holder",
     "LiveScene",
     "SceneObject",
     "SceneSpec",

@@ -9,7 +9,9 @@ Values (all tuples of floats, so the planner can intern and print them):
 * grasp ``(dx, dy)``: the gripper origin in the object's frame;
 * conf ``(x, y)``: a gripper position with θ = 0 *above the reserved columns* (below);
 * approach: a tuple of gripper positions from a conf down to where the hand acts;
-* trajectory: a tuple of gripper positions from one conf to another.
+* trajectory: a tuple of gripper positions from one conf to another;
+* push approach: ``(conf, start, end)``: down from the conf to the pusher's start beside a
+  block, then the push along the table (see :meth:`KitchenGeometry.push_setup`).
 
 **Reserved columns.** Every place an object may stand (its home, the coaster, the spot
 under the faucet) reserves the column above its footprint up to the object's height plus a
@@ -52,6 +54,21 @@ TRANSIT_MARGIN = 0.5
 #: object already in hand, so they accept a grasp at the very end of a bar; a real grasp
 #: there tips the object over).
 MIN_GRIP = 0.8
+#: The push skill's pusher is a disc of this radius (skills/push.py); the kitchen pushes
+#: with the closed fingers, whose leading face is put where the disc's would be.
+PUSHER_RADIUS = 0.4
+#: Pusher speed (units/s), as in the push skill's trials.
+PUSH_SPEED = 4.0
+#: The learned push goal lies this far past the table edge: a control with g > 0 leaves the
+#: block within 2 of it, so its centre ends at least 0.5 past the edge and it falls.
+PUSH_PAST_EDGE = 2.5
+#: The push skill's goal range (its context box is [-5, 5]^2).
+PUSH_REACH = 5.0
+#: Section test: the skill is learned seen from above; the kitchen shows the vertical
+#: section through the block along the table, so only pushes that start in line with the
+#: block (|ry| below this) and run mostly along the table (|sin angle| below this) apply.
+SECTION_RY = 0.5
+SECTION_SIN = 0.35
 
 
 def _r(value: float) -> float:
@@ -114,7 +131,11 @@ class KitchenGeometry:
         ]
         for x, width, height in spec.walls:
             furniture.append((x - width / 2, self.top, x + width / 2, self.top + height))
+        for holder in spec.holders:
+            for x0, x1 in holder.walls():
+                furniture.append((x0, self.top, x1, self.top + holder.height))
         self.furniture = tuple(furniture)
+        self.pusher_boxes = g.boxes(0.0)
         self.bounds = (
             np.array([-lay.width / 2 + 1, self.top + 0.3]),
             np.array([lay.width / 2 - 1, lay.height - 1]),
@@ -199,11 +220,12 @@ class KitchenGeometry:
         return np.stack([bx + c * local[:, 0] - s * local[:, 1],
                          by + s * local[:, 0] + c * local[:, 1]], axis=1)
 
-    def hand_rects(self, held: SceneObject | None, grasp: Point | None, x: float, y: float
-                   ) -> np.ndarray:
-        """Axis-aligned boxes ``(m, 4)`` of the upright gripper and held object."""
+    def hand_rects(self, held: SceneObject | None, grasp: Point | None, x: float, y: float,
+                   boxes: Sequence[Box] | None = None) -> np.ndarray:
+        """Axis-aligned boxes ``(m, 4)`` of the upright gripper (``boxes``, default: open to
+        :data:`APPROACH_OPENING`) and held object."""
         rects = [[x + b.cx - b.hw, y + b.cy - b.hh, x + b.cx + b.hw, y + b.cy + b.hh]
-                 for b in self.gripper_boxes]
+                 for b in (self.gripper_boxes if boxes is None else boxes)]
         if held is not None and grasp is not None:
             ox, oy = x - grasp[0], y - grasp[1]
             rects += [[ox + b.cx - b.hw, oy + b.cy - b.hh, ox + b.cx + b.hw, oy + b.cy + b.hh]
@@ -221,12 +243,14 @@ class KitchenGeometry:
         return bool((~sep).any())
 
     def segment_free(self, held: SceneObject | None, grasp: Point | None,
-                     path: Sequence[Point], exclude: Sequence[str] = ()) -> bool:
-        """Whether the upright hand moving along ``path`` (straight segments) stays clear."""
+                     path: Sequence[Point], exclude: Sequence[str] = (),
+                     boxes: Sequence[Box] | None = None) -> bool:
+        """Whether the upright hand (``boxes``: see :meth:`hand_rects`) moving along
+        ``path`` (straight segments) stays clear."""
         obstacles = self.obstacles(exclude)
         for (x0, y0), (x1, y1) in itertools.pairwise(path):
-            a = self.hand_rects(held, grasp, x0, y0)
-            b = self.hand_rects(held, grasp, x1, y1)
+            a = self.hand_rects(held, grasp, x0, y0, boxes)
+            b = self.hand_rects(held, grasp, x1, y1, boxes)
             swept = np.concatenate([np.minimum(a[:, :2], b[:, :2]),
                                     np.maximum(a[:, 2:], b[:, 2:])], axis=1)
             if self.overlaps(swept, obstacles):
@@ -278,7 +302,8 @@ class KitchenGeometry:
         exclude = [spot] if spot else []
         if not self.segment_free(item, grasp, approach[:-1], exclude):
             return None
-        if not self.segment_free(None, None, empty_hand_path(approach), exclude):
+        open_hand = self.spec.gripper.boxes(approach_opening(item))
+        if not self.segment_free(None, None, empty_hand_path(approach), exclude, open_hand):
             return None
         return approach[0], approach
 
@@ -479,8 +504,88 @@ class KitchenGeometry:
             return None
         return conf, (conf, hand), (_r(bottom), _r(amplitude), 3.0)
 
+    # --- push ----------------------------------------------------------------------------
+    def edge_x(self, edge: str) -> float:
+        """x of a table edge named ``left...`` or ``right...`` (e.g. ``left_edge``)."""
+        lay = self.spec.layout
+        if edge.startswith("left"):
+            return lay.table_x0
+        if edge.startswith("right"):
+            return lay.table_x1
+        raise ValueError(f"not a table edge: {edge!r} (expected a name starting with "
+                         f"left or right)")
+
+    def push_height(self, name: str, pose: Point) -> float:
+        """Gripper origin height while pushing block ``name``: fingertips at half its size,
+        above any curb beside it."""
+        return _r(pose[1] + self.spec.object(name).spec.size / 2 + self.spec.gripper.tip)
+
+    def push_context(self, name: str, pose: Point, edge: str) -> np.ndarray | None:
+        """The push skill's context ``(goal_x, goal_y)`` (relative to the block) for pushing
+        ``name`` off ``edge``, or ``None`` if that goal is beyond the skill's reach."""
+        x_edge = self.edge_x(edge)
+        distance = abs(x_edge - pose[0]) + PUSH_PAST_EDGE
+        if distance > PUSH_REACH:
+            return None
+        return np.array([math.copysign(distance, x_edge - pose[0]), 0.0])
+
+    def push_path_clear(self, name: str, pose: Point, edge: str) -> bool:
+        """Whether the block can slide from ``pose`` to ``edge`` without meeting furniture
+        (a curb or wall on that side): independent of the control."""
+        size = self.spec.object(name).spec.size
+        x_edge = self.edge_x(edge)
+        x0, x1 = sorted((pose[0] - size / 2, pose[0] + size / 2))
+        swept = np.array([[min(x0, x_edge), pose[1] + 0.05, max(x1, x_edge),
+                           pose[1] + size]])
+        return not self.overlaps(swept, np.array(self.furniture[1:]))
+
+    def push_setup(self, name: str, pose: Point, edge: str, control: Sequence[float]
+                   ) -> tuple[Point, tuple[Point, Point, Point]] | None:
+        """Conf and push approach ``(conf, start, end)`` of a push of block ``name`` off
+        ``edge`` with the push skill's control ``(rx, ry, angle, duration)``.
+
+        The closed gripper goes down beside the block (its leading face where the skill's
+        pusher disc would be) and moves along the table by the x part of the skill's push,
+        ``PUSH_SPEED · duration · cos(angle)``. ``None`` if the push does not run towards
+        the edge or the gripper would hit furniture (outside the block's own column).
+        """
+        rx, _ry, angle, duration = (float(v) for v in control)
+        direction = math.copysign(1.0, self.edge_x(edge) - pose[0])
+        travel = PUSH_SPEED * duration * math.cos(angle)
+        if direction * travel <= 0 or direction * rx >= 0:
+            return None
+        half = self.spec.gripper.finger_width  # closed fingers: two finger widths wide
+        start = (_r(pose[0] + rx + direction * (PUSHER_RADIUS - half)),
+                 self.push_height(name, pose))
+        end = (_r(start[0] + travel), start[1])
+        conf = (start[0], self.conf_height(None, None))
+        spot = self.spot_of(pose)
+        exclude = [spot] if spot else []
+        path = (conf, start, end, (end[0], conf[1]))
+        if not self.segment_free(None, None, path, exclude, self.pusher_boxes):
+            return None
+        return conf, (conf, start, end)
+
     def distance(self, a: Point, b: Point) -> float:
         return _r(math.hypot(a[0] - b[0], a[1] - b[1]) + 1.0)
 
     def opening(self, name: str) -> float:
         return grasp_opening(self.spec.object(name))
+
+
+def approach_opening(item: SceneObject) -> float:
+    """Finger opening of an empty hand going down to grasp ``item``: narrow for bars
+    (handles, rods), wide enough to straddle a block."""
+    if item.kind == "block":
+        return min(item.spec.size + 0.2, 0.8)
+    return APPROACH_OPENING
+
+
+def section_mask(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
+    """Push controls ``(n, 4)`` that apply in the kitchen's section for a goal ``context``
+    ``(goal_x, 0)``: the pusher starts behind the block in line with it and runs mostly
+    along the table towards the goal (see :data:`SECTION_RY`)."""
+    direction = np.sign(context[0])
+    rx, ry, angle = controls[:, 0], controls[:, 1], controls[:, 2]
+    return ((direction * rx < 0) & (np.abs(ry) <= SECTION_RY)
+            & (np.abs(np.sin(angle)) <= SECTION_SIN) & (direction * np.cos(angle) > 0))
