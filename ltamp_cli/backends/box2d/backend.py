@@ -11,10 +11,12 @@ from typing import Any
 import numpy as np
 from PIL import Image
 
+from ltamp_cli.backends.box2d.guard import Box2DGuard
 from ltamp_cli.backends.box2d.render import FrameRecorder, save_frames
 from ltamp_cli.backends.box2d.skills import pour, push, scoop
 from ltamp_cli.backends.box2d.world import Observer
 from ltamp_cli.backends.protocol import SkillSpec, TrialResult, skill_spec
+from ltamp_cli.backends.sanity import PhysicsDiverged
 
 _MODULES: Mapping[str, ModuleType] = MappingProxyType({"pour": pour, "scoop": scoop, "push": push})
 
@@ -74,7 +76,13 @@ class Kitchen2DBackend:
         module, config = self._skill(skill)
         context = np.asarray(context, dtype=float).reshape(module.SPEC.context.dim)
         control = np.asarray(control, dtype=float).reshape(module.SPEC.control.dim)
-        return module.run(context, control, int(seed), config, observer)
+        guard = Box2DGuard(observer)  # a diverged simulation makes an invalid trial
+        try:
+            result = module.run(context, control, int(seed), config, guard)
+            guard.final_check()
+        except PhysicsDiverged as diverged:
+            return diverged.result(module.SPEC.invalid_score)
+        return result
 
     def close(self) -> None:
         """Nothing to release: worlds live only as long as their trial."""

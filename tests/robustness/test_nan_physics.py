@@ -1,0 +1,122 @@
+"""Diverging physics (NaN, bodies flung away) makes an invalid trial, never a crash."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+from Box2D import b2
+
+from ltamp_cli.backends import load_backend
+from ltamp_cli.backends.box2d import world as box2d_world
+from ltamp_cli.backends.sanity import DivergenceGuard, PhysicsDiverged, StateLimits
+from ltamp_cli.trials.collect import CollectJob, collect, trial_input
+from ltamp_cli.trials.record import TrialDataset
+
+Kitchen = box2d_world.Kitchen
+
+
+def _first_dynamic(kitchen: Kitchen) -> b2.body:
+    return next(body for body in kitchen.world.bodies if body.type == b2.dynamicBody)
+
+
+def test_state_limits_name_what_is_wrong() -> None:
+    limits = StateLimits(max_position=100.0, max_speed=1e3)
+    fine = np.array([[1.0, 2.0], [-99.0, 0.0]])
+    assert limits.violation(fine, np.zeros((2, 2))) is None
+    assert limits.violation(np.array([[0.0, np.nan]]), np.zeros((1, 2)))[1].startswith(
+        "non-finite position"
+    )
+    assert "speed" in limits.violation(fine, np.array([[0.0, 0.0], [800.0, 800.0]]))[1]
+    body, what = limits.violation(np.array([[0.0, 0.0], [0.0, -150.0]]), np.zeros((2, 2)))
+    assert body == 1 and "position" in what
+    guard = DivergenceGuard(every=3)
+    assert [guard.due() for _ in range(6)] == [False, False, True, False, False, True]
+    with pytest.raises(PhysicsDiverged, match=r"non-finite velocity \(1 of 2 bodies\), first cup"):
+        guard.check(fine, np.array([[0.0, 0.0], [math.inf, 0.0]]), lambda i: ["a", "cup"][i])
+
+
+def test_box2d_pour_with_infinite_velocity_is_invalid() -> None:
+    backend = load_backend("box2d")
+    item = trial_input(backend, "pour", 0, 1, valid_only=True)
+    clean = backend.run_trial("pour", item.context, item.control, item.seed)
+    assert clean.valid and "reason" not in clean.info  # the guard leaves sane trials alone
+
+    def blow_up(kitchen: Kitchen) -> None:
+        if kitchen.steps == 30:
+            kitchen.particles[0].linearVelocity = (math.inf, 0.0)
+
+    result = backend.run_trial("pour", item.context, item.control, item.seed, observer=blow_up)
+    assert not result.valid and result.score == -1.0
+    assert result.info["reason"].startswith("physics diverged: non-finite")
+    assert "after 31 steps" in result.info["reason"]  # caught at once, not after the pour
+
+
+def test_box2d_push_flung_block_is_invalid() -> None:
+    backend = load_backend("box2d")
+    item = trial_input(backend, "push", 0, 0, valid_only=True)
+
+    def fling(kitchen: Kitchen) -> None:
+        # A runaway force (as from an exploding contact); Box2D caps each step's travel at 2
+        # units, so the block leaves the world instead of going non-finite.
+        if kitchen.steps >= 5:
+            block = _first_dynamic(kitchen)
+            block.ApplyLinearImpulse((1e9, 0.0), block.worldCenter, True)
+
+    result = backend.run_trial("push", item.context, item.control, item.seed, observer=fling)
+    assert not result.valid and result.score == -1.0
+    assert "|position| > 100" in result.info["reason"]
+
+
+def _sabotage(
+    monkeypatch: pytest.MonkeyPatch, plan: dict[int, Callable[[Kitchen], None]]
+) -> None:
+    """Kitchen number ``k`` (counted as trials build them) gets observer ``plan[k]``."""
+    original = Kitchen.__init__
+    built = [0]
+
+    def init(self: Kitchen, *args: object, **kwargs: object) -> None:
+        original(self, *args, **kwargs)
+        built[0] += 1
+        if built[0] in plan:
+            self.observers.append(plan[built[0]])
+
+    monkeypatch.setattr(Kitchen, "__init__", init)
+
+
+def test_collect_records_diverged_and_crashed_trials_and_goes_on(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    job = CollectJob(skill="push", backend="box2d", n=8, seed=3, valid_only=True)
+    clean = {r.index: r for r in _collect(job, tmp_path / "clean.jsonl")}
+
+    def nan_at_step_3(kitchen: Kitchen) -> None:
+        if kitchen.steps == 3:
+            _first_dynamic(kitchen).linearVelocity = (math.nan, 0.0)
+
+    def raise_at_step_3(kitchen: Kitchen) -> None:
+        if kitchen.steps == 3:
+            raise RuntimeError("solver exploded\nwith a second line")
+
+    _sabotage(monkeypatch, {2: nan_at_step_3, 5: raise_at_step_3})
+    records = _collect(job, tmp_path / "sabotaged.jsonl")
+    assert sorted(r.index for r in records) == list(range(8))  # collection went on
+    broken = {r.index: r.info["reason"] for r in records if not r.valid}
+    assert len(broken) == 2 and all(records[i].score == -1.0 for i in broken)
+    reasons = sorted(broken.values())
+    assert reasons[0].startswith("physics diverged: non-finite")
+    assert reasons[1] == "trial raised RuntimeError: solver exploded with a second line"
+    for record in records:  # every other trial is exactly what a clean run gives
+        if record.index not in broken:
+            assert (record.score, record.valid) == (
+                clean[record.index].score,
+                clean[record.index].valid,
+            )
+
+
+def _collect(job: CollectJob, out: Path) -> list:
+    assert collect(job, out, workers=1, progress=False) == job.n
+    return sorted(TrialDataset(out).read(), key=lambda r: r.index)
