@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import Annotated
 
@@ -13,6 +14,7 @@ from ltamp_cli.errors import InputError
 def register(app: typer.Typer) -> None:
     plot_app = typer.Typer(help="Draw pictures of trained models (PNG).", no_args_is_help=True)
     plot_app.command(name="level-set")(level_set_command)
+    plot_app.command(name="curves")(curves_command)
     app.add_typer(plot_app, name="plot")
 
 
@@ -112,3 +114,85 @@ def level_set_command(
     typer.echo(f"{out}: {spec.name} level set over {spec.control.names[chosen[0]]}, "
                f"{spec.control.names[chosen[1]]} (β = {superlevel.beta:.3f}, "
                f"{len(train_controls)} trials, {len(drawn)} samples)")
+
+
+def curves_command(
+    out: Annotated[Path, typer.Option("--out", help="PNG file to write (JSON beside it).")],
+    runs: Annotated[list[Path] | None, typer.Argument(
+        help="Model directories trained with --eval-every/--curve (one line per strategy; "
+        "runs of the same strategy are averaged).")] = None,
+    strategies: Annotated[str | None, typer.Option(
+        "--strategies", help="Instead of RUNS: train these strategies (comma-separated) on "
+        "--skill of the synthetic backend and plot them.")] = None,
+    skill: Annotated[str, typer.Option("--skill", help="Synthetic skill for --strategies.")
+                     ] = "moving2d",
+    budget: Annotated[int, typer.Option("--budget", help="Trials per training run.")] = 40,
+    init: Annotated[int, typer.Option("--init", help="Random trials before active ones.")] = 10,
+    seeds: Annotated[int, typer.Option("--seeds", help="Training runs per strategy.")] = 1,
+    eval_every: Annotated[int, typer.Option("--eval-every", help="Evaluate every K trials.")
+                          ] = 10,
+    kernel: Annotated[str, typer.Option("--kernel", help="rbf, matern52 or mlp.")
+                      ] = "matern52",
+    seed: Annotated[int, typer.Option("--seed", help="Seed of the first run.")] = 0,
+) -> None:
+    """F1 and success rate against the number of trials, every strategy on one figure.
+
+    Either from saved models (RUNS) or, with --strategies, by training each strategy on a
+    synthetic skill. Writes OUT (PNG) and OUT with a .json suffix (the plotted data).
+    """
+    from ltamp_cli.learning.curves import rows_from_model_metadata, train_curves, write_curves
+
+    if out.suffix.lower() != ".png":
+        raise InputError(f"--out: expected a .png file name, got {str(out)!r}")
+    if bool(runs) == (strategies is not None):
+        raise InputError("plot curves: give model directories or --strategies, not both "
+                         "(and not neither)")
+    rows: list[dict] = []
+    if runs:
+        from ltamp_cli.learning.model_dir import load_model
+
+        skills: set[str] = set()
+        for run in runs:
+            loaded = load_model(run)
+            skills.add(str(loaded.model.spec.name))
+            try:
+                rows.extend(rows_from_model_metadata(loaded.metadata))
+            except ValueError as error:
+                raise InputError(f"{run}: {error}") from None
+        title = f"{', '.join(sorted(skills))}: {len(runs)} run(s)"
+    else:
+        import torch
+
+        from ltamp_cli.backends import load_backend
+        from ltamp_cli.learning.active import STRATEGIES
+
+        names = [name.strip() for name in (strategies or "").split(",") if name.strip()]
+        unknown = [name for name in names if name not in STRATEGIES]
+        if not names or unknown:
+            raise InputError(f"--strategies: expected names from {', '.join(STRATEGIES)}, "
+                             f"got {strategies!r}")
+        for option, value, low in (("--budget", budget, 1), ("--seeds", seeds, 1),
+                                   ("--eval-every", eval_every, 1), ("--init", init, 1)):
+            if value < low:
+                raise InputError(f"{option}: expected a number >= {low}, got {value}")
+        torch.set_num_threads(1)
+        backend = load_backend("synthetic")
+        try:
+            if skill not in backend.skills():
+                raise InputError(f"--skill: the synthetic backend has no skill {skill!r} "
+                                 f"(known: {', '.join(sorted(backend.skills()))})")
+            try:
+                rows = train_curves(backend, skill, names, budget=budget, seeds=seeds,
+                                    eval_every=eval_every, init=init, kernel=kernel,
+                                    seed=seed, progress=sys.stderr.isatty())
+            except ValueError as error:
+                raise InputError(str(error)) from None
+        finally:
+            backend.close()
+        title = f"synthetic/{skill}: {seeds} seed(s), {kernel}"
+    try:
+        png, data = write_curves(rows, out, title=title)
+    except ValueError as error:
+        raise InputError(f"plot curves: {error}") from None
+    learners = sorted({str(row["learner"]) for row in rows})
+    typer.echo(f"{png}: learning curves of {', '.join(learners)} (data: {data})")

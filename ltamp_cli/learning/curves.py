@@ -77,3 +77,99 @@ def plot_curves(rows: Iterable[Mapping[str, Any]], path: str | Path, title: str 
     figure.savefig(path, dpi=100)
     plt.close(figure)
     return path
+
+
+def rows_from_model_metadata(metadata: Mapping[str, Any], label: str | None = None
+                             ) -> list[dict[str, Any]]:
+    """Learning-curve rows saved in a model directory's ``model.json`` (``curve`` entries).
+
+    Each row gets ``learner`` = ``label`` or the model's strategy. Raises ``ValueError`` when
+    the model was trained without a curve (``ltamp train`` without ``--eval-every``/``--curve``).
+    """
+    curve = metadata.get("curve") or []
+    if not isinstance(curve, list) or not curve:
+        raise ValueError("no learning curve saved: train with --eval-every K or --curve FILE")
+    name = label or str(metadata.get("strategy") or metadata.get("kind") or "model")
+    rows = []
+    for point in curve:
+        if not isinstance(point, Mapping) or "n_trials" not in point:
+            raise ValueError("malformed learning-curve entry in model.json")
+        rows.append({**point, "learner": name})
+    return rows
+
+
+def train_curves(
+    backend: Any,
+    skill: str,
+    strategies: list[str],
+    *,
+    budget: int,
+    seeds: int,
+    eval_every: int,
+    init: int = 10,
+    kernel: str = "matern52",
+    seed: int = 0,
+    n_contexts: int = 30,
+    progress: bool = False,
+) -> list[dict[str, Any]]:
+    """Train every strategy ``seeds`` times on a backend with a true score; curve rows.
+
+    One held-out evaluator (seeded by ``seed``) serves every strategy and seed, so the curves
+    differ only by the learners. Rows: ``learner, seed, n_trials, f1, success_rate, run_s``.
+    """
+    import time
+
+    from ltamp_cli.learning.active import LearningConfig, learn_online
+    from ltamp_cli.learning.metrics import SkillEvaluator
+
+    evaluator = SkillEvaluator.synthetic(backend, skill, n_test=2000, n_contexts=n_contexts,
+                                         seed=seed + 12345)
+    rows: list[dict[str, Any]] = []
+    for strategy in strategies:
+        for offset in range(seeds):
+            config = LearningConfig(strategy=strategy, budget=budget, init=init,
+                                    seed=seed + offset, kernel=kernel)
+            start = time.perf_counter()
+            result = learn_online(backend, skill, config, evaluator=evaluator,
+                                  eval_every=eval_every, progress=progress)
+            seconds = time.perf_counter() - start
+            rows.extend(
+                {"skill": skill, "learner": strategy, "seed": seed + offset,
+                 "n_trials": point.n_trials, "f1": point.f1,
+                 "success_rate": point.success_rate, "run_s": seconds}
+                for point in result.curve
+            )
+    return rows
+
+
+def _finite(value: Any) -> Any:
+    """``value`` with NaN/inf floats replaced by ``None`` (strict JSON)."""
+    if isinstance(value, float):
+        return value if np.isfinite(value) else None
+    if isinstance(value, Mapping):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_finite(v) for v in value]
+    return value
+
+
+def write_curves(rows: list[dict[str, Any]], png: str | Path, title: str = ""
+                 ) -> tuple[Path, Path]:
+    """The PNG (every learner on one figure) and ``<png stem>.json`` beside it.
+
+    The JSON holds ``learners`` (in plotting order), the per-``(learner, n_trials)``
+    ``summary`` and the raw ``rows``.
+    """
+    import json
+
+    png = plot_curves(rows, png, title=title)
+    summary = summarize(rows)
+    data = {
+        "title": title,
+        "learners": sorted({e["learner"] for e in summary}),
+        "summary": summary,
+        "rows": rows,
+    }
+    path = png.with_suffix(".json")
+    path.write_text(json.dumps(_finite(data), indent=2, allow_nan=False) + "\n")
+    return png, path
