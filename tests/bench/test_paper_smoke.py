@@ -40,7 +40,7 @@ def test_smoke_run_writes_json_png_and_report(repo_root: Path, tmp_path: Path) -
            "MKL_NUM_THREADS": "1", "MPLBACKEND": "Agg"}
     completed = subprocess.run(
         [sys.executable, "-m", "bench.paper", "--smoke", "--out", str(out)],
-        cwd=repo_root, env=env, capture_output=True, text=True, timeout=400)
+        cwd=repo_root, env=env, capture_output=True, text=True, timeout=900)
     assert completed.returncode == 0, completed.stdout[-2000:] + completed.stderr[-3000:]
 
     for name, keys in EXPECTED.items():
