@@ -35,9 +35,10 @@ EXPERIMENTS = {
     "confident": "bench.paper.confident",
     "coffee": "bench.paper.coffee",
 }
-# Longest first so that two workers finish close together.
-COST_ORDER = ["supervised3d", "al2d", "active3d", "confident", "kernel_learning", "sampling",
-              "coffee"]
+# Experiments that need no trial pool start at once (cheapest first, so that a run cut short
+# still has most sections); the pool experiments start when the pools are collected.
+UNPOOLED_ORDER = ["coffee", "kernel_learning", "al2d", "sampling"]
+POOLED_ORDER = ["confident", "supervised3d", "active3d"]
 
 
 def run_one(name: str, ctx: Context) -> tuple[str, float, float, str]:
@@ -80,9 +81,17 @@ def main(argv: list[str] | None = None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     ctx = Context(args.mode, args.out.resolve(), sys.stderr.isatty(), args.workers)
     started = time.perf_counter()
-    ordered = [n for n in COST_ORDER if n in names]
-    pooled = [n for n in ("supervised3d", "active3d", "confident") if n in names]
-    if pooled:
+    unpooled = [n for n in UNPOOLED_ORDER if n in names]
+    pooled = [n for n in POOLED_ORDER if n in names]
+    results: list[tuple[str, float, float, str]] = []
+
+    def report_done(result: tuple[str, float, float, str]) -> None:
+        results.append(result)
+        name, seconds, _, error = result
+        print(f"[{time.perf_counter() - started:7.1f} s] {name}: "
+              f"{'FAILED ' + error if error else f'done in {seconds:.1f} s'}", flush=True)
+
+    def collect_pools() -> None:
         from bench.paper.pools import prepare_pools
 
         t0 = time.perf_counter()
@@ -90,18 +99,24 @@ def main(argv: list[str] | None = None) -> int:
                             for n in pooled])
         print(f"[{time.perf_counter() - started:7.1f} s] trial pools ready "
               f"({time.perf_counter() - t0:.1f} s)", flush=True)
-    results: list[tuple[str, float, float, str]] = []
-    if args.jobs <= 1 or len(ordered) == 1:
-        results = [run_one(name, ctx) for name in ordered]
+
+    if args.jobs <= 1:
+        for name in unpooled:
+            report_done(run_one(name, ctx))
+        if pooled:
+            collect_pools()
+        for name in pooled:
+            report_done(run_one(name, ctx))
     else:
-        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-            futures = [pool.submit(run_one, name, ctx) for name in ordered]
+        with ProcessPoolExecutor(max_workers=args.jobs) as executor:
+            futures = [executor.submit(run_one, name, ctx) for name in unpooled]
+            if pooled:
+                # Collected here while the workers run the other experiments: the pools are
+                # complete before any experiment reads them, and only one process writes them.
+                collect_pools()
+            futures += [executor.submit(run_one, name, ctx) for name in pooled]
             for future in as_completed(futures):
-                results.append(future.result())
-                name, seconds, _, error = results[-1]
-                print(f"[{time.perf_counter() - started:7.1f} s] {name}: "
-                      f"{'FAILED ' + error if error else f'done in {seconds:.1f} s'}",
-                      flush=True)
+                report_done(future.result())
     total = time.perf_counter() - started
     # CPU of this process and of every finished child (experiment and collection workers):
     # what the run would cost on dedicated cores, whatever else shares the machine.

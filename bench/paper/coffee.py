@@ -23,7 +23,7 @@ NAME = "coffee"
 PROBLEMS = {"2D": "problems/kitchen2d/coffee.yaml", "3D": "problems/kitchen3d/coffee.yaml"}
 SIZES: dict[str, dict[str, Any]] = {
     "smoke": {"seeds": {"2D": 1}, "max_time": 30.0, "execute_2d": False},
-    "quick": {"seeds": {"2D": 5, "3D": 2}, "max_time": 120.0, "execute_2d": False},
+    "quick": {"seeds": {"2D": 3, "3D": 1}, "max_time": 120.0, "execute_2d": False},
     "full": {"seeds": {"2D": 10, "3D": 10}, "max_time": 120.0, "execute_2d": True},
 }
 

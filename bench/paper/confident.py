@@ -31,8 +31,8 @@ FILLED_KEY = {"pour": "fraction_in_bowl", "scoop": "fraction_of_capacity"}
 SIZES: dict[str, dict[str, Any]] = {
     "smoke": {"backend": "synthetic", "skills": ["skill8d"], "n_train": 60, "n_test": 40,
               "small": 20, "large": 40, "contexts": 3, "candidates": 1000},
-    "quick": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 120,
-              "n_test": 80, "small": 50, "large": 100, "contexts": 4, "candidates": 1000},
+    "quick": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 150,
+              "n_test": 50, "small": 50, "large": 100, "contexts": 4, "candidates": 1000},
     "full": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 9000,
              "n_test": 1000, "small": 50, "large": 100, "contexts": 30, "candidates": 1000},
 }

@@ -35,7 +35,7 @@ SIZES: dict[str, dict[str, Any]] = {
     "smoke": {"rows": [("2D", "synthetic", "moving2d", 1), ("3D", "synthetic", "skill8d", 1)],
               "train_budget": 15},
     "quick": {"rows": [("2D", "box2d", "pour", 1), ("2D", "box2d", "scoop", 1),
-                       ("2D", "box2d", "push", 3), ("3D", "pybullet", "pour", 1)],
+                       ("2D", "box2d", "push", 2), ("3D", "pybullet", "pour", 1)],
               "train_budget": 40},
     "full": {"rows": [("2D", "box2d", "pour", 50), ("2D", "box2d", "scoop", 50),
                       ("2D", "box2d", "push", 50), ("3D", "pybullet", "pour", 50),
