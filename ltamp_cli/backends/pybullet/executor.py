@@ -179,6 +179,8 @@ class Kitchen3DRun:
         """What actions achieved, beyond bead counts: tools pinned at rest (name -> pose),
         the last spoonful of each scooped material (beads), each cup's stir records."""
         self.pinned: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        self.commanded: dict[int, np.ndarray] = {
+            i: arm.get_configuration() for i, arm in enumerate(self.scene.arms)}
         self.spoonfuls: dict[str, int] = {}
         self.stirs: dict[str, list[dict[str, Any]]] = {}
 
@@ -198,8 +200,17 @@ class Kitchen3DRun:
             self.recorder(self.steps)
         self.steps += 1
 
+    def _hold_arms(self, moving: int | None = None) -> None:
+        """Re-apply every arm's last commanded configuration (but ``moving``'s): between
+        resets gravity would make a resting arm sag (centimetres in a second), and the next
+        reset would then yank whatever it holds."""
+        for index, q in self.commanded.items():
+            if index != moving:
+                self.scene.arms[index].set_configuration(q)
+
     def step_n(self, n: int) -> None:
         for _ in range(n):
+            self._hold_arms()
             for arm_index, (name, grasp) in self.held.items():
                 self._carry(arm_index, name, grasp, None)
             self._step()
@@ -255,6 +266,8 @@ class Kitchen3DRun:
         arm = self.scene.arms[arm_index]
         dt = self.world.config.time_step
         for i, q in enumerate(dense):
+            self.commanded[arm_index] = q
+            self._hold_arms(moving=arm_index)
             if held is not None:
                 nxt = None
                 if i + 1 < len(dense):
