@@ -42,9 +42,17 @@ DEFAULT_LEARNED = {
     "sample-pour": {"model": "../../models/kitchen3d/pour", "sampler": "adaptive"},
     "sample-scoop": {"model": "../../models/kitchen3d/scoop", "sampler": "adaptive"},
 }
+#: Targets of tool skills (pour, scoop, dump, stir) farther than this (m, horizontally) from
+#: an arm's base are out of its reach: the Panda reaches 0.855 m, plus the held tool and the
+#: skill's offsets; pours were found up to 0.92 m. Skipping them spares futile IK.
+MAX_TOOL_REACH_M = 1.05
 #: Skill-frame yaws tried around a target, as offsets from the heading of the arm's base
 #: to the target (radians): facing the arm first, then further round.
 YAW_OFFSETS = tuple(k * math.pi / 4 for k in (0, 1, -1, 2, -2, 3, -3, 4))
+#: Dumps roll the spoon sideways: the wrist manages that best with the spoon turned well
+#: round from the arm's heading (found by trying every yaw in the coffee scene), so those
+#: yaws come first.
+DUMP_YAW_OFFSETS = tuple(k * math.pi / 4 for k in (3, -2, 2, 1, 4, -3, -1, 0))
 
 
 def _xy(value: Any) -> tuple[float, float]:
@@ -94,9 +102,17 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         arm = int(r)
         return arm if 0 <= arm < scene.n_arms else None
 
-    def yaws(arm: int, xy: tuple[float, float]) -> list[float]:
+    def in_reach(arm: int | None, pose: Any) -> bool:
+        if arm is None:
+            return False
+        xy = _xy(pose)
+        base = planning.base_xy(arm)
+        return math.hypot(xy[0] - base[0], xy[1] - base[1]) <= MAX_TOOL_REACH_M
+
+    def yaws(arm: int, xy: tuple[float, float], offsets: tuple[float, ...] = YAW_OFFSETS
+             ) -> list[float]:
         heading = planning.base_yaw(arm, xy)
-        return [heading + offset for offset in YAW_OFFSETS]
+        return [heading + offset for offset in offsets]
 
     def sample_placement(name: str, region: str) -> Iterator[tuple[tuple[float, float]]]:
         area = scene.regions[region]
@@ -148,7 +164,7 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         for psi, phi in planning.skill_yaws(cup, g, arm):
             poses = skill_paths.pour_tool_poses(scene.object(cup), scene.object(bowl), _xy(pose),
                                                 table_z, control, psi, phi)
-            path = planning.follow_object_path(cup, g, poses, arm, rng, "pour")
+            path = planning.follow_object_path(cup, g, poses, arm, rng, "pour", target=bowl)
             if path is not None:
                 return (path.start, path, tuple(round(float(v), 6) for v in control))
         # Not None: the learned stream would silently draw again; an empty tuple lets the
@@ -183,13 +199,15 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
 
     def sample_pour(r: Any, cup: str, grasp: GraspValue, bowl: str, pose: Any
                     ) -> Iterator[list[tuple[Any, ...]]]:
-        if scene.object(cup).kind != "cup" or scene.object(bowl).kind not in ("bowl", "cup"):
+        if scene.object(cup).kind != "cup" or scene.object(bowl).kind not in (
+                "bowl", "cup") or not in_reach(arm_of(r), pose):
             return
         yield from pour(r, cup, grasp, bowl, pose)
 
     def sample_scoop(r: Any, spoon: str, grasp: GraspValue, bowl: str, pose: Any
                      ) -> Iterator[list[tuple[Any, ...]]]:
-        if scene.object(spoon).kind != "spoon" or scene.object(bowl).kind != "bowl":
+        if scene.object(spoon).kind != "spoon" or scene.object(bowl).kind != "bowl" or not in_reach(
+                arm_of(r), pose):
             return
         yield from scoop(r, spoon, grasp, bowl, pose)
 
@@ -199,10 +217,10 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
                     ) -> Iterator[list[tuple[ArmConf, ArmPath]]]:
         arm = arm_of(r)
         if arm is None or scene.object(spoon).kind != "spoon" or scene.object(cup).kind not in (
-                "bowl", "cup"):
+                "bowl", "cup") or not in_reach(arm, pose):
             return
         g: GraspValue = tuple(grasp)  # type: ignore[assignment]
-        for psi in yaws(arm, _xy(pose)):
+        for psi in yaws(arm, _xy(pose), DUMP_YAW_OFFSETS):
             for sign in (1.0, -1.0):
                 poses = skill_paths.dump_tool_poses(scene.object(spoon), scene.object(cup),
                                                     _xy(pose), table_z, psi, sign)
@@ -213,7 +231,7 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
                     ) -> Iterator[list[tuple[ArmConf, ArmPath]]]:
         arm = arm_of(r)
         if arm is None or scene.object(stirrer).kind != "stirrer" or scene.object(
-                cup).kind not in ("bowl", "cup"):
+                cup).kind not in ("bowl", "cup") or not in_reach(arm, pose):
             return
         g: GraspValue = tuple(grasp)  # type: ignore[assignment]
         for phi in YAW_OFFSETS:  # the rod is symmetric: its spin only changes the wrist

@@ -68,7 +68,7 @@ class PlanningWorld:
         if self.client < 0:
             raise RuntimeError("could not connect to a PyBullet physics server")
         self._finalizer = weakref.finalize(self, p.disconnect, self.client)
-        self.scene: KitchenScene = build_kitchen_scene(self.client, spec.n_arms)
+        self.scene: KitchenScene = build_kitchen_scene(self.client, spec.n_arms, spec.table)
         self.table_z = float(self.scene.table.height)
         self.bodies: dict[str, KitchenwareBody] = {}
         self.grasps: dict[str, list[Grasp]] = {}
@@ -184,9 +184,10 @@ class PlanningWorld:
         """``follow-obj-path``: arm configurations carrying ``name`` along ``poses``
         (world), collision-free with the fixed scenery; no tilt limit (the skill tilts).
 
-        ``target``: a fixed object the *held tool* may touch (a spoon dragged through a
-        bowl; the skill's own geometric pre-check has validated that path against it); the
-        arm must still clear it."""
+        ``target``: the object the *held tool* works in and may touch (a spoon dragged
+        through a bowl; the skill's own geometric pre-check has validated that path against
+        it); the arm must still clear it. A fixed target is checked here, a movable one by
+        :meth:`path_collides`."""
         g = self.grasp(name, grasp)
         touchable = (target,) if target is not None and self.spec.objects[target].fixed else ()
         checker = self.checker(arm, held=(name, grasp), carries_contents=False,
@@ -210,7 +211,7 @@ class PlanningWorld:
         if not found.success:
             return None
         assert found.configurations is not None
-        return ArmPath(arm, found.configurations, kind, (name, grasp))
+        return ArmPath(arm, found.configurations, kind, (name, grasp), target=target)
 
     def follow_hand_path(self, poses: Sequence[Pose], arm: int, rng: np.random.Generator,
                          kind: str, touching: str | None = None) -> ArmPath | None:
@@ -223,11 +224,16 @@ class PlanningWorld:
         assert found.configurations is not None
         return ArmPath(arm, found.configurations, kind, None, touching=touching)
 
+    def base_xy(self, arm: int) -> XY:
+        """Where arm ``arm``'s base stands (x, y), metres."""
+        base = p.getBasePositionAndOrientation(self.scene.arms[arm].body_id,
+                                               physicsClientId=self.client)[0]
+        return float(base[0]), float(base[1])
+
     def base_yaw(self, arm: int, xy: XY) -> float:
         """Heading (radians) from arm ``arm``'s base to the table point ``xy``."""
-        base = np.asarray(p.getBasePositionAndOrientation(
-            self.scene.arms[arm].body_id, physicsClientId=self.client)[0])
-        return math.atan2(float(xy[1]) - float(base[1]), float(xy[0]) - float(base[0]))
+        base = self.base_xy(arm)
+        return math.atan2(float(xy[1]) - base[1], float(xy[0]) - base[0])
 
     def skill_yaws(self, name: str, grasp: GraspValue, arm: int) -> list[tuple[float, float]]:
         """``(ψ, φ)`` pairs for a skill whose tool tilts about its skill-frame ``y`` axis:
@@ -262,7 +268,7 @@ class PlanningWorld:
                 points = p.getClosestPoints(arm.body_id, body, 0.0, physicsClientId=self.client)
                 if any(c[8] < -1e-3 for c in points):
                     return True
-                if held_body is not None and held_grasp is not None:
+                if held_body is not None and held_grasp is not None and name != path.target:
                     tool = arm.end_effector_pose() @ held_grasp
                     position, quaternion = tool.as_tuples()
                     p.resetBasePositionAndOrientation(held_body, position, quaternion,

@@ -6,6 +6,7 @@ to the table, the faucet) from ``at``::
 
     world:
       arms: 1                      # 1: one Panda at -x; 2: a second one at +x
+      table: {length: 0.9, width: 0.9}   # optional: the table top (m), x and y extents
       objects:
         cup:    {kind: cup, top_diameter: 0.07, base_diameter: 0.06, height: 0.09,
                  contents: {material: water, beads: 60}}
@@ -40,6 +41,7 @@ from ltamp_cli.backends.kitchenware_geometry import (
     stirrer_geometry,
     vessel_geometry,
 )
+from ltamp_cli.backends.pybullet.robot.scene import TableSpec
 from ltamp_cli.errors import InputError
 
 KINDS = ("cup", "bowl", "block", "spoon", "stirrer", "faucet")
@@ -116,11 +118,13 @@ class Region:
 
 @dataclass(frozen=True)
 class SceneSpec:
-    """Objects and regions of one Kitchen3D planning problem, and the number of arms."""
+    """Objects and regions of one Kitchen3D planning problem, the number of arms and the
+    table (the arms stand just off its ``±x`` edges)."""
 
     objects: Mapping[str, ObjectSpec]
     regions: Mapping[str, Region]
     n_arms: int = 1
+    table: TableSpec = field(default_factory=TableSpec)
 
     def object(self, name: str) -> ObjectSpec:
         try:
@@ -224,4 +228,19 @@ def scene_from_world(world: Mapping[str, Any]) -> SceneSpec:
     n_arms = world.get("arms", 1)
     if n_arms not in (1, 2):
         raise InputError(f"world.arms: expected 1 or 2, got {n_arms!r}")
-    return SceneSpec(objects, regions, int(n_arms))
+    return SceneSpec(objects, regions, int(n_arms), _table(world.get("table")))
+
+
+def _table(raw: Any) -> TableSpec:
+    """``world.table``: ``{length, width}`` in metres (each in [0.5, 2.0]), or the default."""
+    if raw is None:
+        return TableSpec()
+    if not isinstance(raw, Mapping) or not set(map(str, raw)) <= {"length", "width"}:
+        raise InputError("world.table: expected {length: L, width: W} in metres")
+    sizes = {}
+    for key in ("length", "width"):
+        value = _number(raw.get(key, getattr(TableSpec(), key)), f"world.table.{key}")
+        if not 0.5 <= value <= 2.0:
+            raise InputError(f"world.table.{key}: expected metres in [0.5, 2.0], got {value}")
+        sizes[key] = value
+    return TableSpec(length=sizes["length"], width=sizes["width"])

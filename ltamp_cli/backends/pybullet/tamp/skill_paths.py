@@ -28,7 +28,7 @@ ABOVE_RIM_M = 0.05
 #: How far the spoon rolls (radians about its own ``y`` axis, along the handle) to dump its
 #: contents: past the side, so that the shallow head empties, while the hand stays beside
 #: the spoon rather than under it.
-DUMP_ANGLE_RAD = math.radians(110.0)
+DUMP_ANGLE_RAD = math.radians(100.0)
 #: Stirrer: its tip this high (m) above the cup's floor, circling this fraction of the
 #: inner radius, with this many waypoints per turn and this many turns.
 STIR_TIP_CLEARANCE_M = 0.015

@@ -51,14 +51,18 @@ def as_conf(value: Any) -> ArmConf:
 class ArmPath:
     """Configurations ``(n, 7)`` of arm ``arm``; ``held`` is ``(object, grasp)`` when it
     carries an object; ``touching`` names the object the hand closes on at the path's end
-    (pick/place approaches), which collision tests against that object ignore. ``kind``:
-    ``free``, ``holding``, ``approach``, ``pour``, ``scoop``, ``dump``, ``stir``, ``push``."""
+    (pick/place approaches), which collision tests against that object ignore; ``target``
+    names the object a held tool works in (the bowl poured or scooped into), which the
+    tool may touch (its skill's own geometric pre-check has validated that) but the arm
+    may not. ``kind``: ``free``, ``holding``, ``approach``, ``pour``, ``scoop``, ``dump``,
+    ``stir``, ``push``."""
 
     arm: int
     configurations: np.ndarray
     kind: str
     held: tuple[str, GraspValue] | None = None
     touching: str | None = None
+    target: str | None = None
 
     @property
     def start(self) -> ArmConf:
