@@ -123,11 +123,20 @@ def main(argv: list[str] | None = None) -> int:
     usage = [resource.getrusage(who) for who in (resource.RUSAGE_SELF,
                                                  resource.RUSAGE_CHILDREN)]
     total_cpu = sum(u.ru_utime + u.ru_stime for u in usage)
-    (ctx.out / "run.json").write_text(json.dumps(
-        {"mode": args.mode, "total_wall_s": round(total, 1), "total_cpu_s": round(total_cpu, 1),
-         "jobs": args.jobs, "experiments": {n: {"wall_s": round(s, 1), "cpu_s": round(c, 1),
-                                                "error": e} for n, s, c, e in results}},
-        indent=2))
+    record = {"mode": args.mode, "total_wall_s": round(total, 1),
+              "total_cpu_s": round(total_cpu, 1), "jobs": args.jobs,
+              "experiments": {n: {"wall_s": round(s, 1), "cpu_s": round(c, 1), "error": e}
+                              for n, s, c, e in results}}
+    # An --only rerun into the same folder updates the record of the earlier run(s).
+    previous = ctx.out / "run.json"
+    if previous.is_file() and args.only:
+        earlier = json.loads(previous.read_text())
+        if earlier.get("mode") == args.mode:
+            record["invocations"] = earlier.get("invocations", 1) + 1
+            for key in ("total_wall_s", "total_cpu_s"):
+                record[key] = round(record[key] + earlier.get(key, 0.0), 1)
+            record["experiments"] = {**earlier.get("experiments", {}), **record["experiments"]}
+    previous.write_text(json.dumps(record, indent=2))
     print(f"{args.mode}: {len(results)} experiment(s) in {total:.1f} s wall, "
           f"{total_cpu:.1f} s CPU", flush=True)
     if not args.no_report:

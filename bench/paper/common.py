@@ -204,3 +204,14 @@ def first_valid_lazy(
         return result
 
     return lazy
+
+
+def wall_limit(cpu_seconds: float, cap: float = 8.0) -> float:
+    """A wall-clock limit that gives a process about ``cpu_seconds`` of CPU on this machine now.
+
+    Planner limits are wall-clock. With a 1-minute load above the core count each runnable
+    process gets about ``cores / load`` of a core, so the limit is stretched by
+    ``load / cores`` (at most ``cap`` times); results are then judged on CPU time.
+    """
+    cores = os.cpu_count() or 1
+    return cpu_seconds * min(cap, max(1.0, os.getloadavg()[0] / cores))

@@ -5,9 +5,11 @@ Each available problem is planned with its learned streams drawing from ``adapti
 ``diverse`` with a fixed unit kernel (Diverse-GK) and ``diverse-lk`` (kernel learned from the
 planner's "unusable" feedback, ε = 0.3). Diverse-LK first plans ``train`` task instances
 (planner seeds) so that its kernel, kept in ``<out>/cache/kernels``, is learned; then every
-sampler plans the same ``eval`` instances with a wall-clock limit of the paper's long time
-limit. Reported: runtime of solved runs (mean ± std, wall and CPU seconds) and success rates
-within the long and the short limit (the paper: 60 s and 6 s; Task I: 0.2 s and 0.02 s).
+sampler plans the same ``eval`` instances. Reported: runtime of solved runs (mean ± std, wall
+and CPU seconds) and success rates within the long and the short limit (the paper: 60 s and
+6 s; Task I: 0.2 s and 0.02 s), judged on the planner process's CPU time: the planner's own
+limit is wall-clock, so on a shared machine it is stretched by the load
+(:func:`bench.paper.common.wall_limit`) to give it about the intended CPU time.
 
 The sampler is chosen through the problem's ``world.learned_streams`` entries. A domain whose
 bindings take no sampler choice (Kitchen2D's bindings draw the most confident controls
@@ -27,7 +29,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from bench.paper.common import REPO, Context, mean_std, unavailable, write_json
+from bench.paper.common import REPO, Context, mean_std, unavailable, wall_limit, write_json
 
 NAME = "kernel_learning"
 SAMPLERS = {"adaptive": "Adaptive", "diverse": "Diverse-GK", "diverse-lk": "Diverse-LK"}
@@ -43,8 +45,8 @@ SMOKE_PROBLEMS = [("synthetic good region", "problems/examples/synthetic_goodreg
                    5.0, 0.5)]
 SIZES: dict[str, dict[str, Any]] = {
     "smoke": {"train": 1, "eval": 2, "cap_s": 10.0},
-    # quick: the long limit is capped so that a failing 3D run costs at most 45 s of wall.
-    "quick": {"train": 2, "eval": 2, "cap_s": 45.0},
+    # quick: the long limit is capped at 20 s of CPU so that failing 3D runs stay affordable.
+    "quick": {"train": 2, "eval": 2, "cap_s": 20.0},
     "full": {"train": 10, "eval": 50, "cap_s": None},
 }
 
@@ -85,7 +87,7 @@ def summarize_runs(runs: list[dict[str, Any]], long_s: float, short_s: float) ->
     solved = [r for r in runs if r["status"] == "solved"]
     return {
         "runs": len(runs),
-        "runtime_wall_s": mean_std([r["wall_s"] for r in solved if r["wall_s"] <= long_s]),
+        "runtime_wall_s": mean_std([r["wall_s"] for r in solved if r["cpu_s"] <= long_s]),
         "runtime_cpu_s": mean_std([r["cpu_s"] for r in solved if r["cpu_s"] <= long_s]),
         # Success within a limit: solved and the run took at most the limit. Wall time is
         # inflated on a shared machine, so CPU time is reported beside it.
@@ -121,10 +123,10 @@ def run(ctx: Context) -> dict[str, Any]:
             rows.append({**row, **unavailable(relative)})
             continue
         problem = load_problem(path)
-        limit = long_s if sizes["cap_s"] is None else min(long_s, sizes["cap_s"])
+        long_s = long_s if sizes["cap_s"] is None else min(long_s, sizes["cap_s"])
         # Short limits below a second: give the planner a few seconds to finish anyway.
-        limit = max(limit, 5.0)
-        row.update(available=True, max_time_s=limit)
+        limit = wall_limit(max(long_s, 5.0))
+        row.update(available=True, max_time_s=limit, long_s=long_s, paper_long_s=row["long_s"])
         variants = sampler_variants(problem, kernel_dir, label)
         eval_seeds = list(range(1000, 1000 + sizes["eval"]))
         if variants is None:
