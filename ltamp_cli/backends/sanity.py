@@ -3,19 +3,28 @@
 A simulation that blows up (a non-finite state, a body thrown out of any sensible workspace or
 moving absurdly fast) must not crash a collection or hand a meaningless score to a learner:
 the trial is invalid, with the skill's invalid score and the reason in ``info["reason"]``.
-Each backend reads its bodies' states its own way and feeds them to a :class:`DivergenceGuard`
-every few steps (checking every step would cost as much as the physics for hundreds of
-particles), and once more when the trial ends.
+Each backend says how to list its moving bodies and read one body's state, and calls
+:meth:`BodyGuard.step` after every simulation step: each step checks a rotating ``1/every``
+slice of the bodies, so every body is checked every ``every`` steps for the cost of one full
+check (checking all of them every step would cost as much as the physics for hundreds of
+particles), yet a NaN, which reaches every touching body within a step, is caught at the next
+step (a physics engine may crawl on NaN rather than fail). :meth:`BodyGuard.check_all` checks
+every body once more when the trial ends.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Generic, TypeVar
 
 import numpy as np
 
 from ltamp_cli.backends.protocol import TrialResult
+
+Body = TypeVar("Body")
+#: One body's ``(position, linear velocity)``, each a tuple of 2 or 3 floats.
+BodyState = tuple[Sequence[float], Sequence[float]]
 
 
 @dataclass(frozen=True)
@@ -24,6 +33,17 @@ class StateLimits:
 
     max_position: float = 100.0
     max_speed: float = 1e3
+
+    def sane(self, position: Sequence[float], velocity: Sequence[float]) -> bool:
+        """Fast scalar test of one body (NaN fails every comparison, so it is not sane)."""
+        reach = self.max_position
+        for value in position:
+            if not abs(value) <= reach:
+                return False
+        speed2 = 0.0
+        for value in velocity:
+            speed2 += value * value
+        return speed2 <= self.max_speed * self.max_speed
 
     def violation(self, positions: np.ndarray, velocities: np.ndarray) -> tuple[int, str] | None:
         """``(first bad body, what is wrong)`` or ``None``; inputs are ``(n, d)``."""
@@ -78,3 +98,68 @@ class DivergenceGuard:
         if found is not None:
             body, what = found
             raise PhysicsDiverged(f"{what}, first {name_of(body)}, after {self.steps} steps")
+
+
+class BodyGuard(Generic[Body]):
+    """Checks a backend's bodies while a trial runs (see the module docstring).
+
+    ``bodies()`` lists the moving bodies now, ``state(body)`` reads one body's
+    :data:`BodyState` and ``name(body)`` names it for the reason of a divergence.
+    """
+
+    def __init__(
+        self,
+        bodies: Callable[[], list[Body]],
+        state: Callable[[Body], BodyState],
+        name: Callable[[Body], str],
+        every: int = 20,
+        limits: StateLimits | None = None,
+    ) -> None:
+        self.bodies, self.state, self.name = bodies, state, name
+        self.guard = DivergenceGuard(every, limits)
+        self._cached: list[Body] | None = None
+
+    def step(self, refresh: bool = False) -> None:
+        """After one simulation step: check this step's slice (``refresh``: the bodies changed)."""
+        due = self.guard.due()
+        if due or refresh or self._cached is None:  # bodies come and go (spawned, frozen)
+            self._cached = self.bodies()
+        every = self.guard.every
+        self._check(self._cached[self.guard.steps % every :: every])
+
+    def check_all(self) -> None:
+        """Check every body now (at the end of a trial)."""
+        self._check(self.bodies())
+
+    def _check(self, bodies: list[Body]) -> None:
+        sane = self.guard.limits.sane
+        if all(sane(*self.state(body)) for body in bodies):
+            return
+        # Something is off: describe it over every body.
+        everyone = self.bodies()
+        states = [self.state(body) for body in everyone]
+        positions = np.array([position for position, _ in states], dtype=float)
+        velocities = np.array([velocity for _, velocity in states], dtype=float)
+        self.guard.check(positions, velocities, lambda i: self.name(everyone[i]))
+
+
+def run_guarded(
+    guard: BodyGuard[Body],
+    run: Callable[[Callable[[int], None]], TrialResult],
+    on_step: Callable[[int], None] | None,
+    invalid_score: float,
+) -> TrialResult:
+    """``run(step_callback)`` with ``guard`` checking bodies after every step it reports
+    (then calling ``on_step``) and at the end; a divergence gives the invalid trial."""
+
+    def step(index: int) -> None:
+        guard.step()
+        if on_step is not None:
+            on_step(index)
+
+    try:
+        result = run(step)
+        guard.check_all()
+    except PhysicsDiverged as diverged:
+        return diverged.result(invalid_score)
+    return result

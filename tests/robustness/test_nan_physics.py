@@ -13,7 +13,7 @@ from Box2D import b2
 from ltamp_cli.backends import load_backend
 from ltamp_cli.backends.box2d import world as box2d_world
 from ltamp_cli.backends.sanity import DivergenceGuard, PhysicsDiverged, StateLimits
-from ltamp_cli.trials.collect import CollectJob, collect, trial_input
+from ltamp_cli.trials.collect import CollectJob, TrialInput, collect, trial_input
 from ltamp_cli.trials.record import TrialDataset
 
 Kitchen = box2d_world.Kitchen
@@ -120,3 +120,105 @@ def test_collect_records_diverged_and_crashed_trials_and_goes_on(
 def _collect(job: CollectJob, out: Path) -> list:
     assert collect(job, out, workers=1, progress=False) == job.n
     return sorted(TrialDataset(out).read(), key=lambda r: r.index)
+
+
+def _inject_after(
+    monkeypatch: pytest.MonkeyPatch, world_class: type, at_step: int, act: Callable[..., None]
+) -> None:
+    """``act(world)`` right after the world's ``at_step``-th ``step`` call."""
+    original = world_class.step
+    calls = [0]
+
+    def step(self: object, n: int = 1) -> None:
+        original(self, n)
+        calls[0] += 1
+        if calls[0] == at_step:
+            act(self)
+
+    monkeypatch.setattr(world_class, "step", step)
+
+
+def _valid_pour(backend: object) -> TrialInput:
+    """The first uniformly drawn pour trial whose control is valid (``valid_only`` draws
+    hundreds of candidates, which costs seconds on the 3D backends)."""
+    for index in range(100):
+        item = trial_input(backend, "pour", 0, index)
+        if backend.is_valid("pour", item.context, item.control[None])[0]:
+            return item
+    raise AssertionError("no valid pour among 100 draws")
+
+
+def _bead_ids(client: int) -> list[int]:
+    import pybullet as p
+
+    ids = [p.getBodyUniqueId(i, physicsClientId=client)
+           for i in range(p.getNumBodies(physicsClientId=client))]  # fmt: skip
+    return [i for i in ids if p.getDynamicsInfo(i, -1, physicsClientId=client)[0] > 0]
+
+
+@pytest.mark.slow  # three PyBullet pours (~4 s CPU)
+def test_pybullet_pour_with_nan_or_flung_bead_is_invalid(monkeypatch: pytest.MonkeyPatch) -> None:
+    import pybullet as p
+
+    from ltamp_cli.backends.pybullet.world import PhysicsWorld
+
+    def infinite_velocity(world: PhysicsWorld) -> None:
+        bead = _bead_ids(world.client)[-1]
+        p.resetBaseVelocity(bead, [math.inf, 0.0, 0.0], physicsClientId=world.client)
+
+    def flung(world: PhysicsWorld) -> None:
+        # Bullet caps multibody speeds (100 m/s), so a runaway bead shows as a far position.
+        bead = _bead_ids(world.client)[-1]
+        p.resetBasePositionAndOrientation(
+            bead, [500.0, 0.0, 1.0], [0.0, 0.0, 0.0, 1.0], physicsClientId=world.client
+        )
+
+    backend = load_backend("pybullet")
+    try:
+        item = _valid_pour(backend)
+        clean = backend.run_trial("pour", item.context, item.control, item.seed)
+        assert clean.valid and "reason" not in clean.info
+        reasons = []
+        for kick in (infinite_velocity, flung):
+            with monkeypatch.context() as patch:
+                _inject_after(patch, PhysicsWorld, 50, kick)
+                result = backend.run_trial("pour", item.context, item.control, item.seed)
+            assert not result.valid and result.score == -1.0
+            reasons.append(result.info["reason"])
+        # The world is reset per trial: a diverged trial leaves nothing behind.
+        assert backend.run_trial("pour", item.context, item.control, item.seed) == clean
+    finally:
+        backend.close()
+    assert reasons[0].startswith("physics diverged: non-finite")
+    assert reasons[1].startswith("physics diverged: |position| > 100 (1 of")
+
+
+def test_sapien_pour_with_nan_or_too_fast_bead_is_invalid(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    pytest.importorskip("sapien")
+    from ltamp_cli.backends.sapien.world import SapienWorld
+
+    backend = load_backend("sapien")
+    try:
+        item = _valid_pour(backend)
+        clean = backend.run_trial("pour", item.context, item.control, item.seed)
+        assert clean.valid and "reason" not in clean.info
+        reasons = []
+        for speed in (math.inf, 5e3):
+
+            def kick(world: SapienWorld, speed: float = speed) -> None:
+                bead = world.scene.physx_system.get_rigid_dynamic_components()[-1]
+                bead.set_linear_velocity([speed, 0.0, 0.0])
+
+            with monkeypatch.context() as patch:
+                _inject_after(patch, SapienWorld, 50, kick)
+                result = backend.run_trial("pour", item.context, item.control, item.seed)
+            assert not result.valid and result.score == -1.0
+            reasons.append(result.info["reason"])
+        assert backend.run_trial("pour", item.context, item.control, item.seed) == clean
+    finally:
+        backend.close()
+    assert reasons[0].startswith("physics diverged: non-finite")
+    assert reasons[1].startswith("physics diverged: speed > 1000")
+    assert all("first bead" in reason for reason in reasons)

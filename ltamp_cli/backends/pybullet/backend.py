@@ -12,6 +12,7 @@ from types import MappingProxyType
 import numpy as np
 
 from ltamp_cli.backends.protocol import SkillSpec, TrialResult, as_batch
+from ltamp_cli.backends.pybullet.guard import bullet_guard
 from ltamp_cli.backends.pybullet.render import Camera, FrameRecorder
 from ltamp_cli.backends.pybullet.skills.common import PathCheck, StepCallback
 from ltamp_cli.backends.pybullet.skills.pour import (
@@ -47,6 +48,7 @@ from ltamp_cli.backends.pybullet.skills.stir import (
     stir_is_valid,
 )
 from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig
+from ltamp_cli.backends.sanity import run_guarded
 
 _SPECS: Mapping[str, SkillSpec] = MappingProxyType(
     {"pour": POUR_SPEC, "scoop": SCOOP_SPEC, "push": PUSH_SPEC, "stir": STIR_SPEC}
@@ -180,7 +182,13 @@ class Kitchen3DBackend:
             "stir": (run_stir, self.stir_settings),
         }
         run, settings = runs[skill]
-        return run(self.world, context, control, int(seed), settings, on_step, check=False)
+        # A diverged simulation (NaN, bodies flung away) makes an invalid trial.
+        return run_guarded(
+            bullet_guard(self.world.client),
+            lambda step: run(self.world, context, control, int(seed), settings, step, check=False),
+            on_step,
+            self._spec(skill).invalid_score,
+        )
 
     def close(self) -> None:
         if self._world is not None:

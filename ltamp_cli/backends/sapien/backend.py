@@ -17,6 +17,8 @@ from ltamp_cli.backends.pybullet.skills.pour import PourSettings
 from ltamp_cli.backends.pybullet.skills.push import PushSettings
 from ltamp_cli.backends.pybullet.skills.scoop import ScoopSettings
 from ltamp_cli.backends.pybullet.skills.stir import StirSettings
+from ltamp_cli.backends.sanity import run_guarded
+from ltamp_cli.backends.sapien.guard import sapien_guard
 from ltamp_cli.backends.sapien.render import (
     CameraView,
     FrameRecorder,
@@ -152,7 +154,13 @@ class SapienKitchen3DBackend:
             "stir": (run_stir, self.stir_settings),
         }
         run, settings = runs[skill]
-        return run(world, context, control, int(seed), settings, on_step, check=False)
+        # A diverged simulation (NaN, bodies flung away) makes an invalid trial.
+        return run_guarded(
+            sapien_guard(world),
+            lambda step: run(world, context, control, int(seed), settings, step, check=False),
+            on_step,
+            self._spec(skill).invalid_score,
+        )
 
     def close(self) -> None:
         for world in (self._world, self._render_world):
