@@ -1,7 +1,8 @@
 """Learning benchmark: GP fit/predict speed and learning curves of every learner.
 
 Speed targets on one core: fit 400 trials x 11 dims in <= 3 s (hyperparameters by maximum
-likelihood with the default restarts) and predict mean+std for 10,000 candidates in <= 50 ms.
+likelihood with the default restarts) and predict mean+std for 10,000 candidates in <= 50 ms,
+judged on CPU time (wall time, printed too, includes waiting for a core on a shared machine).
 Learning curves: held-out F1 and success rate of the most confident control against the
 number of trials, for every learner on the synthetic skills (mean over ``--seeds``).
 
@@ -16,6 +17,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import os
 import platform
 import time
 from pathlib import Path
@@ -24,10 +26,9 @@ import numpy as np
 import torch
 
 from ltamp_cli.backends import load_backend
-from ltamp_cli.learning.active import STRATEGIES, LearningConfig, learn_online
-from ltamp_cli.learning.curves import plot_curves, summarize
+from ltamp_cli.learning.active import STRATEGIES
+from ltamp_cli.learning.curves import plot_curves, summarize, train_curves
 from ltamp_cli.learning.gp import fit_gp
-from ltamp_cli.learning.metrics import SkillEvaluator
 
 FIT_TARGET_S = 3.0
 PREDICT_TARGET_S = 0.050
@@ -91,33 +92,19 @@ def bench_curves(
     rows = []
     for skill in skills:
         budget = max(15, int(BUDGETS[skill] * budget_scale))
-        evaluator = SkillEvaluator.synthetic(backend, skill, n_test=2000, n_contexts=n_contexts)
         for learner in learners:
+            learner_rows = train_curves(backend, skill, [learner], budget=budget, seeds=seeds,
+                                        eval_every=eval_every, kernel=kernel,
+                                        n_contexts=n_contexts)
+            rows.extend(learner_rows)
             for seed in range(seeds):
-                config = LearningConfig(strategy=learner, budget=budget, seed=seed, kernel=kernel)
-                start = time.perf_counter()
-                result = learn_online(
-                    backend, skill, config, evaluator=evaluator, eval_every=eval_every
-                )
-                seconds = time.perf_counter() - start
-                for point in result.curve:
-                    rows.append(
-                        {
-                            "skill": skill,
-                            "learner": learner,
-                            "seed": seed,
-                            "n_trials": point.n_trials,
-                            "f1": point.f1,
-                            "success_rate": point.success_rate,
-                            "run_s": seconds,
-                        }
-                    )
-                last = result.curve[-1]
+                last = [r for r in learner_rows if r["seed"] == seed][-1]
                 print(
-                    f"  {skill:<9}{learner:<7} seed {seed}: F1 {last.f1:.3f}  success "
-                    f"{last.success_rate:.2f}  ({seconds:.1f} s)",
+                    f"  {skill:<9}{learner:<7} seed {seed}: F1 {last['f1']:.3f}  success "
+                    f"{last['success_rate']:.2f}  ({last['run_s']:.1f} s)",
                     flush=True,
                 )
+    backend.close()
     return rows
 
 
@@ -151,10 +138,14 @@ def main() -> None:
             f"{predict_ms[0]:>13.0f}ms {predict_ms[1]:4.0f}ms ({predict_ms[2]:.0f}ms)"
             f"{row['predict_10k_n100_cpu_median_s'] * 1e3:>9.0f}ms"
         )
-    fit_ok = all(r["fit_median_s"] <= FIT_TARGET_S for r in speed)
-    predict_ok = all(r["predict_10k_median_s"] <= PREDICT_TARGET_S for r in speed)
+    # The targets are single-core speed: judged on this process's CPU time, which waiting
+    # for a core on a shared machine does not inflate (wall time is printed alongside).
+    fit_ok = all(r["fit_cpu_median_s"] <= FIT_TARGET_S for r in speed)
+    predict_ok = all(r["predict_10k_cpu_median_s"] <= PREDICT_TARGET_S for r in speed)
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(
-        f"targets: fit <= {FIT_TARGET_S} s {'met' if fit_ok else 'MISSED'}; "
+        f"targets (CPU time, load average {load:.1f} on {os.cpu_count()} CPUs): "
+        f"fit <= {FIT_TARGET_S} s {'met' if fit_ok else 'MISSED'}; "
         f"predict <= {PREDICT_TARGET_S * 1e3:.0f} ms {'met' if predict_ok else 'MISSED'}"
     )
 
@@ -204,6 +195,8 @@ def main() -> None:
                 "targets": {
                     "fit_400x11_s": FIT_TARGET_S,
                     "predict_10k_s": PREDICT_TARGET_S,
+                    "judged_on": "cpu_time",
+                    "load_average": load,
                     "fit_met": fit_ok,
                     "predict_met": predict_ok,
                 },
