@@ -22,6 +22,7 @@ from __future__ import annotations
 import hashlib
 import importlib
 import importlib.util
+import re
 import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -124,6 +125,37 @@ def load_streams_factory(spec: str, base: Path, where: SourceLocation
     return factory
 
 
+_WORLD_PATH = re.compile(r"world((?:\s*[.:]\s*[\w\-]+)*)")
+
+
+def world_error_location(doc: YamlDocument, message: str) -> SourceLocation:
+    """Where a bindings/backend error about ``world`` points in the YAML file.
+
+    Backends name the field at the start of their messages (``world.regions.table: ...``,
+    ``world: layout: unknown field ...``); the deepest node of that path that exists in the
+    file is reported (the ``world`` block itself if none does).
+    """
+    match = _WORLD_PATH.match(message)
+    parts = re.split(r"\s*[.:]\s*", match.group(1).strip(" .:")) if match else []
+    return doc.location("world", *[part for part in parts if part])
+
+
+def _locating_world_errors(factory: Callable[..., Mapping[str, Any]], doc: YamlDocument
+                           ) -> Callable[..., Mapping[str, Any]]:
+    """``factory`` whose location-less ``world`` errors get the YAML position of the field."""
+
+    def make_streams(world: Mapping[str, Any], rng: Any) -> Mapping[str, Any]:
+        try:
+            return factory(world, rng)
+        except InputError as error:
+            if error.location is not None or not error.message.startswith("world"):
+                raise
+            raise InputError(error.message, world_error_location(doc, error.message)) from None
+
+    make_streams.__doc__ = factory.__doc__
+    return make_streams
+
+
 def _parse_objects(doc: YamlDocument, domain: Domain) -> dict[str, tuple[str, Any]]:
     raw = doc.get("objects", default={}) or {}
     if not isinstance(raw, dict):
@@ -216,7 +248,8 @@ def load_problem(path: str | Path, domain_dir: str | Path | None = None) -> Plan
         if not isinstance(spec, str):
             raise doc.error("the domain has streams: 'bindings' must name a .py file or a "
                             "module that defines make_streams(world, rng)", "bindings")
-        factory = load_streams_factory(spec, base, doc.location("bindings"))
+        factory = _locating_world_errors(load_streams_factory(spec, base,
+                                                              doc.location("bindings")), doc)
         bindings_source = spec
     if doc.get("pddl_problem") is not None:
         problem_path = base / str(doc.get("pddl_problem"))

@@ -181,3 +181,43 @@ def test_schema_fields_are_the_documented_planner_options() -> None:
     assert planner is not None
     options = set(yaml.safe_load(BASE)["planner"])
     assert options <= {f.name for f in fields(PlannerConfig)}
+
+
+@pytest.mark.parametrize(("message", "where"), [
+    ("world.regions.table: expected [[x0, x1], [y0, y1]]", (8, 12)),
+    ("world.objects.cup.width: expected a number", (6, 29)),
+    ("world: storage: expected [x_low, x_high], got [5]", (14, 12)),
+    ("world: layout: unknown field 'x'", (5, 3)),  # no layout: the world block
+    ("world.learned_streams.sample-pour.nothing: bad", (11, 7)),  # deepest existing node
+    ("world: 'objects' must map object names to descriptions", (5, 3)),
+])
+def test_world_errors_of_backends_point_at_the_field(message: str,
+                                                     where: tuple[int, int]) -> None:
+    from ltamp_cli.planner.problem import world_error_location
+
+    location = world_error_location(YamlDocument("p.yaml", BASE), message)
+    assert (location.line, location.column) == where
+
+
+def test_bindings_world_error_gets_the_yaml_position(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "dom").mkdir()
+    (tmp_path / "dom" / "domain.pddl").write_text(
+        "(define (domain tiny) (:predicates (Thing ?x) (Done ?x))\n"
+        "  (:action finish :parameters (?x) :precondition (Thing ?x) :effect (Done ?x)))\n")
+    (tmp_path / "dom" / "stream.pddl").write_text(
+        "(define (stream tiny) (:stream make-thing :outputs (?x) :certified (Thing ?x)))\n")
+    (tmp_path / "bindings.py").write_text(
+        "from ltamp_cli.errors import InputError\n"
+        "def make_streams(world, rng):\n"
+        "    raise InputError(f\"world.regions.table: expected [low, high], got "
+        "{world['regions']['table']!r}\")\n")
+    path = tmp_path / "p.yaml"
+    path.write_text("domain: dom\nbindings: bindings.py\nworld:\n  regions:\n"
+                    "    table: [1, 2, 3]\nobjects: {a: null}\ngoal: (Done a)\n")
+    with pytest.raises(SystemExit) as done:
+        main(["check", str(path)])
+    err = capsys.readouterr().err
+    assert done.value.code == 2
+    assert err.strip().splitlines() == [
+        f"ltamp: error: {path}:5:12: world.regions.table: expected [low, high], got [1, 2, 3]"]
