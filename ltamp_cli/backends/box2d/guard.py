@@ -22,7 +22,7 @@ class Box2DGuard:
     """
 
     def __init__(
-        self, observer: Observer | None = None, every: int = 20, limits: StateLimits | None = None
+        self, observer: Observer | None = None, every: int = 40, limits: StateLimits | None = None
     ) -> None:
         self.observer = observer
         self.kitchen: Kitchen | None = None
@@ -46,7 +46,9 @@ class Box2DGuard:
 
 
 def _state(body: b2.body) -> BodyState:
-    return tuple(body.position), tuple(body.linearVelocity)
+    # Attribute access: iterating a b2Vec2 goes through Python-level SWIG lambdas (slow).
+    position, velocity = body.position, body.linearVelocity
+    return (position.x, position.y), (velocity.x, velocity.y)
 
 
 def _name(body: b2.body) -> str:
