@@ -185,3 +185,25 @@ def test_task1_block_is_pushed_off_the_table_away_from_the_curb(
     assert "push block p_block right_edge" in out  # seed 6: the curb is on the left
     assert "executed: True  goal_holds: True" in out
     assert out_gif.stat().st_size > 0
+
+
+@pytest.mark.slow
+def test_task3_pitcher_is_picked_high_out_of_its_holder_and_poured(tmp_path: Path) -> None:
+    problem = load_problem(TASK3)
+    result = solve(problem, PlannerConfig(max_time=60, seed=1))
+    assert result.solved
+    assert [step.name for step in result.plan] == ["move-free", "pick", "move-holding",
+                                                  "pour"]
+    spec = scene_from_world(problem.world, np.random.default_rng(1))
+    (holder,) = spec.holders
+    grasp = result.plan[1].values[2]
+    # The fingertips stay above the holder's walls.
+    assert grasp[1] - spec.gripper.tip > holder.height
+    gif = tmp_path / "task3.gif"
+    report = execute_plan("box2d", problem, result, 1, gif)
+    assert report.success and report.goal_holds, report.details
+    water = report.details["goal"]["(contains cup water)"]
+    assert water["inside"] >= water["needed"] >= 0.9 * 200
+    particles = report.details["particles"]
+    assert particles["n_particles"] == particles["n_expected"] == particles["n_in_world"]
+    assert gif.stat().st_size > 0
