@@ -13,6 +13,11 @@ it includes loading the models and the problem's physics pre-checks of learned p
 are counted per seed (``precheck``: trials run / rejected). Each failed seed gets the
 executor's diagnosis (failed action, failed goal facts, where the material went).
 
+Tasks I and III (``--tasks N``, seeds 1..N, default 5): ``task1_push_off.yaml`` (push a
+block off the table past a curb, learned GoodPush) and ``task3_holder_pour.yaml`` (pick a
+pitcher out of a holder, learned pour) planned and executed the same way; planning time
+(wall and CPU) and executed successes per task.
+
     OMP_NUM_THREADS=1 .venv/bin/python bench/kitchen2d.py --trials 20 --coffee 10
 
 JSON goes to ``--out``.
@@ -36,6 +41,8 @@ POUR_TARGET_S = 0.5
 COFFEE_PLAN_TARGET_S = 5.0
 COFFEE_SUCCESS_TARGET = 0.9
 COFFEE = Path(__file__).resolve().parents[1] / "problems" / "kitchen2d" / "coffee.yaml"
+TASKS = {name: COFFEE.parent / f"{name}.yaml" for name in ("task1_push_off",
+                                                             "task3_holder_pour")}
 
 
 def bench_skill(backend: SkillBackend, skill: str, trials: int, seed: int) -> dict:
@@ -152,6 +159,45 @@ def _print_row(row: dict) -> dict:
     return row
 
 
+def bench_tasks(seeds: list[int], max_time: float) -> dict:
+    """Tasks I and III: plan (wall and CPU time) and execute once per seed."""
+    import ltamp_cli.learning.model  # noqa: F401 - warm import: torch is not planning time
+    from ltamp_cli.backends.execution import execute_plan
+    from ltamp_cli.planner.algorithms.common import PlannerConfig
+    from ltamp_cli.planner.api import solve
+    from ltamp_cli.planner.problem import load_problem
+
+    out = {}
+    for name, path in TASKS.items():
+        rows = []
+        for seed in seeds:
+            problem = load_problem(path)
+            w0, c0 = time.perf_counter(), time.process_time()
+            result = solve(problem, PlannerConfig(max_time=max_time, seed=seed))
+            row = {"seed": seed, "status": result.status,
+                   "plan_time_s": round(time.perf_counter() - w0, 3),
+                   "plan_cpu_s": round(time.process_time() - c0, 3),
+                   "executed": False, "goal_holds": False}
+            if result.solved:
+                report = execute_plan("box2d", problem, result, seed)
+                row.update(executed=report.success, goal_holds=report.goal_holds,
+                           goal=report.details["goal"])
+            print(f"{name} seed {seed}: {row['status']} in {row['plan_time_s']:.2f} s wall "
+                  f"({row['plan_cpu_s']:.2f} s CPU), executed={row['executed']} "
+                  f"goal_holds={row['goal_holds']}", flush=True)
+            rows.append(row)
+        out[name] = {
+            "rows": rows,
+            "plan_time_median_s": float(np.median([r["plan_time_s"] for r in rows])),
+            "plan_cpu_median_s": float(np.median([r["plan_cpu_s"] for r in rows])),
+            "executed_successes": sum(r["executed"] and r["goal_holds"] for r in rows),
+        }
+        print(f"{name}: planning median {out[name]['plan_cpu_median_s']:.2f} s CPU "
+              f"({out[name]['plan_time_median_s']:.2f} s wall), "
+              f"{out[name]['executed_successes']}/{len(rows)} executed successes")
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=20)
@@ -162,6 +208,7 @@ def main() -> None:
     parser.add_argument("--coffee-first-seed", type=int, default=1)
     parser.add_argument("--coffee-max-time", type=float, default=60.0)
     parser.add_argument("--coffee-jobs", type=int, default=1, help="worker processes")
+    parser.add_argument("--tasks", type=int, default=5, help="Task I/III seeds (0: skip)")
     parser.add_argument("--out", type=Path, default=Path("bench/results/kitchen2d.json"))
     args = parser.parse_args()
     options = {} if args.pour_particles is None else {"pour_particles": args.pour_particles}
@@ -197,6 +244,8 @@ def main() -> None:
               f"{'meets' if plan_ok else 'MISSES'} the {COFFEE_PLAN_TARGET_S} s target; "
               f"{coffee['executed_successes']}/{n} executed successes "
               f"{'meet' if exec_ok else 'MISS'} the {COFFEE_SUCCESS_TARGET:.0%} target")
+    tasks = bench_tasks(list(range(1, args.tasks + 1)), args.coffee_max_time) if (
+        args.tasks > 0) else None
     args.out.parent.mkdir(parents=True, exist_ok=True)
     payload = {
         "benchmark": "kitchen2d",
@@ -205,6 +254,7 @@ def main() -> None:
         "pour_target_s": POUR_TARGET_S,
         "rows": rows,
         "coffee": coffee,
+        "tasks": tasks,
     }
     args.out.write_text(json.dumps(payload, indent=2) + "\n")
 
