@@ -34,17 +34,6 @@ class StateLimits:
     max_position: float = 100.0
     max_speed: float = 1e3
 
-    def sane(self, position: Sequence[float], velocity: Sequence[float]) -> bool:
-        """Fast scalar test of one body (NaN fails every comparison, so it is not sane)."""
-        reach = self.max_position
-        for value in position:
-            if not abs(value) <= reach:
-                return False
-        speed2 = 0.0
-        for value in velocity:
-            speed2 += value * value
-        return speed2 <= self.max_speed * self.max_speed
-
     def violation(self, positions: np.ndarray, velocities: np.ndarray) -> tuple[int, str] | None:
         """``(first bad body, what is wrong)`` or ``None``; inputs are ``(n, d)``."""
         positions = np.atleast_2d(np.asarray(positions, dtype=float))
@@ -132,8 +121,8 @@ class BodyGuard(Generic[Body]):
         self._check(self.bodies())
 
     def _check(self, bodies: list[Body]) -> None:
-        # Plain loops, not numpy or ``StateLimits.sane``: this runs after every step and the
-        # slices are small, so call overhead is what counts.
+        # Plain loops, not numpy: this runs after every step and the slices are small, so call
+        # overhead is what counts. NaN fails every comparison, so it breaks out too.
         limits, state = self.guard.limits, self.state
         reach, speed2 = limits.max_position, limits.max_speed * limits.max_speed
         for body in bodies:
