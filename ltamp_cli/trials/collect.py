@@ -96,10 +96,10 @@ def run_one(backend: SkillBackend, job: CollectJob, index: int) -> TrialRecord:
     return _run_guarded(backend, job, index)[0]
 
 
-def failed_result(spec_invalid_score: float, reason: str) -> TrialResult:
-    """An invalid trial with the skill's invalid score and a one-line ``reason``."""
+def failed_result(invalid_score: float, reason: str) -> TrialResult:
+    """An invalid trial with the skill's ``invalid_score`` and a one-line ``reason``."""
     line = " ".join(reason.split())[:REASON_CHARS]
-    return TrialResult(spec_invalid_score, False, {"reason": line})
+    return TrialResult(invalid_score, False, {"reason": line})
 
 
 def _run_guarded(backend: SkillBackend, job: CollectJob, index: int) -> tuple[TrialRecord, bool]:
@@ -115,6 +115,10 @@ def _run_guarded(backend: SkillBackend, job: CollectJob, index: int) -> tuple[Tr
         result = failed_result(invalid_score, f"trial raised {type(error).__name__}: {error}")
     if not math.isfinite(float(result.score)):
         result = failed_result(invalid_score, f"non-finite score {result.score}")
+    try:  # a record must be strict JSON; NaN in the measurements means the physics went wrong
+        json.dumps(dict(result.info), allow_nan=False)
+    except (TypeError, ValueError) as error:
+        result = failed_result(invalid_score, f"unrecordable trial info: {error}")
     return TrialRecord(
         skill=job.skill,
         context=tuple(float(v) for v in item.context),

@@ -222,3 +222,37 @@ def test_sapien_pour_with_nan_or_too_fast_bead_is_invalid(
     assert reasons[0].startswith("physics diverged: non-finite")
     assert reasons[1].startswith("physics diverged: speed > 1000")
     assert all("first bead" in reason for reason in reasons)
+
+
+def test_collect_marks_non_finite_results_invalid(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from ltamp_cli.backends.protocol import TrialResult
+    from ltamp_cli.backends.synthetic import SyntheticBackend
+    from ltamp_cli.trials.collect import trial_seed
+
+    original = SyntheticBackend.run_trial
+    seed_of = {trial_seed(7, index): index for index in range(6)}
+
+    def run_trial(
+        self: SyntheticBackend, skill: str, context: np.ndarray, control: np.ndarray, seed: int
+    ) -> TrialResult:
+        index = seed_of[seed]
+        if index == 1:
+            return TrialResult(math.nan, True, {})
+        if index == 2:
+            return TrialResult(0.5, True, {"fraction": math.inf})
+        if index == 3:
+            raise FloatingPointError("overflow in the integrator")
+        return original(self, skill, context, control, seed)
+
+    monkeypatch.setattr(SyntheticBackend, "run_trial", run_trial)
+    job = CollectJob(skill="toy1d", backend="synthetic", n=6, seed=7)
+    records = _collect(job, tmp_path / "t.jsonl")
+    assert [r.valid for r in records] == [True, False, False, False, True, True]
+    assert [r.score for r in records[1:4]] == [-1.0, -1.0, -1.0]
+    assert records[1].info["reason"] == "non-finite score nan"
+    assert records[2].info["reason"].startswith("unrecordable trial info")
+    assert records[3].info["reason"] == (
+        "trial raised FloatingPointError: overflow in the integrator"
+    )
