@@ -409,6 +409,9 @@ class Kitchen2DExecutor:
         if render_path is not None:
             lay = spec.layout
             bounds = (lay.table_x0 - 2, lay.table_top - 3, lay.table_x1 + 2, lay.faucet_y + 9)
+            if any(item.kind == "block" for item in spec.objects):
+                # A block may be pushed off the table: show where it lands on the floor.
+                bounds = (lay.table_x0 - 10, 0.0, lay.table_x1 + 10, bounds[3])
             recorder = FrameRecorder(self.every, View(bounds, self.scale))
         run = Kitchen2DRun(spec, seed, recorder)
         steps: list[dict[str, Any]] = []
