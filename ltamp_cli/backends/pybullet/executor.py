@@ -140,7 +140,7 @@ class Kitchen3DRun:
         self.settings = settings
         self.rng = np.random.default_rng(seed)
         self.world = PhysicsWorld(WorldConfig())
-        self.scene: KitchenScene = build_kitchen_scene(self.world.client, spec.n_arms)
+        self.scene: KitchenScene = build_kitchen_scene(self.world.client, spec.n_arms, spec.table)
         self.table_z = float(self.scene.table.height)
         self.recorder = (FrameRecorder(self.world.client, settings.render_every, recorder_camera)
                          if recorder_camera is not None else None)

@@ -202,7 +202,7 @@ class SapienKitchen3DRun(Kitchen3DRun):
         settings: ExecutionSettings,
     ) -> None:
         """Scenery, kitchenware, beads and arms; settle; record the initial bead counts."""
-        self.scene: KitchenScene = build_kitchen_scene(self.model.client, spec.n_arms)
+        self.scene: KitchenScene = build_kitchen_scene(self.model.client, spec.n_arms, spec.table)
         self.table_z = float(self.scene.table.height)
         self._add_scenery()
         self.recorder = (
