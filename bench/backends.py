@@ -1,15 +1,18 @@
-"""PyBullet vs SAPIEN on the same Kitchen3D pour trials: wall time and success agreement.
+"""PyBullet vs SAPIEN on the same Kitchen3D trials: wall time and success agreement.
 
-Draws ``--trials`` pour inputs (contexts from the randomised kitchenware distribution,
-controls uniform in the box, redrawn until the geometric pre-check passes) and runs every
-one on both 3D backends with the same seed, single-threaded, each backend reusing its world.
-Also times bare particle stepping (``--beads`` spheres settling in a bowl) in both engines,
-to compare the stepping advantage with the whole-trial one, and (``--plans N``) solves
-``problems/kitchen3d/pour_blocked.yaml`` with seeds ``0..N-1`` and executes every plan on
+Draws ``--trials`` inputs of ``--skill`` (default ``pour``; also ``scoop``, ``push``,
+``stir``): contexts from the skill's context distribution, controls uniform in the box,
+redrawn until the geometric pre-check passes; runs every one on both 3D backends with the
+same seed, single-threaded, each backend reusing its world. Also times bare particle
+stepping (``--beads`` spheres settling in a bowl) in both engines, to compare the stepping
+advantage with the whole-trial one, and (``--plans N``) solves ``--problem`` (default
+``problems/kitchen3d/pour_blocked.yaml``) with seeds ``0..N-1`` and executes every plan on
 both backends (execution wall time, whether the goal holds physically). Prints tables;
 writes JSON to ``--out`` (default ``bench/results/backends.json``).
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/backends.py --trials 20 --plans 3
+    OMP_NUM_THREADS=1 .venv/bin/python bench/backends.py --skill push --trials 50 \
+        --out /tmp/push.json
 """
 
 from __future__ import annotations
@@ -32,39 +35,43 @@ POUR_BLOCKED = Path(__file__).resolve().parents[1] / "problems" / "kitchen3d" / 
 #: Trials whose PyBullet score is at least this far from 0 are clear-cut (g = ±0.5 means
 #: 95 % or 45 % of the beads in the bowl); the others are borderline.
 CLEAR_SCORE = 0.5
+#: The measurement compared between the engines, per skill (a key of the trial's ``info``).
+MEASURES = {"pour": "fraction_in_bowl", "scoop": "fraction_of_capacity", "push": "error_m",
+            "stir": "mean_displacement_m"}
 
 
-def pour_inputs(backend: SkillBackend, n: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:
-    """``n`` (context, valid control) pairs drawn with a seeded generator."""
+def skill_inputs(backend: SkillBackend, skill: str, n: int, seed: int
+                 ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``n`` (context, valid control) pairs of ``skill`` drawn with a seeded generator."""
     rng = np.random.default_rng(seed)
-    spec = backend.skills()["pour"]
+    spec = backend.skills()[skill]
     inputs = []
     while len(inputs) < n:
-        context = backend.sample_context("pour", rng)
+        context = backend.sample_context(skill, rng)
         controls = spec.control.sample_uniform(rng, 16)
-        valid = np.flatnonzero(backend.is_valid("pour", context, controls))
+        valid = np.flatnonzero(backend.is_valid(skill, context, controls))
         if valid.size:
             inputs.append((context, controls[int(valid[0])]))
     return inputs
 
 
 def time_trials(
-    name: str, inputs: list[tuple[np.ndarray, np.ndarray]], seed: int
+    name: str, inputs: list[tuple[np.ndarray, np.ndarray]], seed: int, skill: str = "pour"
 ) -> list[dict]:
-    """Run every input on backend ``name``: wall/CPU seconds, score, fraction, steps."""
+    """Run every input on backend ``name``: wall/CPU seconds, score, measurement, steps."""
     backend = load_backend(name)
     rows = []
     try:
         for index, (context, control) in enumerate(tqdm(inputs, desc=name, leave=False)):
             w0, c0 = time.perf_counter(), time.process_time()
-            result = backend.run_trial("pour", context, control, seed * 1000 + index)
+            result = backend.run_trial(skill, context, control, seed * 1000 + index)
             rows.append(
                 {
                     "wall_s": time.perf_counter() - w0,
                     "cpu_s": time.process_time() - c0,
                     "score": result.score,
                     "valid": result.valid,
-                    "fraction_in_bowl": result.info.get("fraction_in_bowl"),
+                    "measure": result.info.get(MEASURES[skill]),
                     "sim_steps": result.info.get("sim_steps", 0),
                 }
             )
@@ -104,16 +111,17 @@ def stepping_rate(name: str, beads: int, steps: int) -> float:
     return rate
 
 
-def execute_plans(n: int) -> list[dict]:
-    """Solve pour_blocked with seeds ``0..n-1``; execute each plan on both backends."""
+def execute_plans(n: int, path: Path = POUR_BLOCKED) -> list[dict]:
+    """Solve the problem at ``path`` with seeds ``0..n-1``; execute each plan on both
+    backends."""
     from ltamp_cli.backends.execution import execute_plan
     from ltamp_cli.planner.algorithms.common import PlannerConfig
     from ltamp_cli.planner.api import solve
     from ltamp_cli.planner.problem import load_problem
 
-    problem = load_problem(POUR_BLOCKED)
+    problem = load_problem(path)
     rows = []
-    for seed in tqdm(range(n), desc="pour_blocked", leave=False):
+    for seed in tqdm(range(n), desc=path.stem, leave=False):
         result = solve(problem, PlannerConfig(**{**problem.planner_options, "seed": seed}))
         row: dict = {"seed": seed, "status": result.status}
         if result.solved:
@@ -136,10 +144,10 @@ def summarise(rows: dict[str, list[dict]]) -> dict:
     pyb, sap = rows["pybullet"], rows["sapien"]
     agree = [(a["score"] > 0) == (b["score"] > 0) for a, b in zip(pyb, sap, strict=True)]
     clear = [i for i, a in enumerate(pyb) if abs(a["score"]) >= CLEAR_SCORE]
-    fraction_gaps = [
-        abs(a["fraction_in_bowl"] - b["fraction_in_bowl"])
+    measure_gaps = [
+        abs(a["measure"] - b["measure"])
         for a, b in zip(pyb, sap, strict=True)
-        if a["fraction_in_bowl"] is not None and b["fraction_in_bowl"] is not None
+        if a["measure"] is not None and b["measure"] is not None
     ]
     per_backend = {}
     for name, trial_rows in rows.items():
@@ -165,7 +173,7 @@ def summarise(rows: dict[str, list[dict]]) -> dict:
         "clear_cut_trials": len(clear),
         "agreement_clear_cut": float(np.mean([agree[i] for i in clear])) if clear else None,
         "disagreements": [i for i, same in enumerate(agree) if not same],
-        "fraction_mean_abs_diff": float(np.mean(fraction_gaps)) if fraction_gaps else None,
+        "measure_mean_abs_diff": float(np.mean(measure_gaps)) if measure_gaps else None,
     }
 
 
@@ -175,17 +183,20 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--beads", type=int, default=200, help="spheres for the stepping test")
     parser.add_argument("--steps", type=int, default=480, help="steps for the stepping test")
-    parser.add_argument("--plans", type=int, default=0, help="pour_blocked plans to execute")
+    parser.add_argument("--skill", choices=sorted(MEASURES), default="pour")
+    parser.add_argument("--plans", type=int, default=0, help="plans to execute")
+    parser.add_argument("--problem", type=Path, default=POUR_BLOCKED,
+                        help="problem whose plans --plans executes")
     parser.add_argument("--out", type=Path, default=RESULTS_DIR / "backends.json")
     args = parser.parse_args()
     # Same generator draws for both backends: contexts and pre-checks are engine-independent.
     probe = load_backend("pybullet")
-    inputs = pour_inputs(probe, args.trials, args.seed)
+    inputs = skill_inputs(probe, args.skill, args.trials, args.seed)
     probe.close()
-    rows = {name: time_trials(name, inputs, args.seed) for name in BACKENDS}
+    rows = {name: time_trials(name, inputs, args.seed, args.skill) for name in BACKENDS}
     summary = summarise(rows)
     stepping = {name: stepping_rate(name, args.beads, args.steps) for name in BACKENDS}
-    plans = execute_plans(args.plans)
+    plans = execute_plans(args.plans, args.problem)
 
     print(f"{'backend':<10}{'n':>4}{'wall med':>10}{'wall sum':>10}{'cpu med':>9}"
           f"{'steps/s':>9}{'success':>9}")
@@ -194,7 +205,7 @@ def main() -> None:
         print(f"{name:<10}{args.trials:>4}{row['wall_median_s']:>10.2f}"
               f"{row['wall_total_s']:>10.1f}{row['cpu_median_s']:>9.2f}"
               f"{row['trial_steps_per_s']:>9.0f}{row['success_rate']:>9.2f}")
-    print(f"whole pour trials: SAPIEN {summary['speedup_median']:.1f}x faster (median), "
+    print(f"whole {args.skill} trials: SAPIEN {summary['speedup_median']:.1f}x faster (median), "
           f"{summary['speedup_total']:.1f}x (total), "
           f"{summary['speedup_cpu_median']:.1f}x (median CPU)")
     step_speedup = stepping["sapien"] / stepping["pybullet"]
@@ -204,8 +215,8 @@ def main() -> None:
     clear_text = "n/a" if clear is None else f"{clear:.0%}"
     print(f"success labels agree on {summary['agreement']:.0%} of trials, {clear_text} of the "
           f"{summary['clear_cut_trials']} clear-cut ones (PyBullet |score| >= {CLEAR_SCORE}); "
-          f"disagreeing trials: {summary['disagreements']}; mean |fraction difference| "
-          f"{summary['fraction_mean_abs_diff']:.3f}")
+          f"disagreeing trials: {summary['disagreements']}; mean |{MEASURES[args.skill]} "
+          f"difference| {summary['measure_mean_abs_diff']:.3f}")
     executed = [row for row in plans if "sapien" in row]
     if executed:
         print(f"{'seed':>4}{'pyb exec s':>11}{'pyb goal':>9}{'sap exec s':>11}{'sap goal':>9}")
@@ -216,12 +227,14 @@ def main() -> None:
         same = sum(r["pybullet"]["goal_holds"] == r["sapien"]["goal_holds"] for r in executed)
         ratio = sum(r["pybullet"]["wall_s"] for r in executed) / sum(
             r["sapien"]["wall_s"] for r in executed)
-        print(f"pour_blocked executions: goal verdicts agree on {same}/{len(executed)} plans; "
-              f"SAPIEN executes {ratio:.1f}x faster")
+        print(f"{args.problem.stem} executions: goal verdicts agree on {same}/{len(executed)} "
+              f"plans; SAPIEN executes {ratio:.1f}x faster")
     payload = {
         "benchmark": "backends",
         "python": platform.python_version(),
         "omp_num_threads": os.environ.get("OMP_NUM_THREADS"),
+        "skill": args.skill,
+        "measure": MEASURES[args.skill],
         "trials": args.trials,
         "seed": args.seed,
         "clear_score": CLEAR_SCORE,

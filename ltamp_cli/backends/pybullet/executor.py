@@ -176,8 +176,9 @@ class Kitchen3DRun:
         self.initial_counts = self.counts()
 
     def _init_records(self) -> None:
-        """What actions achieved, beyond bead counts: tools pinned at rest (name -> pose),
-        the last spoonful of each scooped material (beads), each cup's stir records."""
+        """State beyond the bodies: tools pinned at rest (name -> pose), every arm's last
+        commanded configuration, the last spoonful of each scooped material (beads) and
+        each cup's stir records."""
         self.pinned: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.commanded: dict[int, np.ndarray] = {
             i: arm.get_configuration() for i, arm in enumerate(self.scene.arms)}
