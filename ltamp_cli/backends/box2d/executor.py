@@ -207,6 +207,9 @@ class Kitchen2DRun:
     def pour(self, source: str, target: str, pose: Point, approach: Sequence[Point],
              control: Sequence[float]) -> None:
         self.follow(approach[1:], speed=SLOW)
+        # The skill's trials start tilting with the grains at rest; after a carry they
+        # still slosh and would leave the mouth early, off the learned stream.
+        self.settle(3.0)
         top = self.spec.layout.table_top
         item = self.spec.object(source)
         grasp = self.gripper._held_rel
