@@ -24,6 +24,7 @@ import queue
 import signal
 import time
 from collections.abc import Iterator, Mapping
+from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -265,19 +266,34 @@ def collect(
     finally:
         backend_check.close()
     indices = pending_indices(dataset, job)
-    stream: Iterator[TrialRecord]
-    if ray_address is not None:
-        from ltamp_cli.trials.ray_collect import ray_stream
+    with ExitStack() as session:
+        stream: Iterator[TrialRecord]
+        if ray_address is not None:
+            from ltamp_cli.trials.ray_collect import import_ray, ray_session, ray_stream
 
-        stream = ray_stream(job, indices, ray_address, workers)
-    elif (workers or 1) == 1 or len(indices) <= 1:
-        stream = _serial(job, indices)
-    else:
-        stream = _parallel(job, indices, min(workers or 1, len(indices)))
+            import_ray()  # a missing Ray is reported even when nothing is left to run
+            # Ray starts (or is joined) before the progress bar, and only if there is work.
+            ray = session.enter_context(ray_session(ray_address, workers)) if indices else None
+            stream = ray_stream(ray, job, indices, workers) if ray is not None else iter(())
+        elif (workers or 1) == 1 or len(indices) <= 1:
+            stream = _serial(job, indices)
+        else:
+            stream = _parallel(job, indices, min(workers or 1, len(indices)))
+        return _append_all(dataset, job, stream, len(indices), progress)
+
+
+def _append_all(
+    dataset: TrialDataset,
+    job: CollectJob,
+    stream: Iterator[TrialRecord],
+    pending: int,
+    progress: bool,
+) -> int:
+    """Append records from ``stream`` one by one as they arrive; returns how many."""
     added = 0
     with tqdm(
         total=job.n,
-        initial=job.n - len(indices),
+        initial=job.n - pending,
         desc=f"{job.backend}/{job.skill}",
         unit="trial",
         disable=not progress,

@@ -17,6 +17,8 @@ from __future__ import annotations
 import json
 import logging
 import os
+import re
+import socket
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from types import ModuleType
@@ -29,6 +31,8 @@ from ltamp_cli.trials.record import TrialRecord
 # The plasma store is sized for trial records (a few kB each), not for Ray's default share
 # of RAM, so a local cluster also starts on small or busy machines.
 LOCAL_OBJECT_STORE_BYTES = 100 * 1024 * 1024
+# How long to wait for a cluster address to accept a TCP connection before giving up.
+PROBE_TIMEOUT_S = 10.0
 
 
 def import_ray() -> ModuleType:
@@ -52,9 +56,24 @@ class RayTrialActor:
         return self.runner.run(index).to_json()
 
 
+def _probe(address: str) -> None:
+    """Fail fast on an unreachable ``[ray://]host:port`` (Ray itself retries for minutes)."""
+    match = re.fullmatch(r"(?:ray://)?\[?([^\[\]]+?)\]?:(\d+)", address.strip())
+    if match is None:  # e.g. "auto": let Ray resolve it
+        return
+    host, port = match.group(1), int(match.group(2))
+    try:
+        with socket.create_connection((host, port), timeout=PROBE_TIMEOUT_S):
+            pass
+    except OSError as error:
+        reason = error.strerror or type(error).__name__
+        raise InputError(f"--ray: cannot reach a Ray cluster at {address!r} ({reason})") from None
+
+
 @contextmanager
 def ray_session(address: str, workers: int | None) -> Iterator[ModuleType]:
-    """Ray initialised for ``address`` (``"local"``: a new local cluster of ``workers`` CPUs)."""
+    """Ray initialised for ``address`` (``"local"``: a new local cluster of ``workers`` CPUs),
+    shut down on exit if this call started or joined it. Errors are one-line InputErrors."""
     ray = import_ray()
     if ray.is_initialized():
         yield ray
@@ -72,8 +91,11 @@ def ray_session(address: str, workers: int | None) -> Iterator[ModuleType]:
                 **options,
             )
         else:
+            _probe(address)
             ray.init(address=address, **options)
-    except Exception as error:  # unreachable address, bad cluster: one line, exit 2
+    except InputError:
+        raise
+    except Exception as error:  # bad address or cluster: one line, exit 2
         message = " ".join(str(error).split())[:300]
         raise InputError(f"--ray: cannot start or join Ray at {address!r}: {message}") from None
     try:
@@ -83,32 +105,26 @@ def ray_session(address: str, workers: int | None) -> Iterator[ModuleType]:
 
 
 def ray_stream(
-    job: CollectJob, indices: list[int], address: str, workers: int | None
+    ray: ModuleType, job: CollectJob, indices: list[int], workers: int | None
 ) -> Iterator[TrialRecord]:
-    """Run trials ``indices`` of ``job`` on Ray actors; yields records as they finish.
+    """Run trials ``indices`` of ``job`` on actors of the initialised ``ray`` (see
+    :func:`ray_session`); yields records as they finish.
 
     ``workers`` actors (``None``: one per CPU of the cluster), never more than the cluster's
     CPUs (an actor that cannot be placed would hold its trials forever) nor than trials.
-    A missing Ray is reported here, at the call, even when nothing is left to run.
     """
-    import_ray()
-    return _records(job, indices, address, workers) if indices else iter(())
+    if not indices:
+        return
+    from ray.util import ActorPool
 
-
-def _records(
-    job: CollectJob, indices: list[int], address: str, workers: int | None
-) -> Iterator[TrialRecord]:
-    with ray_session(address, workers) as ray:
-        from ray.util import ActorPool
-
-        cpus = max(1, int(ray.cluster_resources().get("CPU", 1)))
-        count = max(1, min(workers or cpus, cpus, len(indices)))
-        actor_class = ray.remote(num_cpus=1)(RayTrialActor)
-        actors = [actor_class.remote(job) for _ in range(count)]
-        submit: Callable[[Any, int], Any] = lambda actor, index: actor.run.remote(index)  # noqa: E731
-        try:
-            for payload in ActorPool(actors).map_unordered(submit, indices):
-                yield TrialRecord.from_dict(json.loads(payload))
-        finally:
-            for actor in actors:
-                ray.kill(actor)
+    cpus = max(1, int(ray.cluster_resources().get("CPU", 1)))
+    count = max(1, min(workers or cpus, cpus, len(indices)))
+    actor_class = ray.remote(num_cpus=1)(RayTrialActor)
+    actors = [actor_class.remote(job) for _ in range(count)]
+    submit: Callable[[Any, int], Any] = lambda actor, index: actor.run.remote(index)  # noqa: E731
+    try:
+        for payload in ActorPool(actors).map_unordered(submit, indices):
+            yield TrialRecord.from_dict(json.loads(payload))
+    finally:
+        for actor in actors:
+            ray.kill(actor)

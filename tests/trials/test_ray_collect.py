@@ -13,7 +13,8 @@ import pytest
 from ltamp_cli.trials.collect import CollectJob, collect
 from ltamp_cli.trials.record import TrialDataset, TrialRecord
 
-ENV = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+ENV_THREADS = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+ENV = {**os.environ, **ENV_THREADS}
 
 
 def _comparable(record: TrialRecord) -> tuple:
@@ -88,3 +89,46 @@ def test_ray_empty_address_is_rejected(tmp_path: Path) -> None:
         "--out", str(tmp_path / "t.jsonl"),
     )  # fmt: skip
     assert done.returncode == 2 and "--ray" in done.stderr and "Traceback" not in done.stderr
+
+
+@pytest.mark.skipif(importlib.util.find_spec("ray") is None, reason="needs the ltamp[ray] extra")
+def test_ray_unreachable_address_fails_fast(tmp_path: Path) -> None:
+    out = tmp_path / "t.jsonl"
+    done = _ltamp(
+        "collect", "toy1d", "--backend", "synthetic", "-n", "2", "--ray", "127.0.0.1:1",
+        "--out", str(out),
+    )  # fmt: skip
+    assert done.returncode == 2, done.stderr[-2000:]
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "cannot reach a Ray cluster at '127.0.0.1:1'" in lines[0]
+    assert not out.exists()
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(importlib.util.find_spec("ray") is None, reason="needs the ltamp[ray] extra")
+def test_ray_joins_a_running_cluster_by_address(tmp_path: Path) -> None:
+    import logging
+
+    import ray
+
+    ray.init(
+        num_cpus=2, include_dashboard=False, log_to_driver=False, logging_level=logging.ERROR,
+        object_store_memory=100 * 1024 * 1024,
+    )  # fmt: skip
+    try:
+        address = ray.get_runtime_context().gcs_address
+        out = tmp_path / "t.jsonl"
+        # ray.init sets the cluster's auth settings (RAY_AUTH_MODE...) in os.environ.
+        done = _ltamp(
+            "collect", "moving2d", "--backend", "synthetic", "-n", "6", "--seed", "1",
+            "--ray", address, "--out", str(out), env={**os.environ, **ENV_THREADS},
+        )  # fmt: skip
+        assert done.returncode == 0, done.stderr[-2000:]
+        # The cluster belongs to someone else: the collection leaves it running.
+        assert ray.cluster_resources().get("CPU") == 2
+    finally:
+        ray.shutdown()
+    serial = tmp_path / "serial.jsonl"
+    collect(CollectJob("moving2d", "synthetic", 6, seed=1), serial, progress=False)
+    a = sorted(map(_comparable, TrialDataset(out).read()))
+    assert a == sorted(map(_comparable, TrialDataset(serial).read())) and len(a) == 6
