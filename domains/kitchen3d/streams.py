@@ -42,6 +42,8 @@ DEFAULT_LEARNED = {
     "sample-pour": {"model": "../../models/kitchen3d/pour", "sampler": "adaptive"},
     "sample-scoop": {"model": "../../models/kitchen3d/scoop", "sampler": "adaptive"},
 }
+#: RRT-Connect attempts (each a separate stream call) between two confs.
+MOTION_ATTEMPTS = 3
 #: Targets of tool skills (pour, scoop, dump, stir) farther than this (m, horizontally) from
 #: an arm's base are out of its reach: the Panda reaches 0.855 m, plus the held tool and the
 #: skill's offsets; pours were found up to 0.92 m. Skipping them spares futile IK.
@@ -135,20 +137,25 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         yield list(planning.pick_kinematics(name, _xy(pose), tuple(grasp), rng,  # type: ignore[arg-type]
                                             arms=(arm,)))
 
-    def plan_free_motion(r: Any, q1: ArmConf, q2: ArmConf) -> tuple[ArmPath] | None:
+    def motion(r: Any, q1: ArmConf, q2: ArmConf, held: tuple[str, GraspValue] | None
+               ) -> Iterator[list[tuple[ArmPath]]]:
         a, b = as_conf(q1), as_conf(q2)
-        if a.arm != arm_of(r):
-            return None
-        path = planning.plan_motion(a, b, None, next(motion_seed))
-        return None if path is None else (path,)
+        if a.arm != arm_of(r) or b.arm != a.arm:
+            return
+        # RRT-Connect has a wall-clock budget: on a loaded machine a feasible motion can
+        # miss it, so a failed call yields nothing *this* call and may be retried later.
+        for _ in range(MOTION_ATTEMPTS):
+            path = planning.plan_motion(a, b, held, next(motion_seed))
+            yield [] if path is None else [(path,)]
+            if path is not None:
+                return
+
+    def plan_free_motion(r: Any, q1: ArmConf, q2: ArmConf) -> Iterator[list[tuple[ArmPath]]]:
+        yield from motion(r, q1, q2, None)
 
     def plan_holding_motion(r: Any, name: str, grasp: GraspValue, q1: ArmConf, q2: ArmConf
-                            ) -> tuple[ArmPath] | None:
-        a, b = as_conf(q1), as_conf(q2)
-        if a.arm != arm_of(r):
-            return None
-        path = planning.plan_motion(a, b, (name, tuple(grasp)), next(motion_seed))  # type: ignore[arg-type]
-        return None if path is None else (path,)
+                            ) -> Iterator[list[tuple[ArmPath]]]:
+        yield from motion(r, q1, q2, (name, tuple(grasp)))  # type: ignore[arg-type]
 
     # Learned skills ----------------------------------------------------------------------
 

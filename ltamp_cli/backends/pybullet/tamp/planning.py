@@ -22,6 +22,7 @@ from ltamp_cli.backends.pybullet.kitchenware import (
     KitchenwareBody,
     create_kitchenware,
 )
+from ltamp_cli.backends.pybullet.robot.arm import PANDA_HOME
 from ltamp_cli.backends.pybullet.robot.cartesian import CartesianConfig, follow_tool_path
 from ltamp_cli.backends.pybullet.robot.collision import ArmCollisionChecker, AttachedBody
 from ltamp_cli.backends.pybullet.robot.grasps import Grasp
@@ -112,9 +113,19 @@ class PlanningWorld:
     def grasp(self, name: str, grasp: GraspValue) -> Grasp:
         return self.grasps[name][grasp[1]]
 
+    def rest_other_arms(self, arm: int) -> None:
+        """Put every arm but ``arm`` at its home configuration: an arm's queries see the
+        other arm there (the planner does not track it; the executor starts it there)."""
+        for index, other in enumerate(self.scene.arms):
+            if index != arm:
+                other.set_configuration(np.asarray(PANDA_HOME))
+
     def checker(self, arm: int, held: tuple[str, GraspValue] | None = None,
                 extra: Sequence[str] = (), carries_contents: bool = True,
                 exclude: Sequence[str] = ()) -> ArmCollisionChecker:
+        """Collision checker of arm ``arm`` (the other arms at home, see
+        :meth:`rest_other_arms`), carrying ``held``, with movable objects ``extra``."""
+        self.rest_other_arms(arm)
         attached = None
         if held is not None:
             name, g = held
