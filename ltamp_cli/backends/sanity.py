@@ -14,13 +14,18 @@ every body once more when the trial ends.
 
 from __future__ import annotations
 
+import json
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Generic, TypeVar
 
 import numpy as np
 
-from ltamp_cli.backends.protocol import TrialResult
+from ltamp_cli.backends.protocol import SkillBackend, TrialResult, skill_spec
+
+# Longest error message kept in a failed trial's record (one line).
+REASON_CHARS = 300
 
 Body = TypeVar("Body")
 #: One body's ``(position, linear velocity)``, each a tuple of 2 or 3 floats.
@@ -164,3 +169,32 @@ def run_guarded(
     except PhysicsDiverged as diverged:
         return diverged.result(invalid_score)
     return result
+
+
+def failed_result(invalid_score: float, reason: str) -> TrialResult:
+    """An invalid trial with the skill's ``invalid_score`` and a one-line ``reason``."""
+    line = " ".join(reason.split())[:REASON_CHARS]
+    return TrialResult(invalid_score, False, {"reason": line})
+
+
+def run_trial_safely(
+    backend: SkillBackend, skill: str, context: np.ndarray, control: np.ndarray, seed: int
+) -> tuple[TrialResult, bool]:
+    """``(result, crashed)`` of ``backend.run_trial``, never raising for one trial's physics.
+
+    A trial that raises (``crashed``: the backend's world may be left mid-trial), scores a
+    non-finite value or reports measurements that are not strict JSON (NaN, inf) is an
+    invalid trial with the skill's invalid score and the reason in ``info["reason"]``.
+    """
+    invalid_score = skill_spec(backend, skill).invalid_score
+    try:
+        result = backend.run_trial(skill, context, control, seed)
+    except Exception as error:  # one trial's physics must not end a collection or training
+        return failed_result(invalid_score, f"trial raised {type(error).__name__}: {error}"), True
+    if not math.isfinite(float(result.score)):
+        return failed_result(invalid_score, f"non-finite score {result.score}"), False
+    try:  # a record must be strict JSON; NaN in the measurements means the physics went wrong
+        json.dumps(dict(result.info), allow_nan=False)
+    except (TypeError, ValueError) as error:
+        return failed_result(invalid_score, f"unrecordable trial info: {error}"), False
+    return result, False

@@ -31,6 +31,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ltamp_cli.backends.protocol import SkillBackend, SkillSpec
+from ltamp_cli.backends.sanity import run_trial_safely
 from ltamp_cli.learning.acquisition import evaluate, maximize, straddle
 from ltamp_cli.learning.baselines import SKLEARN_KINDS, RandomModel, SklearnModel
 from ltamp_cli.learning.gp import fit_gp
@@ -219,7 +220,9 @@ def learn_online(
             index = len(records)
             seed = _trial_seed(config.seed, index)
             start = time.perf_counter()
-            result = backend.run_trial(skill, context, control, seed)
+            # A raising or diverged trial is recorded invalid: re-raising would crash every
+            # resume too, as the resumed run proposes the same trial again.
+            result, _crashed = run_trial_safely(backend, skill, context, control, seed)
             record = TrialRecord(
                 skill=skill,
                 context=tuple(float(v) for v in context),

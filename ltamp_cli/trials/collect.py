@@ -18,7 +18,6 @@ freshly built backend, since a world left mid-trial is not trusted).
 from __future__ import annotations
 
 import json
-import math
 import multiprocessing as mp
 import queue
 import signal
@@ -33,14 +32,13 @@ import numpy as np
 from tqdm import tqdm
 
 from ltamp_cli.backends import load_backend
-from ltamp_cli.backends.protocol import SkillBackend, TrialResult, skill_spec
+from ltamp_cli.backends.protocol import SkillBackend, skill_spec
+from ltamp_cli.backends.sanity import run_trial_safely
 from ltamp_cli.errors import InputError
 from ltamp_cli.trials.record import TrialDataset, TrialRecord
 
 VALID_DRAW_BATCH = 256
 VALID_DRAW_ROUNDS = 40
-# Longest error message kept in a failed trial's record (one line).
-REASON_CHARS = 300
 
 
 @dataclass(frozen=True)
@@ -97,29 +95,11 @@ def run_one(backend: SkillBackend, job: CollectJob, index: int) -> TrialRecord:
     return _run_guarded(backend, job, index)[0]
 
 
-def failed_result(invalid_score: float, reason: str) -> TrialResult:
-    """An invalid trial with the skill's ``invalid_score`` and a one-line ``reason``."""
-    line = " ".join(reason.split())[:REASON_CHARS]
-    return TrialResult(invalid_score, False, {"reason": line})
-
-
 def _run_guarded(backend: SkillBackend, job: CollectJob, index: int) -> tuple[TrialRecord, bool]:
     """``(record, crashed)``: ``crashed`` when ``run_trial`` raised (the backend may be dirty)."""
     item = trial_input(backend, job.skill, job.seed, index, job.valid_only)
-    invalid_score = skill_spec(backend, job.skill).invalid_score
-    crashed = False
     start = time.perf_counter()
-    try:
-        result = backend.run_trial(job.skill, item.context, item.control, item.seed)
-    except Exception as error:  # one trial's physics must not end the whole collection
-        crashed = True
-        result = failed_result(invalid_score, f"trial raised {type(error).__name__}: {error}")
-    if not math.isfinite(float(result.score)):
-        result = failed_result(invalid_score, f"non-finite score {result.score}")
-    try:  # a record must be strict JSON; NaN in the measurements means the physics went wrong
-        json.dumps(dict(result.info), allow_nan=False)
-    except (TypeError, ValueError) as error:
-        result = failed_result(invalid_score, f"unrecordable trial info: {error}")
+    result, crashed = run_trial_safely(backend, job.skill, item.context, item.control, item.seed)
     return TrialRecord(
         skill=job.skill,
         context=tuple(float(v) for v in item.context),

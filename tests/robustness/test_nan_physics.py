@@ -256,3 +256,31 @@ def test_collect_marks_non_finite_results_invalid(
     assert records[3].info["reason"] == (
         "trial raised FloatingPointError: overflow in the integrator"
     )
+
+
+def test_online_learning_records_a_raising_trial_and_goes_on(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from ltamp_cli.backends.synthetic import SyntheticBackend
+    from ltamp_cli.learning.active import LearningConfig, learn_online
+
+    original = SyntheticBackend.run_trial
+    calls = [0]
+
+    def run_trial(
+        self: SyntheticBackend, skill: str, context: np.ndarray, control: np.ndarray, seed: int
+    ) -> object:
+        calls[0] += 1
+        if calls[0] == 3:
+            raise ZeroDivisionError("mass ratio")
+        return original(self, skill, context, control, seed)
+
+    monkeypatch.setattr(SyntheticBackend, "run_trial", run_trial)
+    dataset = TrialDataset(tmp_path / "trials.jsonl")
+    config = LearningConfig(strategy="random", budget=6, init=2, seed=0)
+    result = learn_online(load_backend("synthetic"), "moving2d", config, dataset)
+    records = dataset.read()
+    assert [r.index for r in records] == list(range(6)) and len(result.records) == 6
+    assert [r.valid for r in records].count(False) == 1
+    assert not records[2].valid and records[2].score == -1.0
+    assert records[2].info["reason"] == "trial raised ZeroDivisionError: mass ratio"
