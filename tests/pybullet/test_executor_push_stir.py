@@ -47,33 +47,38 @@ STIR_WORLD = {"arms": 1, "objects": {
 
 
 def _arm_path(spec: SceneSpec, tool_poses: list[Pose], grasp: Pose, kind: str,
-              **extra: Any) -> tuple[ArmPath, ArmPath]:
+              arm_index: int = 0, **extra: Any) -> tuple[ArmPath, ArmPath]:
     """A free/holding move from the home configuration to the path's start, and the path."""
     world = PlanningWorld(spec)
-    arm = world.scene.arms[0]
+    arm = world.scene.arms[arm_index]
     path = follow_tool_path(arm, tool_poses, grasp, np.random.default_rng(0))
     assert path.success
     q = np.asarray(path.configurations)
-    reach = ArmPath(0, np.stack([np.asarray(PANDA_HOME), q[0]]), "free")
-    return reach, ArmPath(0, q, kind, **extra)
+    reach = ArmPath(arm_index, np.stack([np.asarray(PANDA_HOME), q[0]]), "free")
+    return reach, ArmPath(arm_index, q, kind, **extra)
 
 
-def push_paths(stop_short_m: float = 0.0) -> tuple[ArmPath, ArmPath]:
-    """The hand lowers behind the block, pushes it along +x to the goal (less
+def push_paths(stop_short_m: float = 0.0, arm_index: int = 0,
+               start: tuple[float, float] = BLOCK_START, goal: tuple[float, float] = BLOCK_GOAL,
+               world: dict[str, Any] | None = None) -> tuple[ArmPath, ArmPath]:
+    """The hand lowers behind the block, pushes it in a straight line to the goal (less
     ``stop_short_m``), backs off and lifts."""
-    spec = scene_from_world(PUSH_WORLD)
+    spec = scene_from_world(world or PUSH_WORLD)
     table_z = 0.7
     z = table_z + PUSH_HEIGHT_M
     behind = 0.025 + 0.012  # half the block + half the closed fingers
+    direction = np.sign(goal[0] - start[0])
+    # The arm at +x faces -x: its hand is turned half a turn (the fingers still span y).
+    hand = Pose.from_euler(np.zeros(3), yaw=math.pi * arm_index) @ PALM_DOWN
 
     def at(x: float, height: float) -> Pose:
-        return Pose(np.array([x, BLOCK_START[1], height])) @ PALM_DOWN
+        return Pose(np.array([x, start[1], height])) @ hand
 
-    first = BLOCK_START[0] - behind - 0.03
-    last = BLOCK_GOAL[0] - behind - stop_short_m
-    poses = [at(first, z + 0.1), at(first, z), at(last, z), at(last - 0.03, z),
-             at(last - 0.03, z + 0.1)]
-    return _arm_path(spec, poses, Pose(), "push", touching="block")
+    first = start[0] - direction * (behind + 0.03)
+    last = goal[0] - direction * (behind + stop_short_m)
+    back = last - direction * 0.03
+    poses = [at(first, z + 0.1), at(first, z), at(last, z), at(back, z), at(back, z + 0.1)]
+    return _arm_path(spec, poses, Pose(), "push", arm_index, touching="block")
 
 
 def stir_paths(control: np.ndarray) -> tuple[ArmPath, ArmPath]:
@@ -183,3 +188,20 @@ def test_push_and_stir_steps_agree_on_sapien() -> None:
             run.close()
         labels[run_class.__name__] = (pushed, stirred, kept >= 48)
     assert labels["Kitchen3DRun"] == labels["SapienKitchen3DRun"] == (True, True, True)
+
+
+def test_the_second_arm_pushes_while_the_first_stays_put() -> None:
+    """Two-arm scene: arm 1 (at +x) pushes the block towards -x; arm 0 does not sag."""
+    world = {**PUSH_WORLD, "arms": 2}
+    start, goal = (0.15, 0.1), (0.0, 0.1)
+    reach, push = push_paths(arm_index=1, start=start, goal=goal, world=world)
+    run = Kitchen3DRun(scene_from_world(world), {"block": start}, 0, ExecutionSettings(), None)
+    try:
+        resting = run.scene.arms[0].end_effector_pose().position
+        run.run_step("move-free", [None, reach, None, 1], ["q0", "t0", "q1", "r1"])
+        run.run_step("push", ["block", start, goal, None, None, push, 1],
+                     ["block", "p1", "p2", "q1", "q2", "t1", "r1"])
+        assert run.log[-1]["error_m"] < 0.01
+        assert np.allclose(run.scene.arms[0].end_effector_pose().position, resting, atol=1e-3)
+    finally:
+        run.close()
