@@ -27,7 +27,9 @@ class TrialRecord:
 
     ``context``/``control`` are in physical units, in the order of the skill's
     :class:`~ltamp_cli.backends.protocol.ParamSpace` names. ``index`` identifies the trial
-    within the job that produced it (collection resumes by skipping done indices).
+    within the job that produced it (collection resumes by skipping done indices). ``info``
+    holds the skill's measurements; an invalid trial says why in ``info["reason"]`` (e.g.
+    ``"colliding start"``, ``"physics diverged: ..."``, ``"trial raised ..."``).
     """
 
     skill: str
