@@ -16,13 +16,15 @@ Layout of ``DIR/``:
 
 from __future__ import annotations
 
+import hashlib
 import json
 import pickle
+from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from importlib import metadata as package_metadata
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 
@@ -101,20 +103,52 @@ def save_model(model: SkillModel, directory: str | Path, **metadata: Any) -> Pat
         record["kernel"] = model.kernel
         record["hyperparameters"] = model.gp.hyperparameters()
         record["n_train"] = model.gp.n
-        np.savez(directory / "weights.npz", **model.gp.state())
+        weights_file = "weights.npz"
+        _replace_atomically(directory / weights_file,
+                            lambda handle: np.savez(handle, **model.gp.state()))
     elif isinstance(model, SklearnModel):
         record["constant"] = model.constant
-        with (directory / "weights.pkl").open("wb") as handle:
-            pickle.dump(model.estimator, handle)
+        weights_file = "weights.pkl"
+        _replace_atomically(directory / weights_file,
+                            lambda handle: pickle.dump(model.estimator, handle))
     elif isinstance(model, RandomModel):
-        np.savez(directory / "weights.npz", mean_score=np.array(model.mean_score))
+        weights_file = "weights.npz"
+        _replace_atomically(directory / weights_file,
+                            lambda handle: np.savez(handle, mean_score=np.array(model.mean_score)))
     else:
         raise TypeError(f"cannot save a {type(model).__name__}")
+    # The weights are replaced before model.json: a save killed in between leaves new weights
+    # beside the old metadata, which the digest exposes on load instead of mixing them.
+    record["weights_sha256"] = _sha256(directory / weights_file)
     record.update(metadata)
     temporary = directory / (METADATA_FILE + ".tmp")
     temporary.write_text(json.dumps(record, indent=2, sort_keys=True, allow_nan=False) + "\n")
     temporary.replace(directory / METADATA_FILE)
     return directory
+
+
+def _replace_atomically(path: Path, write: Callable[[BinaryIO], None]) -> None:
+    """Write ``path`` through a temporary file in its directory, then rename it over."""
+    temporary = path.with_name(path.name + ".tmp")
+    with temporary.open("wb") as handle:
+        write(handle)
+    temporary.replace(path)
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _check_weights(directory: Path, metadata: dict[str, Any], path: Path) -> None:
+    expected = metadata.get("weights_sha256")
+    if expected is None:  # saved before digests were recorded
+        return
+    name = "weights.pkl" if metadata.get("kind") in ("nn-c", "nn-r", "rf-c", "rf-r") \
+        else "weights.npz"
+    weights = directory / name
+    if not weights.is_file() or _sha256(weights) != expected:
+        raise InputError(f"{name} does not match {METADATA_FILE} (a save was interrupted?): "
+                         "train again to rewrite the model", location_in(path))
 
 
 def load_model(directory: str | Path) -> LoadedModel:
@@ -135,6 +169,7 @@ def load_model(directory: str | Path) -> LoadedModel:
         raise InputError(
             f"unsupported model version {metadata.get('version')!r}", location_in(path)
         )
+    _check_weights(directory, metadata, path)
     try:
         spec = spec_from_json(metadata["skill"])
         kind = metadata["kind"]
