@@ -219,3 +219,25 @@ def test_task3_pitcher_is_picked_high_out_of_its_holder_and_poured(tmp_path: Pat
     particles = report.details["particles"]
     assert particles["n_particles"] == particles["n_expected"] == particles["n_in_world"]
     assert gif.stat().st_size > 0
+
+
+def test_a_hand_going_into_the_holder_fails_the_pick_physically() -> None:
+    """Box2D lets the kinematic hand pass through static bodies; the executor checks the
+    hand against walls and holders itself. A low grasp the planner would reject goes into
+    the holder's wall; the planned high grasp does not."""
+    problem = load_problem(TASK3)
+    result = solve(problem, PlannerConfig(max_time=60, seed=1))
+    assert result.solved
+    move, pick = result.plan[:2]
+    assert (move.name, pick.name) == ("move-free", "pick")
+    prefix = dataclasses.replace(result, plan=[move, pick])
+    assert execute_plan("box2d", problem, prefix, 1).success
+    spec = scene_from_world(problem.world, np.random.default_rng(1))
+    pitcher = spec.object("pitcher").spec
+    low = (pitcher.handle_x, pitcher.grasp_height(0.1))
+    conf, grasp_point = pick.values[4]
+    approach = (conf, (grasp_point[0], grasp_point[1] - pick.values[2][1] + low[1]))
+    bad = dataclasses.replace(pick, values=(*pick.values[:2], low, pick.values[3], approach))
+    report = execute_plan("box2d", problem, dataclasses.replace(result, plan=[move, bad]), 1)
+    assert not report.success
+    assert "went into the holder" in report.details["error"]

@@ -41,6 +41,11 @@ HOLD_SPEED = 6.0
 STIR_COVERAGE = 0.6
 #: Fraction of a poured/filled material that must end in the cup for ``Contains``.
 CONTAINS_FRACTION = 0.9
+#: Static obstacles the hand must never enter (Box2D does not collide kinematic bodies,
+#: such as the hand and what it holds, with static ones: the run checks overlaps itself).
+GUARDED = ("wall", "holder")
+#: Check the hand against them every this many physics steps.
+GUARD_EVERY = 4
 
 
 class ActionFailed(RuntimeError):
@@ -65,6 +70,29 @@ class Kitchen2DRun:
         self.sugar_dumped: dict[str, int] = {}
         self.n_created = len(self.scene.kitchen.particles)
         self.log: list[dict[str, Any]] = []
+        self.obstacles = [b for b in self.scene.kitchen.world.bodies
+                          if b.userData and b.userData.get("name") in GUARDED]
+        #: First static obstacle the hand (or what it holds) overlapped, if any.
+        self.hit: str = ""
+        if self.obstacles:
+            self.scene.kitchen.observers.append(self._guard)
+
+    def _guard(self, kitchen: Any) -> None:
+        if self.hit or kitchen.steps % GUARD_EVERY:
+            return
+        movers = list(self.gripper.bodies)
+        if self.gripper.held is not None:
+            movers.append(self.gripper.held)
+        for mover in movers:
+            for obstacle in self.obstacles:
+                for fa in mover.fixtures:
+                    for fb in obstacle.fixtures:
+                        if (fb.userData or {}).get("part") == "base":
+                            continue
+                        if b2.testOverlap(fa.shape, 0, fb.shape, 0, mover.transform,
+                                          obstacle.transform):
+                            self.hit = obstacle.userData["name"]
+                            return
 
     # --- motion primitives ---------------------------------------------------------------
     @property
@@ -423,6 +451,9 @@ class Kitchen2DExecutor:
         for number, step in enumerate(plan_result.plan, start=1):
             try:
                 self._dispatch(run, step)
+                if run.hit:
+                    raise ActionFailed(f"{step.name} {' '.join(step.args[:1])}: the hand "
+                                       f"went into the {run.hit}")
                 run.sweep_spill()
                 entry = {"step": number, "action": step.name, "ok": True}
                 if step.name.lower() in ("fill", "pour", "dump", "stir"):

@@ -375,8 +375,10 @@ def build_scene(spec: SceneSpec, seed: int, observer: Observer | None = None) ->
         body = kitchen.world.CreateStaticBody(position=(0.0, top))
         for x0, x1, y0, y1 in ((a0, a1, 0.0, holder.height), (b0, b1, 0.0, holder.height),
                                (a0, b1, -0.2, 0.0)):
-            body.CreatePolygonFixture(box=((x1 - x0) / 2, (y1 - y0) / 2,
-                                           ((x0 + x1) / 2, (y0 + y1) / 2), 0.0))
+            fixture = body.CreatePolygonFixture(box=((x1 - x0) / 2, (y1 - y0) / 2,
+                                                     ((x0 + x1) / 2, (y0 + y1) / 2), 0.0))
+            # The base is part of the table top: the cup stands on it (not an obstacle).
+            fixture.userData = {"part": "base" if y1 <= 0.0 else "wall"}
         body.userData = {"name": "holder", "color": (95, 95, 140)}
     for item in spec.objects:
         pose = (item.home, top, 0.0)
