@@ -19,7 +19,13 @@ import numpy as np
 import torch
 from scipy.optimize import minimize
 
-from ltamp_cli.learning.kernels import KERNEL_NAMES, CrossCovariance, to_gpytorch, unit_kernel
+from ltamp_cli.learning.kernels import (
+    _ASIN_LIMIT,
+    KERNEL_NAMES,
+    CrossCovariance,
+    to_gpytorch,
+    unit_kernel,
+)
 
 DTYPE = torch.float64
 # Candidates per block: (n, 500) float64 work matrices stay cache-friendly for n ~ 100-400.
@@ -85,32 +91,123 @@ def _unpack(theta: torch.Tensor, k: int) -> tuple[torch.Tensor, ...]:
     return theta[:k].exp(), theta[k].exp(), theta[k + 1].exp(), theta[k + 2]
 
 
+def _stationary_kernel_and_slope(
+    kernel: str, z: torch.Tensor
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """Unit kernel ``K (n, n)`` and ``∂K/∂r² (n, n)`` for scaled inputs ``z = x/ℓ (n, d)``.
+
+    ``rbf``: ``K = e^{−r²/2}``, slope ``−K/2``. ``matern52`` with ``s = √5 r``:
+    ``K = (1 + s + s²/3) e^{−s}`` and ``∂K/∂r² = −(5/6)(1 + s) e^{−s}`` (finite at ``r = 0``).
+    """
+    sq = (z * z).sum(-1)
+    r2 = torch.addmm(sq.unsqueeze(-1) + sq, z, z.T, alpha=-2.0).clamp_min_(0.0)
+    if kernel == "rbf":
+        value = torch.exp(r2.mul_(-0.5))
+        return value, value * -0.5
+    s = r2.mul_(5.0).sqrt_()
+    decay = torch.exp(-s)
+    value = (s * s / 3.0 + s + 1.0) * decay
+    return value, (s + 1.0).mul_(decay).mul_(-5.0 / 6.0)
+
+
+def _arcsine_kernel_and_slope(
+    x: torch.Tensor, params: torch.Tensor
+) -> tuple[torch.Tensor, torch.Tensor, tuple[torch.Tensor, torch.Tensor, torch.Tensor]]:
+    """MLP kernel ``K = (2/π) asin(a)`` and ``∂K/∂a`` at the training inputs ``x (n, d)``.
+
+    ``a_ij = c_ij / D_ij`` with ``c = x̃ Σ x̃ᵀ``, ``q_i = c_ii``, ``D_ij = √((q_i+1)(q_j+1))``,
+    ``x̃ = [x, 1]`` and ``Σ = diag(params)`` (weights, then bias: :func:`unit_kernel`'s order).
+    Also returns ``(x̃, a, 1/D)`` for :func:`_arcsine_gradient`.
+    """
+    augmented = torch.cat([x, torch.ones(x.shape[0], 1, dtype=x.dtype)], dim=1)
+    cross = (augmented * params) @ augmented.T
+    inv_root = (cross.diagonal() + 1.0).rsqrt()
+    inv_denominator = inv_root.unsqueeze(-1) * inv_root
+    ratio = cross.mul_(inv_denominator)
+    inside = ratio.abs() < _ASIN_LIMIT  # the forward clamps: no gradient where it bites
+    ratio.clamp_(-_ASIN_LIMIT, _ASIN_LIMIT)
+    value = torch.asin(ratio).mul_(2.0 / math.pi)
+    slope = (1.0 - ratio * ratio).rsqrt_().mul_(2.0 / math.pi).mul_(inside)
+    return value, slope, (augmented, ratio, inv_denominator)
+
+
+def _arcsine_gradient(weighted: torch.Tensor, unit: torch.Tensor,
+                      features: tuple[torch.Tensor, torch.Tensor, torch.Tensor],
+                      params: torch.Tensor) -> torch.Tensor:
+    """``∂/∂log σ_m`` of ``Σ_ij W_ij a_ij`` for the MLP kernel (``W`` symmetric).
+
+    ``∂a_ij/∂σ_m = x̃_im x̃_jm / D_ij − (a_ij/2)(x̃_im²/(q_i+1) + x̃_jm²/(q_j+1))``, so the sum is
+    ``σ_m [Σ_i x̃_im ((W/D) x̃)_im − Σ_i x̃_im² r_i/(q_i+1)]`` with ``r = (W∘a)`` row sums.
+    """
+    augmented, ratio, inv_denominator = features
+    q_plus_one = (augmented * augmented * params).sum(-1) + 1.0
+    row = (weighted * ratio).sum(1) / q_plus_one
+    pulled = (weighted * inv_denominator) @ augmented
+    return params * ((augmented * pulled).sum(0) - (augmented * augmented).T @ row)
+
+
 def _neg_log_likelihood_and_gradient(
     theta: np.ndarray, kernel: str, x: torch.Tensor, y: torch.Tensor
 ) -> tuple[float, np.ndarray]:
     """Negative log marginal likelihood per data point and its gradient in ``theta``.
 
-    The gradient uses ``∂/∂K = ½ (K⁻¹ − ααᵀ)`` and backpropagates only through the kernel:
-    autograd through the Cholesky factorisation costs several times more.
+    The gradient uses ``∂/∂K = ½ (K⁻¹ − ααᵀ)`` (the upstream ``U``); autograd through the
+    Cholesky factorisation would cost several times more. For the stationary kernels the
+    lengthscale gradient is closed-form: with ``W = U ∘ s·∂K/∂r²`` (symmetric),
+    ``∂/∂log ℓ_d = Σ_ij W_ij ∂r²_ij/∂log ℓ_d = −4 (Σ_i z_id² w_i − Σ_i z_id (Wz)_id)``
+    (``w`` the row sums of ``W``), two GEMMs instead of backpropagating through the kernel.
+    The MLP kernel backpropagates through its torch expression.
     """
     k = theta.size - 3
-    theta_t = torch.tensor(theta, dtype=DTYPE, requires_grad=True)
-    params, outputscale, noise, mean = _unpack(theta_t, k)
     n = x.shape[0]
-    covariance = outputscale * unit_kernel(kernel, x, x, params)
-    covariance = covariance + noise * torch.eye(n, dtype=x.dtype)
     with torch.no_grad():
+        theta_t = torch.as_tensor(theta, dtype=DTYPE)
+        params, outputscale, noise, mean = _unpack(theta_t, k)
+        if kernel == "mlp":
+            unit, slope, features = _arcsine_kernel_and_slope(x, params)
+        else:
+            features = x / params
+            unit, slope = _stationary_kernel_and_slope(kernel, features)
+        covariance = outputscale * unit
+        covariance.diagonal().add_(noise)
         factor = robust_cholesky(covariance)
         residual = y - mean
         alpha = torch.cholesky_solve(residual.unsqueeze(-1), factor).squeeze(-1)
         value = (0.5 * residual @ alpha + factor.diagonal().log().sum()) / n
         inverse = torch.cholesky_inverse(factor)
         upstream = 0.5 * (inverse - torch.outer(alpha, alpha)) / n
-    covariance.backward(upstream)
-    assert theta_t.grad is not None
-    gradient = theta_t.grad.numpy().copy()
-    gradient[k + 2] = -float(alpha.sum()) / n
+        gradient = np.empty(theta.size)
+        weighted = upstream * slope.mul_(outputscale)  # W = U ∘ s·∂K/∂(kernel input)
+        if kernel == "mlp":
+            gradient[:k] = _arcsine_gradient(weighted, unit, features, params).numpy()
+        else:
+            row_sums = weighted.sum(1)
+            pulled = weighted @ features
+            sq = features * features
+            gradient[:k] = (-4.0 * (sq.T @ row_sums - (features * pulled).sum(0))).numpy()
+        gradient[k] = float(outputscale * (upstream * unit).sum())
+        gradient[k + 1] = float(noise * upstream.diagonal().sum())
+        gradient[k + 2] = -float(alpha.sum()) / n
     return float(value) + 0.5 * math.log(2.0 * math.pi), gradient
+
+
+def _neg_log_likelihood_autograd(
+    theta: np.ndarray, kernel: str, x: torch.Tensor, y: torch.Tensor
+) -> tuple[float, np.ndarray]:
+    """Reference for tests: the same value with the gradient by autograd through everything."""
+    k = theta.size - 3
+    theta_t = torch.tensor(theta, dtype=DTYPE, requires_grad=True)
+    params, outputscale, noise, mean = _unpack(theta_t, k)
+    n = x.shape[0]
+    covariance = outputscale * unit_kernel(kernel, x, x, params)
+    covariance = covariance + noise * torch.eye(n, dtype=x.dtype)
+    factor = torch.linalg.cholesky(covariance)
+    residual = y - mean
+    alpha = torch.cholesky_solve(residual.unsqueeze(-1), factor).squeeze(-1)
+    value = (0.5 * residual @ alpha + factor.diagonal().log().sum()) / n
+    value.backward()
+    assert theta_t.grad is not None
+    return float(value.detach()) + 0.5 * math.log(2.0 * math.pi), theta_t.grad.numpy().copy()
 
 
 class GaussianProcess:
