@@ -1,4 +1,4 @@
-"""PyBullet Kitchen3D backend: procedural kitchenware, beads, pour and scoop trials.
+"""PyBullet Kitchen3D backend: procedural kitchenware, beads, pour, scoop, push and stir trials.
 
 Importing this package is cheap; :func:`make_backend` imports the simulation modules.
 Submodules: :mod:`.world` (one physics client per world), :mod:`.kitchenware` (bodies from
