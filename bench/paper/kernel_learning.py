@@ -78,7 +78,12 @@ def plan_once(problem: Any, seed: int, max_time: float) -> dict[str, Any]:
 
     options = {**problem.planner_options, "seed": seed, "max_time": max_time}
     wall, cpu = time.perf_counter(), time.process_time()
-    result = solve(problem, PlannerConfig(**options))
+    try:
+        result = solve(problem, PlannerConfig(**options))
+    except Exception as error:  # a broken stream fails this run, not the whole table
+        return {"seed": seed, "status": "error", "wall_s": time.perf_counter() - wall,
+                "cpu_s": time.process_time() - cpu, "actions": 0,
+                "error": f"{type(error).__name__}: {error}".splitlines()[0][:300]}
     return {"seed": seed, "status": result.status, "wall_s": time.perf_counter() - wall,
             "cpu_s": time.process_time() - cpu, "actions": len(result.plan or [])}
 

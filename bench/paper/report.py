@@ -340,6 +340,9 @@ def section_kernel(out: Path, report: Path) -> list[str]:
             continue
         if row.get("note"):
             notes.append(f"{row['task']}: {row['note']}.")
+        errors = {run.get("error") for entry in row.get("samplers", {}).values()
+                  for run in entry.get("detail", []) if run.get("error")}
+        notes += [f"{row['task']}: a planning run raised `{e}`." for e in sorted(errors)]
         learned = row.get("learned_kernels") or {}
         if "diverse-lk" in row.get("samplers", {}):
             notes.append(f"{row['task']}: Diverse-LK inverse lengthscales after training and "
