@@ -9,6 +9,7 @@ whose set holds several percent of bad controls, against a large uniform estimat
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from ltamp_cli.sampling.factory import make_sampler
 from ltamp_cli.sampling.superlevel import build_superlevel_set
@@ -32,6 +33,7 @@ def _fp_prone_context(synthetic, model):
     raise AssertionError("no context with false positives in its set")
 
 
+@pytest.mark.slow
 def test_adaptive_false_positive_rate_is_the_uniform_one(synthetic, skill8d_model) -> None:
     context, beta, uniform_rate = _fp_prone_context(synthetic, skill8d_model)
     rates = {}
