@@ -35,7 +35,7 @@ SPOON_HANDLE_FRACTION = 0.7
 #: How far below the stirrer's top end (m) the fingertips hold it.
 STIRRER_GRIP_DEPTH_M = 0.02
 #: Stirrer hand yaws (radians about the rod): the rod is symmetric, so several are offered.
-STIRRER_YAWS = (0.0, math.pi / 4, math.pi / 2, 3 * math.pi / 4)
+STIRRER_YAWS = (0.0, math.pi / 2)
 
 
 def approach_direction(grasp: Grasp) -> np.ndarray:
