@@ -475,8 +475,10 @@ def write_report(out: Path, report: Path) -> Path:
             f"{n} {e['wall_s']:.0f} s wall / {e.get('cpu_s', float('nan')):.0f} s CPU"
             + (" (FAILED)" if e["error"] else "")
             for n, e in run.get("experiments", {}).items()),
-        "",
     ]
+    # Free-text notes about how this run went (e.g. reruns), kept in run.json by the operator.
+    lines += [f"- Note: {note}" for note in run.get("notes", [])]
+    lines.append("")
     for section in SECTIONS:
         lines += section(out, report)
     report.parent.mkdir(parents=True, exist_ok=True)
