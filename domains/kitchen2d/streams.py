@@ -18,7 +18,8 @@ yielded it is also run once as the skill's own Box2D trial (the simulation the m
 from, with the scene's cup sizes, trial seed 0, about 0.3–0.6 s of CPU for a pour) and dropped
 unless it scores > 0. The paper's planner trusts the model; this trades planning time for
 fewer failed executions. At most ``world.precheck_limit`` (default 8) trials are run per
-stream call. Every check is logged on the ``ltamp.kitchen2d`` logger (INFO, with the record
+stream call; a control within half a lengthscale (the model's) of one that failed is refused
+without a trial. Every check is logged on the ``ltamp.kitchen2d`` logger (INFO, with the record
 attribute ``precheck``: skill, score, verdict) so that callers can report how many controls
 the pre-check rejected.
 
@@ -55,6 +56,8 @@ from ltamp_cli.planner.streams import Binding, StreamInfo
 HERE = Path(__file__).resolve().parent
 LOG = logging.getLogger("ltamp.kitchen2d")
 PRECHECK_SKILLS = ("pour", "scoop")
+#: Pre-check: controls within this many lengthscales of a failed one are not simulated.
+NEAR_FAILURE = 0.5
 DEFAULT_MODELS = {"pour": "../../models/kitchen2d/pour", "scoop": "../../models/kitchen2d/scoop"}
 DEFAULT_PUSH = {"model": "../../models/kitchen2d/push", "sampler": "adaptive"}
 #: GoodPush gives up on one (block, pose, edge) after this many controls in a row that the
@@ -146,6 +149,12 @@ class LearnedControls:
         self.lam = lam
         self.batch = batch
 
+    def control_scale(self) -> np.ndarray:
+        """The GP's ARD lengthscales of the controls in physical units, ``(dθ,)``."""
+        space = self.model.spec.control
+        width = np.asarray(space.highs, dtype=float) - np.asarray(space.lows, dtype=float)
+        return np.asarray(self.model.lengthscales, dtype=float)[: space.dim] * width / 2.0
+
     def controls(self, context: np.ndarray, feasible: Callable[[np.ndarray], bool],
                  rounds: int = 5) -> Iterator[np.ndarray]:
         from ltamp_cli.learning.confidence import relaxed_beta
@@ -176,7 +185,8 @@ class SkillCheck:
 
     ``module`` is the skill module (``run(context (dα,), control (dθ,), seed, config)``);
     ``limit`` bounds the trials per stream call (:meth:`budget` starts a call's count);
-    ``checked``/``rejected`` count every trial this check ran.
+    ``checked``/``rejected`` count every trial this check ran, ``skipped`` the controls
+    refused without a trial for being next to a failed one.
     """
 
     def __init__(self, skill: str, module: Any, config: Any, limit: int) -> None:
@@ -186,20 +196,35 @@ class SkillCheck:
         self.limit = limit
         self.checked = 0
         self.rejected = 0
+        self.skipped = 0
 
-    def budget(self) -> Callable[[np.ndarray, np.ndarray], bool]:
+    def budget(self, scale: np.ndarray | None = None) -> Callable[[np.ndarray, np.ndarray], bool]:
         """The check of one stream call, ``passes(context, control) -> bool``: at most
-        ``limit`` simulations, later controls are refused without simulating."""
+        ``limit`` simulations, later controls are refused without simulating.
+
+        With ``scale`` (the model's control lengthscales, physical units) a control closer
+        than ``NEAR_FAILURE`` lengthscales to one that already failed its trial is refused
+        without simulating: the model sees the two as one (correlation > 0.8 for Matérn-5/2),
+        and the most confident candidates often crowd into one such spot.
+        """
         left = [self.limit]
+        failed: list[np.ndarray] = []
 
         def passes(context: np.ndarray, control: np.ndarray) -> bool:
             if left[0] <= 0:
+                return False
+            if scale is not None and any(
+                    float(np.linalg.norm((control - bad) / scale)) < NEAR_FAILURE
+                    for bad in failed):
+                self.skipped += 1
                 return False
             left[0] -= 1
             result = self.module.run(context, control, 0, self.config)
             ok = bool(result.valid and result.score > 0.0)
             self.checked += 1
             self.rejected += not ok
+            if not ok:
+                failed.append(np.asarray(control, dtype=float))
             LOG.info("precheck %s: context=%s control=%s score=%.3f %s", self.skill,
                      _tuple(context), _tuple(control), result.score,
                      "accepted" if ok else "rejected",
@@ -284,7 +309,8 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         p = _pose(geometry, target, pose)
         context = np.array([src.spec.width, src.spec.height, dst.spec.width, dst.spec.height])
         setups: dict[bytes, Any] = {}
-        check = prechecks["pour"].budget() if "pour" in prechecks else None
+        check = (prechecks["pour"].budget(model("pour").control_scale())
+                 if "pour" in prechecks else None)
 
         def feasible(control: np.ndarray) -> bool:
             setups[control.tobytes()] = geometry.pour_setup(source, target, p, control)
@@ -303,7 +329,8 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         p = _pose(geometry, bowl, pose)
         context = np.array([cup.spec.width, cup.spec.height])
         setups: dict[bytes, Any] = {}
-        check = prechecks["scoop"].budget() if "scoop" in prechecks else None
+        check = (prechecks["scoop"].budget(model("scoop").control_scale())
+                 if "scoop" in prechecks else None)
 
         def feasible(control: np.ndarray) -> bool:
             setups[control.tobytes()] = geometry.scoop_setup(spoon, bowl, p, control)

@@ -51,6 +51,20 @@ def test_precheck_accepts_good_rejects_bad_and_respects_its_limit(
     assert check.checked == 3
 
 
+def test_precheck_skips_controls_next_to_a_failed_one() -> None:
+    streams = _streams_module()
+    check = streams.SkillCheck("pour", pour_skill, pour_skill.PourConfig(), limit=3)
+    scale = np.array([0.5, 2.0, 1.0, 0.5])  # lengthscales in physical units
+    passes = check.budget(scale)
+    assert not passes(CONTEXT, BAD)
+    # 0.1 lengthscales from the failure: refused without a trial (the limit is not spent).
+    assert not passes(CONTEXT, BAD + np.array([0.0, 0.2, 0.0, 0.0]))
+    assert (check.checked, check.skipped) == (1, 1)
+    # Far from it (the good control is 3.5 lengthscales away): simulated and accepted.
+    assert passes(CONTEXT, GOOD)
+    assert (check.checked, check.rejected, check.skipped) == (2, 1, 1)
+
+
 @pytest.mark.parametrize(("key", "value", "needle"), [
     ("precheck", ["push"], "world: precheck"),
     ("precheck", "pour", "world: precheck"),
