@@ -150,6 +150,15 @@ def _curve_table(summary: list[dict[str, Any]], learners: list[str], labels: dic
     return lines
 
 
+def _few_positives(pool: dict[str, Any]) -> str:
+    """A warning when the held-out set has too few successes for F1 to say anything."""
+    if pool["test_positives"] >= 5:
+        return ""
+    return (f" **Only {pool['test_positives']} test positives: F1 is 0 or noise here; the "
+            "quick pool is far too small for this skill's rare successes (the paper used "
+            "10,000 trials).**")
+
+
 def _png(out: Path, report: Path, name: str) -> str:
     if not (out / name).is_file():
         return ""
@@ -207,7 +216,7 @@ def section_supervised(out: Path, report: Path) -> list[str]:
         pool = entry["pool"]
         lines += [f"**{skill}** — pool: valid {pool['valid_fraction']:.0%}, positive "
                   f"{pool['positive_fraction']:.0%}, {pool['test_positives']} positives among "
-                  "the test trials.", "", "Success rate:", ""]
+                  "the test trials." + _few_positives(pool), "", "Success rate:", ""]
         lines += _curve_table(entry["summary"], learners, LABELS, "success_rate")
         lines += ["", "Held-out F1:", ""]
         lines += _curve_table(entry["summary"], learners, LABELS, "f1")
@@ -247,7 +256,10 @@ def section_active(out: Path, report: Path) -> list[str]:
              f"{sizes['seeds']} run(s); repeated protocol {sizes['rep_init']}→"
              f"{sizes['rep_budget']} trials × {sizes['reps']} (paper: × 200)).", ""]
     for skill, entry in data["skills"].items():
-        lines += [f"**{skill}** — success rate:", ""]
+        pool = entry["pool"]
+        lines += [f"**{skill}** — pool: valid {pool['valid_fraction']:.0%}, positive "
+                  f"{pool['positive_fraction']:.0%}, {pool['test_positives']} positives among "
+                  "the test trials." + _few_positives(pool), "", "Success rate:", ""]
         lines += _curve_table(entry["summary"], LEARNERS, LABELS, "success_rate")
         lines += ["", "Held-out F1:", ""]
         lines += _curve_table(entry["summary"], LEARNERS, LABELS, "f1")
@@ -354,6 +366,10 @@ def section_kernel(out: Path, report: Path) -> list[str]:
         for sampler, entry in row["samplers"].items():
             label = data["sampler_labels"].get(sampler, sampler)
             theirs = paper.get(sampler, ("–", "–", "–"))
+            if sampler == "built-in" and paper:
+                # No sampler choice here: show the paper's three samplers side by side.
+                theirs = tuple("; ".join(f"{data['sampler_labels'][k]} {v[i]}"
+                                         for k, v in paper.items()) for i in range(3))
 
             def pct(key: str, entry: dict[str, Any] = entry) -> str:
                 value = entry.get(key)
