@@ -324,6 +324,13 @@ def section_sampling(out: Path, report: Path) -> list[str]:
     for label, fp_ok, div_ok in checks:
         lines.append(f"- {label}: adaptive FP ≤ rejection FP {_verdict(fp_ok)}; diverse "
                      f"Diversity ≥ adaptive {_verdict(div_ok)}.")
+    for table in data["tables"]:
+        if all(table["metrics"][s]["fp"]["mean"] >= 100.0 for s in ("rejection", "adaptive",
+                                                                      "diverse")):
+            lines.append(f"- {table['table']} {table['skill']}: every sample of every sampler "
+                         "failed when simulated: the model's confident set misses the skill's "
+                         "true good set for these contexts (a model problem, not a sampler "
+                         "one), so N5 and Diversity carry no information here.")
     lines += ["", _png(out, report, "sampling.png"), ""]
     return lines
 
