@@ -19,6 +19,7 @@ Relative paths are relative to the YAML file.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib
 import importlib.util
@@ -144,6 +145,7 @@ def _locating_world_errors(factory: Callable[..., Mapping[str, Any]], doc: YamlD
                            ) -> Callable[..., Mapping[str, Any]]:
     """``factory`` whose location-less ``world`` errors get the YAML position of the field."""
 
+    @functools.wraps(factory)  # keeps the bindings module's name (__module__) visible
     def make_streams(world: Mapping[str, Any], rng: Any) -> Mapping[str, Any]:
         try:
             return factory(world, rng)
@@ -152,7 +154,6 @@ def _locating_world_errors(factory: Callable[..., Mapping[str, Any]], doc: YamlD
                 raise
             raise InputError(error.message, world_error_location(doc, error.message)) from None
 
-    make_streams.__doc__ = factory.__doc__
     return make_streams
 
 
