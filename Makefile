@@ -27,7 +27,7 @@ demo: setup
 
 test: setup
 	$(BIN)/ruff check ltamp_cli tests bench
-	$(BIN)/python -m pytest -q tests
+	$(BIN)/python -m pytest -q -n 2 --dist loadscope tests
 
 lint: setup
 	$(BIN)/ruff check ltamp_cli tests bench
