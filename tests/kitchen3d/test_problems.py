@@ -1,7 +1,10 @@
 """Kitchen3D problems with the tool skills: ``unclog`` (learned scoop beside a faucet, dump)
-planned, validated and executed with the goal checked from bead positions, and
-``push_to_reach`` (two arms: the bowl is pushed within the pouring arm's reach) planned,
-validated and executed."""
+planned, validated and executed with the goal checked from bead positions; ``push_to_reach``
+(two arms: the bowl is pushed within the pouring arm's reach, or the cup handed over) and
+``coffee`` (pour, scoop and dump, stir last) planned, validated and executed on SAPIEN.
+Their PyBullet executions are not asserted here: the PyBullet executor's pours in these two
+scenes currently spill the beads off the table although the same pour controls succeed in
+PyBullet pour trials (an executor issue, being looked at)."""
 
 from __future__ import annotations
 
@@ -111,3 +114,38 @@ def test_push_to_reach_executed_on_sapien(push_to_reach) -> None:  # type: ignor
     assert report.success, report.details["steps"]
     assert report.goal_holds, report.details["goal"]
     assert report.details["goal"][0]["counts"]["total"] == 60
+
+
+@pytest.fixture(scope="module")
+def coffee():  # type: ignore[no-untyped-def]
+    return _plan("coffee", 240)
+
+
+@pytest.mark.slow
+def test_coffee_pours_scoops_dumps_and_stirs_last(coffee) -> None:  # type: ignore[no-untyped-def]
+    _problem, result = coffee
+    steps = [(step.name, step.args) for step in result.plan]
+    names = [name for name, _ in steps]
+    for action in ("pour", "scoop", "dump", "stir"):
+        assert action in names
+    # Adding contents undoes a stir: the last pour/dump into the bowl precedes the stir.
+    last_fill = max(i for i, (name, args) in enumerate(steps)
+                    if name in ("pour", "dump") and args[2] == "bowl")
+    assert last_fill < names.index("stir")
+    assert names.index("scoop") < names.index("dump")
+    # Both arms work (the cup and stirrer are on r0's side, the spoon and sugar on r1's).
+    assert {args[-1] for _, args in steps} == {"r0", "r1"}
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not HAS_SAPIEN, reason="sapien is not installed")
+def test_coffee_executed_on_sapien(coffee) -> None:  # type: ignore[no-untyped-def]
+    from ltamp_cli.backends.execution import execute_plan
+
+    problem, result = coffee
+    report = execute_plan("sapien", problem, result, seed=0)
+    assert report.success, report.details["steps"]
+    facts = {fact["fact"]: fact for fact in report.details["goal"]}
+    assert report.goal_holds, facts
+    assert facts["(contains bowl cream)"]["counts"]["total"] == 40
+    assert facts["(contains bowl sugar)"]["counts"]["total"] == 200
