@@ -3,7 +3,8 @@
 :mod:`.scene` (the problem's ``world`` → objects and regions), :mod:`.values` (planner
 values: poses, grasps, arm confs and paths), :mod:`.grasping`, :mod:`.planning` (the
 headless world answering IK, motion and collision queries for the streams),
-:mod:`.skill_paths` (learned-skill tool paths placed in the kitchen), :mod:`.animation`.
+:mod:`.skill_paths` (tool paths placed in the kitchen: learned pour and scoop, engineered dump,
+stir and push), :mod:`.animation`.
 The bindings are ``domains/kitchen3d/streams.py``; plans are replayed by
 :mod:`ltamp_cli.backends.pybullet.executor`.
 """
