@@ -109,9 +109,9 @@ def test_pour_blocked_is_solved_and_executed_on_sapien() -> None:
 
 
 # Known, open in issue 7: push_to_reach's plan can exceed its time limit on a loaded
-# machine and its PyBullet push ends short (the palm lands on the bowl's rim); coffee's
-# PyBullet pour spilled during the carry until motions kept the cup within pi/12 (fixed
-# after the last full run, not yet confirmed there).
+# machine and its PyBullet push ends short (the palm lands on the bowl's rim); in coffee's
+# PyBullet run the carry to the pour tilts the cup within the pi/6 roll/pitch limit but far
+# enough (~35 deg) to spill the beads before the pour.
 _KNOWN_PYBULLET_GAPS = {"push_to_reach.yaml", "coffee.yaml"}
 
 

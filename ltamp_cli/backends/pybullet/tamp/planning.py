@@ -45,13 +45,6 @@ PARK_DISTANCE_M = 20.0
 FOOTPRINT_MARGIN_M = 0.01
 
 
-
-# Planned motions that carry contents keep the tool's |roll| and |pitch| within pi/12, inside
-# the paper's pi/6: with pi/6 on both angles an RRT carry tilted a full cup by 35 degrees and
-# spilled 53 of its 60 beads off the table before the pour (PyBullet, pour_blocked seed 1);
-# with pi/12 the same carry stayed within 3 degrees and the pour filled the bowl.
-PLAN_CARRY_TILT_LIMIT = float(np.pi / 12)
-
 def pose_of(xy: Sequence[float], table_z: float, yaw: float = 0.0) -> Pose:
     """World pose of an upright object whose base centre is at ``xy`` on the table."""
     return Pose.from_euler(np.array([float(xy[0]), float(xy[1]), table_z]), yaw=yaw)
@@ -145,7 +138,7 @@ class PlanningWorld:
             attached = AttachedBody(self.bodies[name].body, self.grasp(name, g).tool_in_gripper,
                                     carrying)
         return ArmCollisionChecker(self.scene.arms[arm], self.obstacles(arm, extra, exclude),
-                                   attached, tilt_limit=PLAN_CARRY_TILT_LIMIT)
+                                   attached)
 
     # Stream queries ----------------------------------------------------------------------
 
