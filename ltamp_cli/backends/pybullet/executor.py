@@ -196,7 +196,17 @@ class Kitchen3DRun:
     def _step(self) -> None:
         for name, (position, quaternion) in self.pinned.items():
             self.bodies[name].set_pose(position, quaternion)
+        # The fingers are kinematic like the arm (set between steps, no motors): undo what a
+        # step did to them. Left free, an open finger slid shut during a descent and knocked
+        # the block it was about to grasp (pour_blocked seed 0's re-pick).
+        fingers = [(arm, [s[0] for s in p.getJointStates(arm.body_id, PANDA_FINGER_JOINTS,
+                                                          physicsClientId=self.world.client)])
+                   for arm in self.scene.arms]
         self.world.step()
+        for arm, positions in fingers:
+            for joint, position in zip(PANDA_FINGER_JOINTS, positions, strict=True):
+                p.resetJointState(arm.body_id, joint, position,
+                                  physicsClientId=self.world.client)
         if self.recorder is not None:
             self.recorder(self.steps)
         self.steps += 1
