@@ -10,11 +10,12 @@ encoded as static unary literals ``type:T``.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 from ltamp_cli.errors import InputError
 from ltamp_cli.planner.pddl.syntax import (
+    EQUALITY,
     OBJECT_TYPE,
     Action,
     And,
@@ -138,6 +139,9 @@ class Normalizer:
         # forall x. φ  ≡  not aux(free), with aux(free) <- exists x. not φ.
         self.auxiliary: list[NormalAxiom] = []
         self._pending: list[tuple[str, tuple[str, ...], Formula]] = []
+        # Auxiliary predicates created in an action precondition -> the action's clauses
+        # that use them (see :meth:`take_auxiliary`'s guards).
+        self._action_uses: dict[str, list[Clause]] = {}
 
     def _assignments(self, parameters: Sequence[TypedName]) -> list[dict[str, str]]:
         domains = [self.objects_by_type.get(p.type, ()) for p in parameters]
@@ -192,15 +196,47 @@ class Normalizer:
         self._pending.append((name, free, counter_body))
         return LiftedLiteral(name, free, False)
 
-    def take_auxiliary(self) -> list[NormalAxiom]:
-        """Rules of every auxiliary predicate created so far (and those they create)."""
+    def take_auxiliary(self, static: Callable[[str], bool] | None = None
+                       ) -> list[NormalAxiom]:
+        """Rules of every auxiliary predicate created so far (and those they create).
+
+        ``static(predicate)`` says which predicates no action changes. With it, the rules of
+        an auxiliary predicate that only action preconditions use are *guarded* by the
+        static literals of those preconditions over its free variables: ``forall ?m (Contains
+        ?c ?m)`` in an action with ``(Cup ?c)`` grounds ``aux(?c)`` for cups only instead of
+        for every object (thousands of optimistic objects in TAMP). The guard holds wherever
+        the action's static precondition does, so ``not aux`` keeps its meaning there.
+        """
         while self._pending:
             name, free, body = self._pending.pop()
+            if static is not None:
+                body = self._guarded(name, free, body, static)
             types = tuple(LiftedLiteral(type_predicate(OBJECT_TYPE), (v,)) for v in free)
             for clause in self.dnf(body):
                 self.auxiliary.append(NormalAxiom(name, free, types + clause))
         rules, self.auxiliary = self.auxiliary, []
         return rules
+
+    def _guarded(self, name: str, free: tuple[str, ...], body: Formula,
+                 static: Callable[[str], bool]) -> Formula:
+        uses = self._action_uses.get(name)
+        if not uses or not free:
+            return body
+        variables = set(free)
+        guards: list[Formula] = []
+        for clause in uses:
+            guard = tuple(
+                Atom(lit.predicate, lit.args) for lit in clause
+                if lit.positive and lit.predicate != EQUALITY and static(lit.predicate)
+                and lit.predicate != type_predicate(OBJECT_TYPE)
+                and any(is_variable(a) for a in lit.args)
+                and all(a in variables for a in lit.args if is_variable(a)))
+            if not guard:
+                return body  # some use is unconstrained: no guard at all
+            guards.append(And(guard))
+        unique = list(dict.fromkeys(guards))
+        condition = unique[0] if len(unique) == 1 else Or(tuple(unique))
+        return And((condition, body))
 
     def effects(self, effect: Effect) -> tuple[list[NormalEffect], list[CostExpression]]:
         match effect:
@@ -245,10 +281,14 @@ class Normalizer:
                              action.location)
         cost = costs[0] if costs else None
         parameters = tuple(p.name for p in action.parameters)
-        return [
-            NormalAction(action.name, parameters, types + clause, tuple(effects), cost)
-            for clause in self.dnf(action.precondition)
-        ]
+        created = len(self._pending)
+        clauses = [types + clause for clause in self.dnf(action.precondition)]
+        for name, _, _ in self._pending[created:]:
+            self._action_uses[name] = [
+                clause for clause in clauses
+                if any(lit.predicate == name for lit in clause)]
+        return [NormalAction(action.name, parameters, clause, tuple(effects), cost)
+                for clause in clauses]
 
     def axiom(self, axiom: DerivedPredicate) -> list[NormalAxiom]:
         head_args = tuple(p.name for p in axiom.head.parameters)

@@ -84,7 +84,10 @@ def plan_discrete(
     actions = [variant for action in domain.actions for variant in normalizer.action(action)]
     axioms = [rule for axiom in domain.axioms for rule in normalizer.axiom(axiom)]
     axioms += normalizer.goal(goal)
-    axioms += normalizer.take_auxiliary()
+    changing = ({effect.predicate for action in actions for effect in action.effects}
+                | {axiom.head.name for axiom in domain.axioms})
+    axioms += normalizer.take_auxiliary(
+        lambda predicate: predicate not in changing and not predicate.startswith("%"))
     grounding = ground_task(actions, axioms, facts, function_values)
     if fluent_requirements:
         grounding = require_fluent_contexts(grounding, fluent_requirements)
