@@ -1,8 +1,8 @@
-"""Replaying kitchen3d plans in SAPIEN: the arm mirror, rendering refusal, pour_blocked."""
+"""Replaying kitchen3d plans in SAPIEN: the arm mirror and pour_blocked (rendering: see
+test_sapien_replay*.py)."""
 
 from __future__ import annotations
 
-import types
 from pathlib import Path
 
 import numpy as np
@@ -17,9 +17,7 @@ from ltamp_cli.backends.execution import load_executor
 from ltamp_cli.backends.pybullet.robot.scene import build_kitchen_scene
 from ltamp_cli.backends.pybullet.world import PhysicsWorld
 from ltamp_cli.backends.sapien.executor import SapienArm, SapienKitchen3DExecutor
-from ltamp_cli.backends.sapien.render import probe_render_device
 from ltamp_cli.backends.sapien.world import SapienWorld
-from ltamp_cli.errors import InputError
 from ltamp_cli.planner.problem import load_problem
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -70,16 +68,6 @@ def test_sapien_arm_mirror_matches_the_kinematic_model() -> None:
 
 def test_sapien_backend_provides_the_executor() -> None:
     assert isinstance(load_executor("sapien"), SapienKitchen3DExecutor)
-
-
-def test_render_without_a_device_is_an_input_error() -> None:
-    if probe_render_device().available:
-        pytest.skip("this machine has a rendering device")
-    problem = load_problem(POUR_BLOCKED)
-    with pytest.raises(InputError, match=r"--render: SAPIEN cannot render"):
-        SapienKitchen3DExecutor().execute(
-            problem, types.SimpleNamespace(plan=[]), seed=0, render_path="out.gif"
-        )
 
 
 @pytest.mark.slow

@@ -4,7 +4,7 @@ Runs on machines without a GPU (a ``PhysxCpuSystem`` scene, collision shapes onl
 renders only after a child-process probe found a rendering device. Importing this package
 is cheap and does not import SAPIEN; :func:`make_backend` does. Submodules: :mod:`.world`,
 :mod:`.bodies` (kitchenware and beads), :mod:`.skills`, :mod:`.render`, :mod:`.backend`,
-:mod:`.executor` (plan replay).
+:mod:`.executor` (plan replay), :mod:`.replay` (CPU rendering of a recorded execution).
 """
 
 from __future__ import annotations

@@ -21,6 +21,7 @@ goal checked from bead positions); only the simulation underneath is replaced:
 from __future__ import annotations
 
 import os
+import sys
 from typing import Any
 
 import numpy as np
@@ -64,8 +65,8 @@ from ltamp_cli.backends.sapien.render import (
     FrameRecorder,
     new_render_system,
     probe_render_device,
-    require_renderer,
 )
+from ltamp_cli.backends.sapien.replay import BeadGroup, ReplayFrame, ReplayRecorder, ReplayScene
 from ltamp_cli.backends.sapien.world import (
     SapienWorld,
     SapienWorldConfig,
@@ -73,7 +74,6 @@ from ltamp_cli.backends.sapien.world import (
     sapien,
     to_sapien_pose,
 )
-from ltamp_cli.errors import InputError
 
 #: Finger clearance (m, per side) when the gripper opens around an object. The PyBullet
 #: executor opens fully (8 cm); a fully open finger beside a 4 cm block dips into a cup
@@ -180,12 +180,18 @@ class SapienKitchen3DRun(Kitchen3DRun):
         self.settings = settings
         self.rng = np.random.default_rng(seed)
         render_system = None
+        #: Set when rendering is asked for but SAPIEN has no render device: the execution
+        #: is then recorded and replayed on the CPU (see :mod:`.replay`).
+        self._replay_camera: Camera | None = None
         if recorder_camera is not None:
-            try:
-                require_renderer(probe_render_device())
-            except RuntimeError as error:
-                raise InputError(f"--render: {error}") from None
-            render_system = new_render_system()
+            probe = probe_render_device()
+            if probe.available:
+                render_system = new_render_system()
+                print("render: SAPIEN's renderer", file=sys.stderr)
+            else:
+                self._replay_camera = recorder_camera
+                print(f"render: no SAPIEN render device ({probe.reason}); replaying the "
+                      "recorded poses with PyBullet's TinyRenderer on the CPU", file=sys.stderr)
         # The kinematic model: never stepped, only posed (FK and distance queries).
         self.model = PhysicsWorld()
         self.world = SapienWorld(SapienWorldConfig(), render_system=render_system)  # type: ignore[assignment]
@@ -252,6 +258,10 @@ class SapienKitchen3DRun(Kitchen3DRun):
         self.held: dict[int, tuple[str, Pose]] = {}
         self._init_records()  # tools are kinematic bodies here: nothing to pin
         self._grip_widths: dict[int, float] = {}
+        if self._replay_camera is not None:
+            self.recorder = ReplayRecorder(  # type: ignore[assignment]
+                self._replay_scene(), self._snapshot, settings.render_every, self._replay_camera
+            )
         self.step_n(self.world.steps_for(settings.settle_s))
         self.initial_counts = self.counts()
 
@@ -276,6 +286,27 @@ class SapienKitchen3DRun(Kitchen3DRun):
                 entity.add_component(visual)
             entity.set_pose(to_sapien_pose(position, quaternion))
             self.world.scene.add_entity(entity)  # type: ignore[attr-defined]
+
+    def _replay_scene(self) -> ReplayScene:
+        """What a CPU replay of this run must draw: arms, table, kitchenware, beads."""
+        return ReplayScene(
+            self.spec.n_arms,
+            self.scene.table,
+            {name: body.geometry for name, body in self.bodies.items()},
+            {
+                material: BeadGroup(len(beads), beads.spec.radius, beads.spec.rgba)  # type: ignore[attr-defined]
+                for material, beads in self.beads.items()
+            },
+        )
+
+    def _snapshot(self) -> ReplayFrame:
+        """The state of every actor now: the model's arms (the SAPIEN links follow them),
+        SAPIEN's kitchenware poses and bead positions."""
+        return ReplayFrame(
+            tuple((arm.get_configuration(), arm.finger_opening()) for arm in self.scene.arms),
+            {name: body.pose() for name, body in self.bodies.items()},
+            {material: beads.positions() for material, beads in self.beads.items()},  # type: ignore[attr-defined]
+        )
 
     def close(self) -> None:
         self.world.close()
@@ -378,7 +409,9 @@ class SapienKitchen3DRun(Kitchen3DRun):
 class SapienKitchen3DExecutor(Kitchen3DExecutor):
     """:class:`~ltamp_cli.backends.execution.PlanExecutor` for kitchen3d plans in SAPIEN.
 
-    ``render_path`` needs a rendering device; without one, :class:`InputError` explains.
+    ``render_path`` uses SAPIEN's renderer when a rendering device exists and otherwise
+    replays the recorded execution with PyBullet's TinyRenderer (:mod:`.replay`); one
+    line on stderr says which.
     """
 
     run_class = SapienKitchen3DRun
