@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from contextlib import closing
 
 import numpy as np
 import pytest
@@ -64,7 +65,7 @@ def test_a_two_frame_trajectory_renders_the_recorded_states() -> None:
 
 
 def test_each_actor_is_drawn_where_the_frame_puts_it() -> None:
-    with ReplayRenderer(SCENE, CAMERA) as renderer:
+    with closing(ReplayRenderer(SCENE, CAMERA)) as renderer:
         start = renderer.render(START)
         # Rendering is a pure function of the recorded state.
         assert np.array_equal(renderer.render(END), renderer.render(END))
@@ -80,8 +81,11 @@ def test_each_actor_is_drawn_where_the_frame_puts_it() -> None:
 
 
 def test_a_frame_that_does_not_match_the_scene_is_refused() -> None:
-    with ReplayRenderer(SCENE, CAMERA) as renderer, pytest.raises(ValueError, match="beads"):
-        renderer.render(frame(HOME, (0.0, 0.0), BEADS[:5]))
+    with closing(ReplayRenderer(SCENE, CAMERA)) as renderer:
+        with pytest.raises(ValueError, match="beads"):
+            renderer.render(frame(HOME, (0.0, 0.0), BEADS[:5]))
+        with pytest.raises(ValueError, match="arms"):
+            renderer.render(ReplayFrame((), START.objects, START.beads))
 
 
 def test_the_recorder_keeps_every_nth_state_and_renders_once() -> None:

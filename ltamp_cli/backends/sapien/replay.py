@@ -15,8 +15,8 @@ Poses: positions ``(3,)`` in metres, quaternions ``(4,)`` in ``(x, y, z, w)`` or
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from contextlib import closing
 from dataclasses import dataclass, field
-from types import TracebackType
 
 import numpy as np
 import pybullet as p
@@ -81,8 +81,8 @@ class ReplayFrame:
 class ReplayRenderer:
     """The mirror scene of a :class:`ReplayScene` in its own PyBullet ``DIRECT`` client.
 
-    Build once, then :meth:`render` any number of frames; :meth:`close` (or use as a
-    context manager) disconnects the client.
+    Build once, then :meth:`render` any number of frames; :meth:`close` disconnects the
+    client (``contextlib.closing`` makes it a context manager).
     """
 
     def __init__(self, scene: ReplayScene, camera: Camera | None = None) -> None:
@@ -154,23 +154,12 @@ class ReplayRenderer:
             p.disconnect(physicsClientId=self.client)
             self.client = -1
 
-    def __enter__(self) -> ReplayRenderer:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self.close()
-
 
 def render_replay(
     scene: ReplayScene, frames: Sequence[ReplayFrame], camera: Camera | None = None
 ) -> list[np.ndarray]:
     """Render every recorded frame; ``len(frames)`` images ``(h, w, 3)`` uint8."""
-    with ReplayRenderer(scene, camera) as renderer:
+    with closing(ReplayRenderer(scene, camera)) as renderer:
         return [renderer.render(frame) for frame in frames]
 
 
