@@ -39,6 +39,7 @@ from ltamp_cli.trials.record import TrialDataset, TrialRecord
 
 VALID_DRAW_BATCH = 256
 VALID_DRAW_ROUNDS = 40
+VALID_CHECK_CHUNK = 16
 
 
 @dataclass(frozen=True)
@@ -80,9 +81,16 @@ def trial_input(
     if valid_only:
         for _ in range(VALID_DRAW_ROUNDS):
             batch = spec.control.sample_uniform(rng, VALID_DRAW_BATCH)
-            ok = np.flatnonzero(backend.is_valid(skill, context, batch))
-            if ok.size:
-                control = batch[ok[0]]
+            # The first valid control of the batch, checked a chunk at a time: the same choice
+            # as checking the whole batch, without paying for the rest (PyBullet's pre-check
+            # costs ~30 ms per control).
+            chosen = next((start + int(ok[0])
+                           for start in range(0, VALID_DRAW_BATCH, VALID_CHECK_CHUNK)
+                           if (ok := np.flatnonzero(backend.is_valid(
+                               skill, context, batch[start:start + VALID_CHECK_CHUNK]))).size),
+                          None)
+            if chosen is not None:
+                control = batch[chosen]
                 break
     return TrialInput(index, context, control, trial_seed(base_seed, index))
 
