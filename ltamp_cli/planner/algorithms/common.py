@@ -29,7 +29,7 @@ from ltamp_cli.planner.result import (
     PlanStep,
     StreamResult,
 )
-from ltamp_cli.planner.search.ground import Context, Fact, FactIndex, join
+from ltamp_cli.planner.search.ground import Context, Fact, FactIndex, join, join_new
 from ltamp_cli.planner.search.normalize import LiftedLiteral
 from ltamp_cli.planner.search.solve import DiscreteResult, plan_discrete
 from ltamp_cli.planner.streams import (
@@ -132,6 +132,18 @@ class PlannerState:
         default_factory=dict)
     # Per-stream totals persisted by earlier runs of this domain (calls, successes, time_s).
     history: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
+    # (purpose, stream name) -> ``facts.sizes()`` when the stream's inputs were last
+    # enumerated for that purpose (eager evaluation, incremental sampling): later rounds only
+    # join what was added since (facts only grow).
+    enumerated: dict[tuple[str, str], dict[str, int]] = field(default_factory=dict)
+
+    def new_bindings(self, external: External, purpose: str) -> list[tuple[str, ...]]:
+        """Input tuples of ``external`` over the real facts that an earlier call with the
+        same ``purpose`` did not return (deduplicated, in a deterministic order)."""
+        key = (purpose, external.name)
+        since = self.enumerated.get(key)
+        self.enumerated[key] = self.facts.sizes()
+        return list(dict.fromkeys(self.bindings_of(external, self.facts, since)))
 
     def effort(self, name: str) -> Effort:
         """Expected success probability and overhead of a call of stream ``name``."""
@@ -254,17 +266,22 @@ class PlannerState:
             "(" + " ".join(atom) + ")" for atom in goal_atoms(self.problem)
             if atom not in reachable]
 
-    def bindings_of(self, external: External, index: FactIndex) -> Iterator[tuple[str, ...]]:
-        """Input tuples whose domain facts all hold in ``index``."""
+    def bindings_of(self, external: External, index: FactIndex,
+                    since: Mapping[str, int] | None = None) -> Iterator[tuple[str, ...]]:
+        """Input tuples whose domain facts all hold in ``index``; with ``since`` (a
+        :meth:`FactIndex.sizes` snapshot), only those using a fact added after it (possibly
+        repeated)."""
         inputs = external_inputs(external)
         literals = [LiftedLiteral(a.predicate, a.args) for a in external_domain(external)]
         if not literals:
             if inputs:
                 raise InputError(f"stream {external.name!r} has inputs but an empty :domain; "
                                  "every input must appear in a :domain fact")
-            yield ()
+            if since is None:
+                yield ()
             return
-        for binding in join(literals, index):
+        bindings = join(literals, index) if since is None else join_new(literals, index, since)
+        for binding in bindings:
             yield tuple(binding[v] for v in inputs)
 
     def result(self, status: str, discrete: DiscreteResult | None,

@@ -50,15 +50,25 @@ class Effort:
 def estimate_effort(prior: StreamInfo, history: Mapping[str, float] | None,
                     run: StreamStats | None) -> Effort:
     """Blend a stream's prior with its persisted ``history`` (keys ``calls``, ``successes``,
-    ``time_s``) and the current ``run``'s statistics (each may be missing)."""
+    ``time_s``) and the current ``run``'s statistics (each may be missing).
+
+    The current run's calls and successes count, but not its measured seconds: the order of
+    stream plans must not depend on timing noise, or a run would not be deterministic for a
+    given seed (two streams with equal counts were ordered by microseconds of noise). Its
+    calls are costed at the prior-and-history mean overhead instead.
+    """
     calls = PRIOR_CALLS
     successes = PRIOR_CALLS * prior.p_success
     seconds = PRIOR_CALLS * prior.overhead
-    for source in (history or {}, _as_totals(run)):
+    for source in (history or {},):
         calls += float(source.get("calls", 0.0))
         successes += float(source.get("successes", 0.0))
         seconds += float(source.get("time_s", 0.0))
-    return Effort(min(1.0, successes / calls), seconds / calls)
+    overhead = seconds / calls
+    if run is not None:
+        calls += run.calls
+        successes += run.successes
+    return Effort(min(1.0, successes / calls), overhead)
 
 
 def observed_cheap(history: Mapping[str, float] | None, run: StreamStats | None) -> bool:

@@ -39,7 +39,7 @@ def sample_all(state: PlannerState) -> bool:
     initial = [(atom.predicate, *atom.args) for atom in state.problem.init]
     for external in state.externals.values():
         context = state.fluent_context(external.name, initial)
-        for inputs in list(state.bindings_of(external, state.facts)):
+        for inputs in state.new_bindings(external, "incremental"):
             state.instance(external.name, inputs, context)
     before = (len(state.facts.members), len(state.function_values))
     for instance in list(state.instances.values()):

@@ -51,11 +51,14 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
     evaluation = OptimisticEvaluation(index, dict(state.function_values),
                                       dict(state.object_types))
     done: set[InstanceKey] = set()
-    changed = True
-    while changed:
-        changed = False
+    # Semi-naive fixpoint: after a first full round, each round only joins the facts the
+    # previous round added. An instance cut by the bound stays cut (its level depends only on
+    # its inputs), so it is not retried.
+    since: dict[str, int] | None = None
+    while True:
+        before = index.sizes()
         for external in state.externals.values():
-            for inputs in list(state.bindings_of(external, index)):
+            for inputs in list(state.bindings_of(external, index, since)):
                 key = (external.name, inputs)
                 if key in done:
                     continue
@@ -70,10 +73,11 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
                     level += real.num_calls
                 if level > complexity:
                     evaluation.cut = True
-                    done.discard(key)
                     continue
-                changed |= _add_optimistic(state, evaluation, key, level, placeholders)
-    return evaluation
+                _add_optimistic(state, evaluation, key, level, placeholders)
+        if index.sizes() == before:
+            return evaluation
+        since = before
 
 
 def _pending_test(instance: StreamInstance) -> bool:
@@ -185,7 +189,7 @@ def evaluate_eager(state: PlannerState) -> None:
         for external in state.externals.values():
             if not state.eager(external.name):
                 continue
-            for inputs in list(state.bindings_of(external, state.facts)):
+            for inputs in state.new_bindings(external, "eager"):
                 instance = state.instance(external.name, inputs)
                 if instance.num_calls == 0:
                     state.call(instance)

@@ -110,6 +110,11 @@ class FactIndex:
             self._indexes_by_predicate[predicate].append(positions)
         return index.get(key, ())
 
+    def sizes(self) -> dict[str, int]:
+        """Facts per predicate so far: facts are only ever appended, so this marks a point
+        after which :func:`join_new` finds what was added."""
+        return {predicate: len(args) for predicate, args in self.by_predicate.items()}
+
 
 @dataclass(frozen=True)
 class _Step:
@@ -172,6 +177,28 @@ def join(literals: Sequence[LiftedLiteral], index: FactIndex,
     """All bindings of the literals' variables such that every literal is in ``index``."""
     start = dict(binding or {})
     yield from _run_join(_compile_join(literals, set(start)), index, start)
+
+
+def join_new(literals: Sequence[LiftedLiteral], index: FactIndex, since: Mapping[str, int]
+             ) -> Iterator[dict[str, str]]:
+    """Bindings of ``literals`` in ``index`` that use at least one fact added after ``since``
+    (a :meth:`FactIndex.sizes` snapshot): semi-naive evaluation, so a fixpoint loop does not
+    redo every earlier join. A binding using several new facts may be yielded more than once.
+    """
+    for position, literal in enumerate(literals):
+        facts = index.by_predicate.get(literal.predicate, ())
+        start = since.get(literal.predicate, 0)
+        if start >= len(facts):
+            continue
+        others = [lit for i, lit in enumerate(literals) if i != position]
+        steps: list[_Step] | None = None
+        for args in facts[start:]:
+            binding = _match(literal, args)
+            if binding is None:
+                continue
+            if steps is None:
+                steps = _compile_join(others, set(binding))
+            yield from _run_join(steps, index, binding)
 
 
 def _ground(args: Iterable[str], binding: Mapping[str, str]) -> tuple[str, ...]:
