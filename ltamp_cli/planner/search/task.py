@@ -16,6 +16,8 @@ from ltamp_cli.planner.search.ground import Fact, GroundAction, GroundAxiom, Gro
 from ltamp_cli.planner.search.normalize import GOAL_PREDICATE
 
 TRUE_FACT, FALSE_FACT = 0, 1
+# State vectors kept per task (a few kB each); the cache is emptied when it reaches this.
+MAX_CACHED_VECTORS = 20_000
 GOAL_FACT: Fact = (GOAL_PREDICATE,)
 
 
@@ -69,6 +71,7 @@ class Task:
             self.is_derived[index] = fact[0] in derived
         self._compile_operators()
         self._compile_axioms(axiom_heads, axiom_pos, axiom_neg)
+        self._vectors: dict[frozenset[int], np.ndarray] = {}
 
     def fact_id(self, fact: Fact) -> int:
         index = self.fact_ids.get(fact)
@@ -123,7 +126,19 @@ class Task:
         self.axiom_positive = positive
 
     def state_vector(self, state: frozenset[int]) -> np.ndarray:
-        """Truth vector of a basic state, extended with its derived facts."""
+        """Truth vector (read-only, ``(num_facts,)`` uint8) of a basic state, extended with
+        its derived facts. Cached: searches, plan post-processing and preimages evaluate the
+        same states again."""
+        vector = self._vectors.get(state)
+        if vector is None:
+            if len(self._vectors) >= MAX_CACHED_VECTORS:
+                self._vectors.clear()
+            vector = self._compute_vector(state)
+            vector.flags.writeable = False
+            self._vectors[state] = vector
+        return vector
+
+    def _compute_vector(self, state: frozenset[int]) -> np.ndarray:
         vector = np.zeros(self.num_facts, dtype=np.uint8)
         vector[TRUE_FACT] = 1
         if state:
