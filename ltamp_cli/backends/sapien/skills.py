@@ -1,10 +1,11 @@
 """Kitchen3D pour, scoop, push and stir trials in SAPIEN.
 
-Same scenes, latents, tool paths, pre-checks and scores as the PyBullet skills
-(:mod:`ltamp_cli.backends.pybullet.skills.pour` / ``.scoop``, whose pure parts are imported,
-not copied): the seed draws the same bead count, sizes and materials, the beads start on the
-same grid, and the tool follows the same timed path. Only the physics engine differs, so the
-two backends agree on clearly good and clearly bad controls (borderline ones may differ).
+Same scenes, latents, tool paths, pre-checks and scores as the PyBullet skills: everything
+but the physics comes from :mod:`ltamp_cli.backends.pybullet.skills` (``prepare_*`` parses
+the context and control, builds the tool path and runs the pre-check; ``sample_*_latents``
+draws the seed's bead count, sizes and materials; ``*_outcome`` turns the measurements
+into the score and ``info``). Only the physics engine differs, so the two backends agree on
+clearly good and clearly bad controls (borderline ones may differ).
 
 The tool (cup, spoon, fingertip pad, stirrer) is a kinematic body driven by per-step targets;
 the bowl is static; the pushed block and the stirred cup are dynamic.
@@ -16,57 +17,36 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ltamp_cli.backends.kitchenware_geometry import (
-    block_geometry,
-    spoon_geometry,
-    stirrer_geometry,
-    vessel_geometry,
-)
+from ltamp_cli.backends.kitchenware_geometry import block_geometry, vessel_geometry
 from ltamp_cli.backends.protocol import TrialResult
 from ltamp_cli.backends.pybullet.particles import count_lost
 from ltamp_cli.backends.pybullet.paths import PosePath, timed_poses
-from ltamp_cli.backends.pybullet.skills.common import (
-    check_tool_path,
-    sample_beads,
-    sample_material,
-)
 from ltamp_cli.backends.pybullet.skills.pour import (
-    MIN_BEADS_IN_CUP,
-    POUR_SPEC,
-    POUR_TAU,
-    PourContext,
+    POUR_SPEED_M_S,
     PourSettings,
-    pour_path,
+    pour_outcome,
+    pour_too_few_beads,
+    prepare_pour,
     sample_pour_latents,
 )
 from ltamp_cli.backends.pybullet.skills.push import (
-    PUSH_SPEC,
-    PushContext,
     PushSettings,
     block_material,
-    check_push,
-    pad_geometry,
+    prepare_push,
     push_outcome,
-    push_path,
 )
 from ltamp_cli.backends.pybullet.skills.scoop import (
-    SCOOP_SPEC,
-    SCOOP_TAU,
-    ScoopContext,
     ScoopSettings,
+    prepare_scoop,
     sample_scoop_latents,
-    scoop_path,
-    spoon_capacity,
+    scoop_outcome,
 )
-from ltamp_cli.backends.pybullet.skills.scoring import piecewise_linear_score
 from ltamp_cli.backends.pybullet.skills.stir import (
-    STIR_SPEC,
-    STIRRER_LENGTH_M,
     StirSettings,
     TipTracker,
-    cup_of,
+    prepare_stir,
+    sample_stir_latents,
     stir_outcome,
-    stir_path,
 )
 from ltamp_cli.backends.sapien.bodies import (
     SapienBody,
@@ -78,8 +58,6 @@ from ltamp_cli.backends.sapien.bodies import (
 from ltamp_cli.backends.sapien.world import SapienWorld
 
 StepCallback = Callable[[int], None]
-#: Linear speed (m/s) of the cup's path segments, as in the PyBullet pour.
-POUR_SPEED_M_S = 0.2
 
 
 def follow_path(
@@ -130,23 +108,19 @@ def run_pour(
     ``fraction_in_bowl``, ``sim_steps``, ``sim_time_s``).
     """
     settings = settings or PourSettings()
-    scene = PourContext.from_array(context)
-    control = np.asarray(control, dtype=float).reshape(5)
-    path = pour_path(scene, control)
-    cup_geometry = vessel_geometry(scene.cup, "cup")
-    if check:
-        verdict = check_tool_path(cup_geometry, path, scene.bowl)
-        if not verdict.valid:
-            return TrialResult(POUR_SPEC.invalid_score, False, {"reason": verdict.reason})
+    trial = prepare_pour(context, control, check)
+    if trial.rejected is not None:
+        return trial.rejected
+    path = trial.path
     rng = np.random.default_rng(seed)
     latents = sample_pour_latents(rng, settings)
     world.reset()
     bowl = create_kitchenware(
-        world, vessel_geometry(scene.bowl, "bowl"), material=latents.bowl_material
+        world, vessel_geometry(trial.scene.bowl, "bowl"), material=latents.bowl_material
     )
     cup = create_kitchenware(
         world,
-        cup_geometry,
+        trial.tool,
         path.positions[0],
         path.quaternions[0],
         material=latents.cup_material,
@@ -155,15 +129,9 @@ def run_pour(
     beads = spawn_beads_in(world, cup, latents.beads, rng)
     steps = hold(world, world.steps_for(settings.settle_s), on_step)
     started_in_cup = contained_mask(cup, beads.positions())
-    in_cup = int(started_in_cup.sum())
-    info: dict[str, object] = {
-        "beads_total": len(beads),
-        "beads_in_cup_start": in_cup,
-        "bead_radius_m": latents.beads.radius,
-    }
-    if in_cup < MIN_BEADS_IN_CUP:
-        info["reason"] = f"only {in_cup} beads in the cup at the start (need {MIN_BEADS_IN_CUP})"
-        return TrialResult(POUR_SPEC.invalid_score, False, info)
+    too_few = pour_too_few_beads(len(beads), started_in_cup, latents.beads.radius)
+    if too_few is not None:
+        return too_few
     timed = timed_poses(
         path, speed=POUR_SPEED_M_S, angular_speed=settings.angular_speed,
         dt=world.config.time_step,
@@ -171,20 +139,9 @@ def run_pour(
     steps += follow_path(world, cup, timed, on_step, steps)
     steps += hold(world, world.steps_for(settings.hold_s), on_step, steps)
     end = beads.positions()
-    in_cup_end = contained_mask(cup, end)
-    in_bowl = contained_mask(bowl, end) & ~in_cup_end & started_in_cup
-    fraction = float(in_bowl.sum()) / in_cup
-    info.update(
-        {
-            "beads_in_bowl_end": int(in_bowl.sum()),
-            "beads_in_cup_end": int(in_cup_end.sum()),
-            "beads_lost": count_lost(end),
-            "fraction_in_bowl": fraction,
-            "sim_steps": steps,
-            "sim_time_s": steps * world.config.time_step,
-        }
-    )
-    return TrialResult(piecewise_linear_score(fraction, POUR_TAU), True, info)
+    return pour_outcome(latents.beads.radius, started_in_cup, contained_mask(cup, end),
+                        contained_mask(bowl, end), count_lost(end), steps,
+                        world.config.time_step)
 
 
 def run_scoop(
@@ -198,23 +155,19 @@ def run_scoop(
 ) -> TrialResult:
     """Simulate one scoop in ``world`` (reset first); deterministic given ``seed``."""
     settings = settings or ScoopSettings()
-    scene = ScoopContext.from_array(context)
-    control = np.asarray(control, dtype=float).reshape(5)
-    path = scoop_path(scene, control)
-    spoon_geom = spoon_geometry(scene.spoon)
-    if check:
-        verdict = check_tool_path(spoon_geom, path, scene.bowl)
-        if not verdict.valid:
-            return TrialResult(SCOOP_SPEC.invalid_score, False, {"reason": verdict.reason})
+    trial = prepare_scoop(context, control, check)
+    if trial.rejected is not None:
+        return trial.rejected
+    path = trial.path
     rng = np.random.default_rng(seed)
     latents = sample_scoop_latents(rng, settings)
     world.reset()
     bowl = create_kitchenware(
-        world, vessel_geometry(scene.bowl, "bowl"), material=latents.bowl_material
+        world, vessel_geometry(trial.scene.bowl, "bowl"), material=latents.bowl_material
     )
     spoon = create_kitchenware(
         world,
-        spoon_geom,
+        trial.tool,
         path.positions[0],
         path.quaternions[0],
         material=latents.spoon_material,
@@ -227,21 +180,9 @@ def run_scoop(
     steps += follow_path(world, spoon, timed, on_step, steps)
     steps += hold(world, world.steps_for(settings.hold_s), on_step, steps)
     end = beads.positions()
-    in_spoon = int(contained_mask(spoon, end).sum())
-    capacity = spoon_capacity(scene.spoon)
-    fraction = min(1.0, in_spoon / capacity)
-    info = {
-        "beads_total": len(beads),
-        "beads_in_bowl_start": in_bowl_start,
-        "beads_in_spoon_end": in_spoon,
-        "beads_lost": count_lost(end),
-        "spoon_capacity": capacity,
-        "fraction_of_capacity": fraction,
-        "bead_radius_m": latents.beads.radius,
-        "sim_steps": steps,
-        "sim_time_s": steps * world.config.time_step,
-    }
-    return TrialResult(piecewise_linear_score(fraction, SCOOP_TAU), True, info)
+    return scoop_outcome(trial.scene, len(beads), in_bowl_start,
+                         int(contained_mask(spoon, end).sum()), count_lost(end),
+                         latents.beads.radius, steps, world.config.time_step)
 
 
 def run_push(
@@ -256,22 +197,19 @@ def run_push(
     """Simulate one push in ``world`` (reset first); deterministic given ``seed``. Same
     block, pad path, draws and score as the PyBullet push."""
     settings = settings or PushSettings()
-    scene = PushContext.from_array(context)
-    control = np.asarray(control, dtype=float).reshape(4)
-    if check:
-        verdict = check_push(context, control)
-        if not verdict.valid:
-            return TrialResult(PUSH_SPEC.invalid_score, False, {"reason": verdict.reason})
+    trial = prepare_push(context, control, check)
+    if trial.rejected is not None:
+        return trial.rejected
+    scene, path = trial.scene, trial.path
     rng = np.random.default_rng(seed)
     world.reset()
     size = scene.size
     block = create_kitchenware(world, block_geometry((size, size, size)),
                                material=block_material(scene, rng), body_type="dynamic")
-    path = push_path(scene, control)
-    pad = create_kitchenware(world, pad_geometry(), path.positions[0], path.quaternions[0],
+    pad = create_kitchenware(world, trial.tool, path.positions[0], path.quaternions[0],
                              body_type="kinematic")
     steps = hold(world, world.steps_for(settings.settle_s), on_step)
-    timed = timed_poses(path, speed=float(control[1]), angular_speed=1.0,
+    timed = timed_poses(path, speed=float(trial.control[1]), angular_speed=1.0,
                         dt=world.config.time_step)
     steps += follow_path(world, pad, timed, on_step, steps)
     steps += hold(world, world.steps_for(settings.after_s), on_step, steps)
@@ -291,37 +229,29 @@ def run_stir(
     """Simulate one stir in ``world`` (reset first); deterministic given ``seed``. Same
     cup, beads, stirrer path, draws, tip rule and score as the PyBullet stir."""
     settings = settings or StirSettings()
-    cup_dims = cup_of(context)
-    control = np.asarray(control, dtype=float).reshape(4)
-    path = stir_path(cup_dims, control)
-    rod = stirrer_geometry(STIRRER_LENGTH_M)
-    if check:
-        verdict = check_tool_path(rod, path, cup_dims)
-        if not verdict.valid:
-            return TrialResult(STIR_SPEC.invalid_score, False, {"reason": verdict.reason})
+    trial = prepare_stir(context, control, check)
+    if trial.rejected is not None:
+        return trial.rejected
+    path = trial.path
     rng = np.random.default_rng(seed)
-    beads_spec = sample_beads(rng, settings.bead_count_mean, 8.0, 40.0, 80.0)
-    cup_material = sample_material(rng, (0.9, 0.5, 0.2, 1.0), mass=(0.15, 0.03, 0.08, 0.25))
+    latents = sample_stir_latents(rng, settings)
     world.reset()
-    cup_geometry = vessel_geometry(cup_dims, "cup")
-    cup = create_kitchenware(world, cup_geometry, material=cup_material, body_type="dynamic")
-    stirrer = create_kitchenware(world, rod, path.positions[0], path.quaternions[0],
+    cup_geometry = vessel_geometry(trial.scene, "cup")
+    cup = create_kitchenware(world, cup_geometry, material=latents.cup_material,
+                             body_type="dynamic")
+    stirrer = create_kitchenware(world, trial.tool, path.positions[0], path.quaternions[0],
                                  body_type="kinematic")
-    beads = spawn_beads_in(world, cup, beads_spec, rng)
+    beads = spawn_beads_in(world, cup, latents.beads, rng)
     dt = world.config.time_step
     steps = hold(world, world.steps_for(settings.settle_s), on_step)
     start = beads.positions()
     in_start = contained_mask(cup, start)
     assert cup_geometry.cavity is not None
     tracker = TipTracker(cup_geometry.cavity, dt)
-
-    def track(step: int) -> None:
-        tip, _ = stirrer.pose()
-        tracker.add(world_to_object(tip[None, :], *cup.pose())[0])
-        if on_step is not None:
-            on_step(step)
-
-    timed = timed_poses(path, speed=float(control[3]), angular_speed=1.0, dt=dt)
+    track = tracker.callback(
+        lambda: world_to_object(stirrer.pose()[0][None, :], *cup.pose())[0], on_step
+    )
+    timed = timed_poses(path, speed=float(trial.control[3]), angular_speed=1.0, dt=dt)
     steps += follow_path(world, stirrer, timed, track, steps)
     steps += hold(world, world.steps_for(settings.after_s), on_step, steps)
     end = beads.positions()

@@ -1,11 +1,14 @@
 """Pieces shared by the Kitchen3D skills: latent physical properties, kinematic tool motion,
-and the geometric pre-check of a tool path against a bowl."""
+the geometric pre-check of a tool path against a bowl, and the engine-independent start of
+a trial (:class:`SkillTrial`: parsed context and control, tool path, pre-check verdict) that
+the PyBullet and SAPIEN skills both build on."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
+from typing import Generic, TypeVar
 
 import numpy as np
 
@@ -15,12 +18,14 @@ from ltamp_cli.backends.kitchenware_geometry import (
     check_points,
     points_in_vessel_wall,
 )
+from ltamp_cli.backends.protocol import SkillSpec, TrialResult
 from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial, KitchenwareBody
 from ltamp_cli.backends.pybullet.particles import BeadSpec
 from ltamp_cli.backends.pybullet.paths import PosePath, velocities
 from ltamp_cli.backends.pybullet.world import PhysicsWorld
 
 StepCallback = Callable[[int], None]
+SceneT = TypeVar("SceneT")
 
 #: Point spacing (m) on the tool surface for the collision pre-check.
 CHECK_SPACING_M = 0.004
@@ -83,6 +88,31 @@ class PathCheck:
     valid: bool
     first_hit: int = -1
     reason: str = ""
+
+
+def rejection(spec: SkillSpec, verdict: PathCheck) -> TrialResult | None:
+    """The result of a trial whose pre-check failed (the skill's invalid score, not valid,
+    the reason in ``info``), or ``None`` when it passed."""
+    if verdict.valid:
+        return None
+    return TrialResult(spec.invalid_score, False, {"reason": verdict.reason})
+
+
+@dataclass(frozen=True)
+class SkillTrial(Generic[SceneT]):
+    """The engine-independent start of one trial, before any world is touched.
+
+    ``scene``: the parsed context (e.g. a ``PourContext``); ``control``: the flattened
+    control ``(d_control,)``; ``path``: the tool's poses in the scene frame; ``tool``: the
+    tool's geometry; ``rejected``: the result to return without simulating when the
+    pre-check ran and failed, else ``None``.
+    """
+
+    scene: SceneT
+    control: np.ndarray
+    path: PosePath
+    tool: KitchenwareGeometry
+    rejected: TrialResult | None
 
 
 def check_tool_path(

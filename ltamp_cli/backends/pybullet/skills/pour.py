@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ltamp_cli.backends.kitchenware_geometry import VesselDims, vessel_geometry
+from ltamp_cli.backends.kitchenware_geometry import KitchenwareGeometry, VesselDims, vessel_geometry
 from ltamp_cli.backends.protocol import ParamSpace, SkillSpec, TrialResult
 from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial, create_kitchenware
 from ltamp_cli.backends.pybullet.particles import (
@@ -41,11 +41,13 @@ from ltamp_cli.backends.pybullet.paths import PosePath, rotation_about_axis, tim
 from ltamp_cli.backends.pybullet.skills.common import (
     BOWL_RGBA,
     PathCheck,
+    SkillTrial,
     StepCallback,
     batch_path_validity,
     check_tool_path,
     follow_path,
     hold,
+    rejection,
     sample_beads,
     sample_material,
 )
@@ -55,6 +57,8 @@ from ltamp_cli.backends.pybullet.world import PhysicsWorld
 POUR_TAU = 0.9
 MIN_BEADS_IN_CUP = 10
 PITCH_STEP_RAD = math.pi / 16
+#: Linear speed (m/s) of the cup along its path segments.
+POUR_SPEED_M_S = 0.2
 
 #: Nominal measured-style dimensions (metres), scaled per context.
 NOMINAL_BOWL = VesselDims(base_diameter=0.12, top_diameter=0.20, height=0.08)
@@ -164,6 +168,62 @@ def check_pour(context: np.ndarray, control: np.ndarray) -> PathCheck:
     return check_tool_path(vessel_geometry(scene.cup, "cup"), pour_path(scene, control), scene.bowl)
 
 
+def prepare_pour(context: np.ndarray, control: np.ndarray, check: bool) -> SkillTrial[PourContext]:
+    """Context ``(6,)`` and control ``(5,)`` parsed, the cup's path and geometry, and (with
+    ``check``) the pre-check's rejection: the engine-independent start of a pour trial."""
+    scene = PourContext.from_array(context)
+    control = np.asarray(control, dtype=float).reshape(5)
+    path = pour_path(scene, control)
+    cup: KitchenwareGeometry = vessel_geometry(scene.cup, "cup")
+    rejected = rejection(POUR_SPEC, check_tool_path(cup, path, scene.bowl)) if check else None
+    return SkillTrial(scene, control, path, cup, rejected)
+
+
+def _pour_start_info(total: int, started_in_cup: np.ndarray, bead_radius: float
+                     ) -> dict[str, object]:
+    return {
+        "beads_total": total,
+        "beads_in_cup_start": int(started_in_cup.sum()),
+        "bead_radius_m": bead_radius,
+    }
+
+
+def pour_too_few_beads(total: int, started_in_cup: np.ndarray, bead_radius: float
+                       ) -> TrialResult | None:
+    """The rejected result when fewer than :data:`MIN_BEADS_IN_CUP` of the ``total`` beads
+    are in the cup after settling (``started_in_cup``: bool ``(total,)``), else ``None``."""
+    in_cup = int(started_in_cup.sum())
+    if in_cup >= MIN_BEADS_IN_CUP:
+        return None
+    info = _pour_start_info(total, started_in_cup, bead_radius)
+    info["reason"] = f"only {in_cup} beads in the cup at the start (need {MIN_BEADS_IN_CUP})"
+    return TrialResult(POUR_SPEC.invalid_score, False, info)
+
+
+def pour_outcome(bead_radius: float, started_in_cup: np.ndarray, in_cup_end: np.ndarray,
+                 in_bowl_end: np.ndarray, lost: int, steps: int, dt: float) -> TrialResult:
+    """Score and ``info`` of a simulated pour (shared with the SAPIEN pour).
+
+    Masks are bool ``(n_beads,)``: in the cup after settling, in the cup and in the bowl at
+    the end; ``lost`` beads fell off the table; ``steps`` of ``dt`` s were simulated. The
+    fraction poured counts beads that started in the cup and ended in the bowl (not the cup).
+    """
+    in_bowl = in_bowl_end & ~in_cup_end & started_in_cup
+    fraction = float(in_bowl.sum()) / int(started_in_cup.sum())
+    info = _pour_start_info(len(started_in_cup), started_in_cup, bead_radius)
+    info.update(
+        {
+            "beads_in_bowl_end": int(in_bowl.sum()),
+            "beads_in_cup_end": int(in_cup_end.sum()),
+            "beads_lost": lost,
+            "fraction_in_bowl": fraction,
+            "sim_steps": steps,
+            "sim_time_s": steps * dt,
+        }
+    )
+    return TrialResult(piecewise_linear_score(fraction, POUR_TAU), True, info)
+
+
 def pour_is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
     """Geometric pre-check for a batch ``controls (n, 5)``: bool ``(n,)``."""
     scene = PourContext.from_array(context)
@@ -199,14 +259,10 @@ def run_pour(
 ) -> TrialResult:
     """Simulate one pour in ``world`` (reset first); deterministic given ``seed``."""
     settings = settings or PourSettings()
-    scene = PourContext.from_array(context)
-    control = np.asarray(control, dtype=float).reshape(5)
-    path = pour_path(scene, control)
-    cup_geometry = vessel_geometry(scene.cup, "cup")
-    if check:
-        verdict = check_tool_path(cup_geometry, path, scene.bowl)
-        if not verdict.valid:
-            return TrialResult(POUR_SPEC.invalid_score, False, {"reason": verdict.reason})
+    trial = prepare_pour(context, control, check)
+    if trial.rejected is not None:
+        return trial.rejected
+    path, scene = trial.path, trial.scene
     rng = np.random.default_rng(seed)
     latents = sample_pour_latents(rng, settings)
     world.reset()
@@ -215,7 +271,7 @@ def run_pour(
     )
     cup = create_kitchenware(
         world.client,
-        cup_geometry,
+        trial.tool,
         path.positions[0],
         path.quaternions[0],
         material=latents.cup_material,
@@ -229,19 +285,13 @@ def run_pour(
         world.steps_for(settings.settle_s),
         on_step,
     )
-    start = bead_positions(world.client, beads)
-    started_in_cup = contained_mask(cup, start)
-    in_cup = int(started_in_cup.sum())
-    info: dict[str, object] = {
-        "beads_total": len(beads),
-        "beads_in_cup_start": in_cup,
-        "bead_radius_m": latents.beads.radius,
-    }
-    if in_cup < MIN_BEADS_IN_CUP:
-        info["reason"] = f"only {in_cup} beads in the cup at the start (need {MIN_BEADS_IN_CUP})"
-        return TrialResult(POUR_SPEC.invalid_score, False, info)
+    started_in_cup = contained_mask(cup, bead_positions(world.client, beads))
+    too_few = pour_too_few_beads(len(beads), started_in_cup, latents.beads.radius)
+    if too_few is not None:
+        return too_few
     timed = timed_poses(
-        path, speed=0.2, angular_speed=settings.angular_speed, dt=world.config.time_step
+        path, speed=POUR_SPEED_M_S, angular_speed=settings.angular_speed,
+        dt=world.config.time_step,
     )
     steps += follow_path(world, cup, timed, on_step, steps)
     steps += hold(
@@ -254,16 +304,6 @@ def run_pour(
         steps,
     )
     end = bead_positions(world.client, beads)
-    in_bowl = contained_mask(bowl, end) & ~contained_mask(cup, end) & started_in_cup
-    fraction = float(in_bowl.sum()) / in_cup
-    info.update(
-        {
-            "beads_in_bowl_end": int(in_bowl.sum()),
-            "beads_in_cup_end": int(contained_mask(cup, end).sum()),
-            "beads_lost": count_lost(end),
-            "fraction_in_bowl": fraction,
-            "sim_steps": steps,
-            "sim_time_s": steps * world.config.time_step,
-        }
-    )
-    return TrialResult(piecewise_linear_score(fraction, POUR_TAU), True, info)
+    return pour_outcome(latents.beads.radius, started_in_cup, contained_mask(cup, end),
+                        contained_mask(bowl, end), count_lost(end), steps,
+                        world.config.time_step)

@@ -40,9 +40,11 @@ from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial, create_kitchen
 from ltamp_cli.backends.pybullet.paths import PosePath, timed_poses
 from ltamp_cli.backends.pybullet.skills.common import (
     PathCheck,
+    SkillTrial,
     StepCallback,
     follow_path,
     hold,
+    rejection,
     truncated_normal,
 )
 from ltamp_cli.backends.pybullet.world import PhysicsWorld
@@ -144,6 +146,16 @@ def check_push(context: np.ndarray, control: np.ndarray) -> PathCheck:
     return PathCheck(False, 0, "fingertip pad below the table")
 
 
+def prepare_push(context: np.ndarray, control: np.ndarray, check: bool
+                 ) -> SkillTrial[PushContext]:
+    """Context ``(4,)`` and control ``(4,)`` parsed, the pad's path and geometry, and (with
+    ``check``) the pre-check's rejection: the engine-independent start of a push trial."""
+    scene = PushContext.from_array(context)
+    control = np.asarray(control, dtype=float).reshape(4)
+    rejected = rejection(PUSH_SPEC, check_push(context, control)) if check else None
+    return SkillTrial(scene, control, push_path(scene, control), pad_geometry(), rejected)
+
+
 def push_score(error_m: float, tilt_rad: float) -> float:
     """``clip(1 − error / PUSH_TOLERANCE_M, −1, 1)``; −1 when toppled."""
     if tilt_rad > TOPPLE_RAD:
@@ -195,25 +207,22 @@ def run_push(
 ) -> TrialResult:
     """Simulate one push in ``world`` (reset first); deterministic given ``seed``."""
     settings = settings or PushSettings()
-    scene = PushContext.from_array(context)
-    control = np.asarray(control, dtype=float).reshape(4)
-    if check:
-        verdict = check_push(context, control)
-        if not verdict.valid:
-            return TrialResult(PUSH_SPEC.invalid_score, False, {"reason": verdict.reason})
+    trial = prepare_push(context, control, check)
+    if trial.rejected is not None:
+        return trial.rejected
+    scene, path = trial.scene, trial.path
     rng = np.random.default_rng(seed)
     world.reset()
     size = scene.size
     block = create_kitchenware(world.client, block_geometry((size, size, size)),
                                material=block_material(scene, rng))
-    path = push_path(scene, control)
-    pad = create_kitchenware(world.client, pad_geometry(), path.positions[0], path.quaternions[0],
+    pad = create_kitchenware(world.client, trial.tool, path.positions[0], path.quaternions[0],
                              material=BodyMaterial(mass=PAD_MASS_KG, lateral_friction=0.5,
                                                    restitution=0.0, rgba=(0.2, 0.2, 0.2, 1.0)))
     dt = world.config.time_step
     steps = hold(world, pad, path.positions[0], path.quaternions[0],
                  world.steps_for(settings.settle_s), on_step)
-    timed = timed_poses(path, speed=float(control[1]), angular_speed=1.0, dt=dt)
+    timed = timed_poses(path, speed=float(trial.control[1]), angular_speed=1.0, dt=dt)
     steps += follow_path(world, pad, timed, on_step, steps)
     steps += hold(world, pad, path.positions[-1], path.quaternions[-1],
                   world.steps_for(settings.after_s), on_step, steps)
@@ -223,6 +232,6 @@ def run_push(
 
 __all__ = [
     "PUSH_CONTEXT", "PUSH_CONTROL", "PUSH_SPEC", "PUSH_TOLERANCE_M", "PushContext",
-    "PushSettings", "check_push", "pad_geometry", "push_is_valid", "push_outcome",
+    "PushSettings", "check_push", "pad_geometry", "prepare_push", "push_is_valid", "push_outcome",
     "push_path", "push_score", "run_push", "sample_push_context",
 ]

@@ -47,11 +47,13 @@ from ltamp_cli.backends.pybullet.paths import PosePath, rotation_about_axis, tim
 from ltamp_cli.backends.pybullet.skills.common import (
     BOWL_RGBA,
     PathCheck,
+    SkillTrial,
     StepCallback,
     batch_path_validity,
     check_tool_path,
     follow_path,
     hold,
+    rejection,
     sample_beads,
     sample_material,
 )
@@ -168,6 +170,39 @@ def check_scoop(context: np.ndarray, control: np.ndarray) -> PathCheck:
     return check_tool_path(spoon_geometry(scene.spoon), scoop_path(scene, control), scene.bowl)
 
 
+def prepare_scoop(context: np.ndarray, control: np.ndarray, check: bool
+                  ) -> SkillTrial[ScoopContext]:
+    """Context ``(4,)`` and control ``(5,)`` parsed, the spoon's path and geometry, and (with
+    ``check``) the pre-check's rejection: the engine-independent start of a scoop trial."""
+    scene = ScoopContext.from_array(context)
+    control = np.asarray(control, dtype=float).reshape(5)
+    path = scoop_path(scene, control)
+    spoon = spoon_geometry(scene.spoon)
+    rejected = rejection(SCOOP_SPEC, check_tool_path(spoon, path, scene.bowl)) if check else None
+    return SkillTrial(scene, control, path, spoon, rejected)
+
+
+def scoop_outcome(scene: ScoopContext, total: int, in_bowl_start: int, in_spoon: int,
+                  lost: int, bead_radius: float, steps: int, dt: float) -> TrialResult:
+    """Score and ``info`` of a simulated scoop (shared with the SAPIEN scoop): ``total``
+    beads, ``in_bowl_start`` of them in the bowl after settling, ``in_spoon`` in the spoon's
+    head at the end, ``lost`` off the table; ``steps`` of ``dt`` s simulated."""
+    capacity = spoon_capacity(scene.spoon)
+    fraction = min(1.0, in_spoon / capacity)
+    info = {
+        "beads_total": total,
+        "beads_in_bowl_start": in_bowl_start,
+        "beads_in_spoon_end": in_spoon,
+        "beads_lost": lost,
+        "spoon_capacity": capacity,
+        "fraction_of_capacity": fraction,
+        "bead_radius_m": bead_radius,
+        "sim_steps": steps,
+        "sim_time_s": steps * dt,
+    }
+    return TrialResult(piecewise_linear_score(fraction, SCOOP_TAU), True, info)
+
+
 def scoop_is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
     """Geometric pre-check for a batch ``controls (n, 5)``: bool ``(n,)``."""
     scene = ScoopContext.from_array(context)
@@ -203,23 +238,19 @@ def run_scoop(
 ) -> TrialResult:
     """Simulate one scoop in ``world`` (reset first); deterministic given ``seed``."""
     settings = settings or ScoopSettings()
-    scene = ScoopContext.from_array(context)
-    control = np.asarray(control, dtype=float).reshape(5)
-    path = scoop_path(scene, control)
-    spoon_geom = spoon_geometry(scene.spoon)
-    if check:
-        verdict = check_tool_path(spoon_geom, path, scene.bowl)
-        if not verdict.valid:
-            return TrialResult(SCOOP_SPEC.invalid_score, False, {"reason": verdict.reason})
+    trial = prepare_scoop(context, control, check)
+    if trial.rejected is not None:
+        return trial.rejected
+    path = trial.path
     rng = np.random.default_rng(seed)
     latents = sample_scoop_latents(rng, settings)
     world.reset()
     bowl = create_kitchenware(
-        world.client, vessel_geometry(scene.bowl, "bowl"), material=latents.bowl_material
+        world.client, vessel_geometry(trial.scene.bowl, "bowl"), material=latents.bowl_material
     )
     spoon = create_kitchenware(
         world.client,
-        spoon_geom,
+        trial.tool,
         path.positions[0],
         path.quaternions[0],
         material=latents.spoon_material,
@@ -246,18 +277,6 @@ def run_scoop(
         steps,
     )
     end = bead_positions(world.client, beads)
-    in_spoon = int(contained_mask(spoon, end).sum())
-    capacity = spoon_capacity(scene.spoon)
-    fraction = min(1.0, in_spoon / capacity)
-    info = {
-        "beads_total": len(beads),
-        "beads_in_bowl_start": in_bowl_start,
-        "beads_in_spoon_end": in_spoon,
-        "beads_lost": count_lost(end),
-        "spoon_capacity": capacity,
-        "fraction_of_capacity": fraction,
-        "bead_radius_m": latents.beads.radius,
-        "sim_steps": steps,
-        "sim_time_s": steps * world.config.time_step,
-    }
-    return TrialResult(piecewise_linear_score(fraction, SCOOP_TAU), True, info)
+    return scoop_outcome(trial.scene, len(beads), in_bowl_start,
+                         int(contained_mask(spoon, end).sum()), count_lost(end),
+                         latents.beads.radius, steps, world.config.time_step)

@@ -31,6 +31,7 @@ Score: ``min(d / STIR_DISPLACEMENT_M − 1, (k − STIR_RETAIN) / (1 − STIR_RE
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,6 +49,7 @@ from ltamp_cli.backends.pybullet.kitchenware import (
     world_to_object,
 )
 from ltamp_cli.backends.pybullet.particles import (
+    BeadSpec,
     bead_positions,
     contained_mask,
     count_lost,
@@ -56,10 +58,12 @@ from ltamp_cli.backends.pybullet.particles import (
 from ltamp_cli.backends.pybullet.paths import PosePath, timed_poses
 from ltamp_cli.backends.pybullet.skills.common import (
     PathCheck,
+    SkillTrial,
     StepCallback,
     check_tool_path,
     follow_path,
     hold,
+    rejection,
     sample_beads,
     sample_material,
 )
@@ -141,6 +145,32 @@ def check_stir(context: np.ndarray, control: np.ndarray) -> PathCheck:
     return check_tool_path(stirrer_geometry(STIRRER_LENGTH_M), stir_path(cup, control), cup)
 
 
+def prepare_stir(context: np.ndarray, control: np.ndarray, check: bool
+                 ) -> SkillTrial[VesselDims]:
+    """Context ``(3,)`` parsed into the cup, control ``(4,)``, the rod's path and geometry,
+    and (with ``check``) the pre-check's rejection: the engine-independent start of a stir."""
+    cup = cup_of(context)
+    control = np.asarray(control, dtype=float).reshape(4)
+    path = stir_path(cup, control)
+    rod = stirrer_geometry(STIRRER_LENGTH_M)
+    rejected = rejection(STIR_SPEC, check_tool_path(rod, path, cup)) if check else None
+    return SkillTrial(cup, control, path, rod, rejected)
+
+
+@dataclass(frozen=True)
+class StirLatents:
+    """Per-trial physical randomisation (drawn from the trial seed)."""
+
+    beads: BeadSpec
+    cup_material: BodyMaterial
+
+
+def sample_stir_latents(rng: np.random.Generator, settings: StirSettings) -> StirLatents:
+    beads = sample_beads(rng, settings.bead_count_mean, 8.0, 40.0, 80.0)
+    cup = sample_material(rng, (0.9, 0.5, 0.2, 1.0), mass=(0.15, 0.03, 0.08, 0.25))
+    return StirLatents(beads, cup)
+
+
 def stir_is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
     """Pre-check of a batch ``controls (n, 4)``: bool ``(n,)``."""
     batch = np.asarray(controls, dtype=float).reshape(-1, 4)
@@ -167,6 +197,18 @@ class TipTracker:
             self._last = tip
         else:
             self._last = None
+
+    def callback(self, tip_in_container: Callable[[], np.ndarray],
+                 on_step: StepCallback | None) -> StepCallback:
+        """A step callback that adds ``tip_in_container()`` (the tip ``(3,)`` in the
+        container's frame, read from the simulation) and then calls ``on_step``."""
+
+        def track(step: int) -> None:
+            self.add(tip_in_container())
+            if on_step is not None:
+                on_step(step)
+
+        return track
 
     @property
     def stirred(self) -> bool:
@@ -221,23 +263,18 @@ def run_stir(
     """Simulate one stir in ``world`` (reset first); deterministic given ``seed``. The cup is
     dynamic (a rough stir can shove or tip it); the stirrer is moved kinematically."""
     settings = settings or StirSettings()
-    cup_dims = cup_of(context)
-    control = np.asarray(control, dtype=float).reshape(4)
-    path = stir_path(cup_dims, control)
-    rod = stirrer_geometry(STIRRER_LENGTH_M)
-    if check:
-        verdict = check_tool_path(rod, path, cup_dims)
-        if not verdict.valid:
-            return TrialResult(STIR_SPEC.invalid_score, False, {"reason": verdict.reason})
+    trial = prepare_stir(context, control, check)
+    if trial.rejected is not None:
+        return trial.rejected
+    path = trial.path
     rng = np.random.default_rng(seed)
-    beads_spec = sample_beads(rng, settings.bead_count_mean, 8.0, 40.0, 80.0)
-    cup_material = sample_material(rng, (0.9, 0.5, 0.2, 1.0), mass=(0.15, 0.03, 0.08, 0.25))
+    latents = sample_stir_latents(rng, settings)
     world.reset()
-    cup_geometry = vessel_geometry(cup_dims, "cup")
-    cup = create_kitchenware(world.client, cup_geometry, material=cup_material)
-    stirrer = create_kitchenware(world.client, rod, path.positions[0], path.quaternions[0],
+    cup_geometry = vessel_geometry(trial.scene, "cup")
+    cup = create_kitchenware(world.client, cup_geometry, material=latents.cup_material)
+    stirrer = create_kitchenware(world.client, trial.tool, path.positions[0], path.quaternions[0],
                                  material=BodyMaterial(mass=0.05, rgba=(0.6, 0.6, 0.65, 1.0)))
-    beads = spawn_beads_in(cup, beads_spec, rng)
+    beads = spawn_beads_in(cup, latents.beads, rng)
     dt = world.config.time_step
     steps = hold(world, stirrer, path.positions[0], path.quaternions[0],
                  world.steps_for(settings.settle_s), on_step)
@@ -245,14 +282,10 @@ def run_stir(
     in_start = contained_mask(cup, start)
     assert cup_geometry.cavity is not None
     tracker = TipTracker(cup_geometry.cavity, dt)
-    timed = timed_poses(path, speed=float(control[3]), angular_speed=1.0, dt=dt)
-
-    def track(step: int) -> None:
-        tip, _ = stirrer.pose()
-        tracker.add(world_to_object(tip[None, :], *cup.pose())[0])
-        if on_step is not None:
-            on_step(step)
-
+    timed = timed_poses(path, speed=float(trial.control[3]), angular_speed=1.0, dt=dt)
+    track = tracker.callback(
+        lambda: world_to_object(stirrer.pose()[0][None, :], *cup.pose())[0], on_step
+    )
     steps += follow_path(world, stirrer, timed, track, steps)
     steps += hold(world, stirrer, path.positions[-1], path.quaternions[-1],
                   world.steps_for(settings.after_s), on_step, steps)
@@ -263,6 +296,7 @@ def run_stir(
 
 __all__ = [
     "STIR_CONTEXT", "STIR_CONTROL", "STIR_MIN_TIME_S", "STIR_MIN_TRAVEL_M", "STIR_SPEC",
-    "StirSettings", "TipTracker", "check_stir", "cup_of", "run_stir", "sample_stir_context",
+    "StirLatents", "StirSettings", "TipTracker", "check_stir", "cup_of", "prepare_stir",
+    "run_stir", "sample_stir_context", "sample_stir_latents",
     "stir_is_valid", "stir_outcome", "stir_path", "stir_score",
 ]
