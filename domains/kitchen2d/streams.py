@@ -5,30 +5,36 @@ planner's stream RNG *before anything else*, so the executor rebuilds the same a
 from the same seed (:func:`ltamp_cli.backends.box2d.scene.scene_from_world`). Initial poses
 are symbolic PDDL objects and mean "the object's home".
 
-GoodPour and GoodScoop are learned: the GP level-set models (``world.models``, paths
-relative to this folder) are loaded once per planning run; for a context the stream yields
-the most confident control ``θ* = argmax μ/σ`` first, then further controls with
-``μ/σ > β`` (the relaxed threshold ``β = Φ⁻¹(λ Φ(φ(θ*)))``), all of them passing the skill's
-start-collision test and the kitchen's checks (approach, swing, the pour must not touch the
-target cup: the pour score does not penalise shoving it aside, a plan must). Values are documented
-in :mod:`ltamp_cli.backends.box2d.tamp`.
+GoodPour, GoodScoop and GoodPush are learned streams
+(:class:`~ltamp_cli.learned_streams.kitchen.GoodPour`, ``GoodScoop``, a generic
+:class:`~ltamp_cli.learned_streams.stream.LearnedStream`): each draws controls of a GP level-set
+model (loaded once per planning run, never refitted) from the sampler its problem chooses::
+
+    world:
+      learned_streams:
+        sample-pour: {model: ../../models/kitchen2d/pour, sampler: diverse-lk}
+        sample-scoop: {model: ../../models/kitchen2d/scoop, sampler: adaptive}
+        sample-push: {model: ../../models/kitchen2d/push, sampler: rejection}
+
+(paths relative to this folder; :data:`LEARNED_STREAMS` gives the defaults, and
+``world.models.<skill>`` still names a model alone). The kitchen's hard tests run *inside*
+the sampler, vectorised over its candidate batches (:mod:`ltamp_cli.backends.box2d.tamp_batch`):
+the skill's start-collision test and the kitchen's approach and swing checks, for a pour also
+"the tilt must not graze the target cup" (the pour score does not penalise shoving the target
+aside, a plan must), for a push the kitchen's section (pushes in line with the block). So the
+set's θ*, β and proposals are those of valid controls. The planner's "unusable downstream"
+feedback reaches the sampler (``diverse-lk`` learns its kernel from it). Values are
+documented in :mod:`ltamp_cli.backends.box2d.tamp`.
 
 **Physics pre-check** (opt-in, ``world.precheck: [pour, scoop]``): before a learned control is
 yielded it is also run once as the skill's own Box2D trial (the simulation the model was learned
 from, with the scene's cup sizes, trial seed 0, about 0.3–0.6 s of CPU for a pour) and dropped
 unless it scores > 0. The paper's planner trusts the model; this trades planning time for
 fewer failed executions. At most ``world.precheck_limit`` (default 8) trials are run per
-stream call; a control within half a lengthscale (the model's) of one that failed is refused
-without a trial. Every check is logged on the ``ltamp.kitchen2d`` logger (INFO, with the record
-attribute ``precheck``: skill, score, verdict) so that callers can report how many controls
-the pre-check rejected.
-
-GoodPush (``sample-push``) is a generic :class:`~ltamp_cli.learned_streams.stream.LearnedStream`
-over the push model (``world.learned_streams.sample-push`` or the shipped
-``models/kitchen2d/push``): its context is the goal ``(goal_x, 0)`` a little past the table
-edge, its samples are restricted to the kitchen's section (pushes in line with the block,
-:func:`~ltamp_cli.backends.box2d.tamp.section_mask`) and the planner's "unusable" feedback
-goes back to its sampler.
+stream call (the call then ends); a control within half a lengthscale (the model's) of one
+that failed is refused without a trial. Every check is logged on the ``ltamp.kitchen2d``
+logger (INFO, with the record attribute ``precheck``: skill, score, verdict) so that callers
+can report how many controls the pre-check rejected.
 """
 
 from __future__ import annotations
@@ -45,10 +51,13 @@ from ltamp_cli.backends.box2d.skills import pour as pour_skill
 from ltamp_cli.backends.box2d.skills import push as push_skill
 from ltamp_cli.backends.box2d.skills import scoop as scoop_skill
 from ltamp_cli.backends.box2d.tamp import KitchenGeometry, Point, section_mask
+from ltamp_cli.backends.box2d.tamp_batch import pour_mask, push_mask, scoop_mask
 from ltamp_cli.errors import InputError
+from ltamp_cli.learned_streams.kitchen import GoodPour, GoodScoop
 from ltamp_cli.learned_streams.stream import (
     LearnedStream,
     LearnedStreamConfig,
+    ModelCache,
     learned_stream_configs,
 )
 from ltamp_cli.planner.streams import Binding, StreamInfo
@@ -58,57 +67,239 @@ LOG = logging.getLogger("ltamp.kitchen2d")
 PRECHECK_SKILLS = ("pour", "scoop")
 #: Pre-check: controls within this many lengthscales of a failed one are not simulated.
 NEAR_FAILURE = 0.5
-DEFAULT_MODELS = {"pour": "../../models/kitchen2d/pour", "scoop": "../../models/kitchen2d/scoop"}
-DEFAULT_PUSH = {"model": "../../models/kitchen2d/push", "sampler": "adaptive"}
-#: GoodPush gives up on one (block, pose, edge) after this many controls in a row that the
-#: kitchen cannot use (the sampler itself never ends while its level set has members).
-PUSH_REJECTS = 200
+#: The kitchen's learned streams: skill, default model (relative to this folder) and sampler.
+#: Pour and scoop default to ``diverse``: its first control is θ*, the most confident valid
+#: one (what the kitchen drew first before it had a sampler choice), the next ones spread
+#: over the confident set.
+LEARNED_STREAMS = {
+    "sample-pour": ("pour", "../../models/kitchen2d/pour", "diverse"),
+    "sample-scoop": ("scoop", "../../models/kitchen2d/scoop", "diverse"),
+    "sample-push": ("push", "../../models/kitchen2d/push", "adaptive"),
+}
+#: A learned stream call ends after this many controls in a row that the kitchen cannot use
+#: (the samplers never end while their set has members; the hard tests run inside them, so
+#: only the physics pre-check or a rounding edge rejects a control afterwards).
+MAX_REJECTS = 200
+PUSH_REJECTS = MAX_REJECTS  # the name earlier versions used
 
 
 class _GiveUp(Exception):
     """Raised inside a learned stream's output mapping to end that stream call."""
 
 
-def push_stream(world: Mapping[str, Any], geometry: KitchenGeometry,
-                rng: np.random.Generator) -> tuple[LearnedStream, Callable[..., Any]]:
-    """GoodPush and the planner generator over it (inputs ``(block, pose, edge)``, outputs
-    ``(conf, approach, control)``). The model is loaded once, never refitted."""
+def learned_configs(world: Mapping[str, Any]) -> dict[str, LearnedStreamConfig]:
+    """Model and sampler of each learned stream: ``world.learned_streams.<stream>`` if given
+    (paths relative to this folder), else ``world.models.<skill>`` (the older form, model
+    only) or the shipped model, with the stream's default sampler."""
     configs = learned_stream_configs(world, HERE)
-    config = configs.get("sample-push") or LearnedStreamConfig.from_mapping(
-        DEFAULT_PUSH, HERE, "sample-push")
-    if not (config.model_dir / "model.json").is_file():
-        raise InputError(f"world: learned_streams.sample-push.model: no model directory at "
-                         f"{config.model_dir}")
+    unknown = sorted(set(configs) - set(LEARNED_STREAMS))
+    if unknown:
+        raise InputError(f"world.learned_streams.{unknown[0]}: not a learned stream of the "
+                         f"kitchen2d domain: expected one of {', '.join(LEARNED_STREAMS)}")
+    models = dict(world.get("models", {}) or {})
+    for name, (skill, default, sampler) in LEARNED_STREAMS.items():
+        if name in configs:
+            if skill in models:
+                raise InputError(f"world.models.{skill}: the model of {name} is also given in "
+                                 f"world.learned_streams.{name}: keep one")
+            where = f"world.learned_streams.{name}.model"
+        else:
+            model = models.get(skill, default)
+            if not isinstance(model, str):
+                raise InputError(f"world.models.{skill}: expected the path of a model directory")
+            configs[name] = LearnedStreamConfig.from_mapping(
+                {"model": model, "sampler": sampler}, HERE, name)
+            where = f"world.models.{skill}" if skill in models else name
+        if not (configs[name].model_dir / "model.json").is_file():
+            raise InputError(f"{where}: no model directory at {configs[name].model_dir}")
+    return configs
+
+
+class KitchenLearnedStream:
+    """A learned stream of the kitchen wired for the planner: ``generate(*inputs)`` checks
+    the inputs (``applies``), then draws from ``stream``; a call ends after
+    :data:`MAX_REJECTS` unusable controls in a row or when ``outputs`` raises ``_GiveUp``.
+    ``on_unusable`` is the planner feedback (routed to the call's sampler)."""
+
+    def __init__(self, stream: LearnedStream, applies: Callable[..., bool]) -> None:
+        self.stream = stream
+        self.applies = applies
+        self.rejected: dict[tuple[str, ...], int] = {}  # per stream call (inputs)
+
+    def reject(self, inputs: tuple[Any, ...]) -> None:
+        """Count one unusable control of the call ``inputs`` (ends it after too many)."""
+        key = tuple(map(str, inputs))
+        self.rejected[key] = self.rejected.get(key, 0) + 1
+        if self.rejected[key] >= MAX_REJECTS:
+            raise _GiveUp
+
+    def accept(self, inputs: tuple[Any, ...]) -> None:
+        self.rejected[tuple(map(str, inputs))] = 0
+
+    def generate(self, *inputs: Any) -> Iterator[tuple[Any, ...]]:
+        if not self.applies(*inputs):
+            return
+        self.accept(inputs)
+        try:
+            yield from self.stream(*inputs)
+        except _GiveUp:
+            return
+
+    def binding(self, info: StreamInfo) -> Binding:
+        return Binding(self.generate, info, on_unusable=self.stream.on_unusable)
+
+
+def control_scale(stream: LearnedStream) -> np.ndarray:
+    """The GP's ARD lengthscales of the controls in physical units, ``(dθ,)``."""
+    space = stream.model.spec.control
+    width = np.asarray(space.highs, dtype=float) - np.asarray(space.lows, dtype=float)
+    return np.asarray(stream.model.lengthscales, dtype=float)[: space.dim] * width / 2.0
+
+
+def pour_stream(config: LearnedStreamConfig, geometry: KitchenGeometry,
+                rng: np.random.Generator, check: SkillCheck | None,
+                models: ModelCache) -> KitchenLearnedStream:
+    """GoodPour over the kitchen: inputs ``(source, target, pose, region)``, outputs
+    ``(grasp, conf, approach, control)``. Hard tests inside the sampler: the pour skill's
+    start-collision test and the kitchen's approach, swing and "the tilt must not graze the
+    target" tests (:func:`~ltamp_cli.backends.box2d.tamp_batch.pour_mask`)."""
+    scene = geometry.spec
+    skill_config = pour_skill.PourConfig()
+    budgets: dict[tuple[str, ...], Budget] = {}
+
+    def context(source: str, target: str, pose: Any, region: str) -> np.ndarray:
+        src, dst = scene.object(source).spec, scene.object(target).spec
+        return np.array([src.width, src.height, dst.width, dst.height], dtype=float)
+
+    def validity_for(source: str, target: str, pose: Any, region: str) -> Any:
+        p = _pose(geometry, target, pose)
+
+        def valid(ctx: np.ndarray, controls: np.ndarray) -> np.ndarray:
+            ok = pour_skill.valid_mask(ctx, controls, skill_config)
+            if ok.any():
+                ok[ok] = pour_mask(geometry, source, target, p, controls[ok])
+            return ok
+
+        return valid
+
+    def outputs(control: np.ndarray, source: str, target: str, pose: Any, region: str
+                ) -> tuple[Any, ...] | None:
+        inputs = (source, target, pose, region)
+        setup = geometry.pour_setup(source, target, _pose(geometry, target, pose), control)
+        budget = budgets.get(tuple(map(str, inputs)))
+        if setup is None or (budget is not None and not budget(
+                context(*inputs), np.asarray(control, dtype=float))):
+            if budget is not None and budget.spent:
+                raise _GiveUp
+            wired.reject(inputs)
+            return None
+        wired.accept(inputs)
+        grasp, conf, approach = setup
+        return (grasp, conf, approach, _tuple(control))
+
+    def applies(source: str, target: str, pose: Any, region: str) -> bool:
+        if source == target or not scene.object(source).material:
+            return False
+        if check is not None:
+            budgets[(source, target, str(pose), region)] = check.budget(control_scale(stream))
+        return True
+
+    stream = GoodPour(config, rng, outputs, models=models, to_context=context,
+                      validity_for=validity_for)
+    wired = KitchenLearnedStream(stream, applies)
+    return wired
+
+
+def scoop_stream(config: LearnedStreamConfig, geometry: KitchenGeometry,
+                 rng: np.random.Generator, check: SkillCheck | None,
+                 models: ModelCache) -> KitchenLearnedStream:
+    """GoodScoop over the kitchen: inputs ``(spoon, bowl, pose)``, outputs ``(grasp, conf,
+    approach, control)``; hard tests inside the sampler: the skill's swept-path test and the
+    kitchen's approach and exit (:func:`~ltamp_cli.backends.box2d.tamp_batch.scoop_mask`)."""
+    scene = geometry.spec
+    skill_config = scoop_skill.ScoopConfig()
+    budgets: dict[tuple[str, ...], Budget] = {}
+
+    def context(spoon: str, bowl: str, pose: Any) -> np.ndarray:
+        cup = scene.object(bowl).spec
+        return np.array([cup.width, cup.height], dtype=float)
+
+    def validity_for(spoon: str, bowl: str, pose: Any) -> Any:
+        p = _pose(geometry, bowl, pose)
+
+        def valid(ctx: np.ndarray, controls: np.ndarray) -> np.ndarray:
+            ok = scoop_skill.valid_mask(ctx, controls, skill_config)
+            if ok.any():
+                ok[ok] = scoop_mask(geometry, spoon, bowl, p, controls[ok])
+            return ok
+
+        return valid
+
+    def outputs(control: np.ndarray, spoon: str, bowl: str, pose: Any
+                ) -> tuple[Any, ...] | None:
+        inputs = (spoon, bowl, pose)
+        setup = geometry.scoop_setup(spoon, bowl, _pose(geometry, bowl, pose), control)
+        budget = budgets.get(tuple(map(str, inputs)))
+        if setup is None or (budget is not None and not budget(
+                context(*inputs), np.asarray(control, dtype=float))):
+            if budget is not None and budget.spent:
+                raise _GiveUp
+            wired.reject(inputs)
+            return None
+        wired.accept(inputs)
+        grasp, conf, approach = setup
+        return (grasp, conf, approach, _tuple(control))
+
+    def applies(spoon: str, bowl: str, pose: Any) -> bool:
+        if not scene.object(bowl).material:
+            return False
+        if check is not None:
+            budgets[(spoon, bowl, str(pose))] = check.budget(control_scale(stream))
+        return True
+
+    stream = GoodScoop(config, rng, outputs, models=models, to_context=context,
+                       validity_for=validity_for)
+    wired = KitchenLearnedStream(stream, applies)
+    return wired
+
+
+def push_stream(config: LearnedStreamConfig, geometry: KitchenGeometry,
+                rng: np.random.Generator, models: ModelCache) -> KitchenLearnedStream:
+    """GoodPush: inputs ``(block, pose, edge)``, outputs ``(conf, approach, control)``; hard
+    tests inside the sampler: the skill's start test, the kitchen's section (pushes in line
+    with the block) and the pusher's path (:func:`~ltamp_cli.backends.box2d.tamp_batch.
+    push_mask`). The model is loaded once, never refitted."""
     push_config = push_skill.PushConfig()
-    rejected: dict[tuple[Any, ...], int] = {}  # per stream call (inputs)
 
     def context(block: str, pose: Any, edge: str) -> np.ndarray:
         found = geometry.push_context(block, _pose(geometry, block, pose), edge)
-        assert found is not None  # the generator below checks reach first
+        assert found is not None  # ``applies`` checks reach first
         return found
+
+    def validity_for(block: str, pose: Any, edge: str) -> Any:
+        p = _pose(geometry, block, pose)
+
+        def valid(ctx: np.ndarray, controls: np.ndarray) -> np.ndarray:
+            ok = push_skill.valid_mask(ctx, controls, push_config) & section_mask(ctx, controls)
+            if ok.any():
+                ok[ok] = push_mask(geometry, block, p, edge, controls[ok])
+            return ok
+
+        return valid
 
     def outputs(control: np.ndarray, block: str, pose: Any, edge: str
                 ) -> tuple[Any, ...] | None:
         setup = geometry.push_setup(block, _pose(geometry, block, pose), edge, control)
-        key = (block, str(pose), edge)
         if setup is None:
-            rejected[key] = rejected.get(key, 0) + 1
-            if rejected[key] >= PUSH_REJECTS:
-                raise _GiveUp
+            wired.reject((block, pose, edge))
             return None
-        rejected[key] = 0
+        wired.accept((block, pose, edge))
         conf, approach = setup
         return (conf, approach, _tuple(control))
 
-    def valid(ctx: np.ndarray, controls: np.ndarray) -> np.ndarray:
-        return push_skill.valid_mask(ctx, controls, push_config) & section_mask(ctx, controls)
-
-    stream = LearnedStream(config, context, outputs, rng, valid)
-
-    def generate(block: str, pose: Any, edge: str) -> Iterator[tuple[Any, ...]]:
-        item = geometry.spec.object(block)
-        if item.kind != "block":
-            return
+    def applies(block: str, pose: Any, edge: str) -> bool:
+        if geometry.spec.object(block).kind != "block":
+            return False
         p = _pose(geometry, block, pose)
         try:
             geometry.edge_x(edge)
@@ -116,68 +307,13 @@ def push_stream(world: Mapping[str, Any], geometry: KitchenGeometry,
             raise InputError(f"sample-push: {error}") from None
         # The block must reach the edge without meeting a curb, and the goal past the edge
         # must lie in the skill's context box: otherwise no control can help.
-        if geometry.push_context(block, p, edge) is None or not geometry.push_path_clear(
-                block, p, edge):
-            return
-        rejected[(block, str(pose), edge)] = 0
-        try:
-            yield from stream(block, pose, edge)
-        except _GiveUp:
-            return
+        return geometry.push_context(block, p, edge) is not None and geometry.push_path_clear(
+            block, p, edge)
 
-    return stream, generate
-
-
-class LearnedControls:
-    """Confident controls of one learned skill for a context and a placement.
-
-    ``valid(context, controls (n, d)) -> (n,) bool`` is the skill's start-collision test
-    (vectorised); ``feasible(control) -> bool``, given per query, is the kitchen's own check
-    (approach and swing clear of everything else). ``θ*`` is the most confident control
-    among ``n`` random valid *and feasible* controls; later ones are the other candidates
-    with ``μ/σ > β``, ``β = Φ⁻¹(λ Φ(μ/σ(θ*)))``, most confident first. Each batch of
-    candidates is predicted in one vectorised GP call; the model is never refitted.
-    """
-
-    def __init__(self, model_dir: Path, valid: Callable[[np.ndarray, np.ndarray], np.ndarray],
-                 rng: np.random.Generator, lam: float = 0.95, batch: int = 4000) -> None:
-        from ltamp_cli.learning.model import LevelSetModel
-
-        self.model = LevelSetModel.load(str(model_dir))
-        self.valid = valid
-        self.rng = rng
-        self.lam = lam
-        self.batch = batch
-
-    def control_scale(self) -> np.ndarray:
-        """The GP's ARD lengthscales of the controls in physical units, ``(dθ,)``."""
-        space = self.model.spec.control
-        width = np.asarray(space.highs, dtype=float) - np.asarray(space.lows, dtype=float)
-        return np.asarray(self.model.lengthscales, dtype=float)[: space.dim] * width / 2.0
-
-    def controls(self, context: np.ndarray, feasible: Callable[[np.ndarray], bool],
-                 rounds: int = 5) -> Iterator[np.ndarray]:
-        from ltamp_cli.learning.confidence import relaxed_beta
-
-        beta: float | None = None
-        space = self.model.spec.control
-        for _ in range(rounds):
-            candidates = space.sample_uniform(self.rng, self.batch)
-            candidates = candidates[self.valid(context, candidates)]
-            if len(candidates) == 0:
-                continue
-            mean, std = self.model.predict(np.repeat(context[None, :], len(candidates), 0),
-                                           candidates)
-            phi = mean / std
-            order = np.argsort(-phi)
-            for index in order:
-                if beta is not None and phi[index] <= beta:
-                    break
-                if not feasible(candidates[index]):
-                    continue
-                if beta is None:
-                    beta = relaxed_beta(float(phi[index]), self.lam)
-                yield candidates[index]
+    stream = LearnedStream(config, context, outputs, rng, models=models,
+                           validity_for=validity_for)
+    wired = KitchenLearnedStream(stream, applies)
+    return wired
 
 
 class SkillCheck:
@@ -198,41 +334,55 @@ class SkillCheck:
         self.rejected = 0
         self.skipped = 0
 
-    def budget(self, scale: np.ndarray | None = None) -> Callable[[np.ndarray, np.ndarray], bool]:
+    def budget(self, scale: np.ndarray | None = None) -> Budget:
         """The check of one stream call, ``passes(context, control) -> bool``: at most
-        ``limit`` simulations, later controls are refused without simulating.
+        ``limit`` simulations, later controls are refused without simulating
+        (:attr:`Budget.spent` then tells the stream call to end).
 
         With ``scale`` (the model's control lengthscales, physical units) a control closer
         than ``NEAR_FAILURE`` lengthscales to one that already failed its trial is refused
         without simulating: the model sees the two as one (correlation > 0.8 for Matérn-5/2),
         and the most confident candidates often crowd into one such spot.
         """
-        left = [self.limit]
-        failed: list[np.ndarray] = []
+        return Budget(self, scale)
 
-        def passes(context: np.ndarray, control: np.ndarray) -> bool:
-            if left[0] <= 0:
-                return False
-            if scale is not None and any(
-                    float(np.linalg.norm((control - bad) / scale)) < NEAR_FAILURE
-                    for bad in failed):
-                self.skipped += 1
-                return False
-            left[0] -= 1
-            result = self.module.run(context, control, 0, self.config)
-            ok = bool(result.valid and result.score > 0.0)
-            self.checked += 1
-            self.rejected += not ok
-            if not ok:
-                failed.append(np.asarray(control, dtype=float))
-            LOG.info("precheck %s: context=%s control=%s score=%.3f %s", self.skill,
-                     _tuple(context), _tuple(control), result.score,
-                     "accepted" if ok else "rejected",
-                     extra={"precheck": {"skill": self.skill, "score": float(result.score),
-                                         "accepted": ok}})
-            return ok
 
-        return passes
+class Budget:
+    """One stream call's share of a :class:`SkillCheck` (see :meth:`SkillCheck.budget`)."""
+
+    def __init__(self, check: SkillCheck, scale: np.ndarray | None) -> None:
+        self.check = check
+        self.scale = scale
+        self.left = check.limit
+        self.failed: list[np.ndarray] = []
+
+    @property
+    def spent(self) -> bool:
+        """Whether every simulation of this call's budget has been used."""
+        return self.left <= 0
+
+    def __call__(self, context: np.ndarray, control: np.ndarray) -> bool:
+        check = self.check
+        if self.spent:
+            return False
+        if self.scale is not None and any(
+                float(np.linalg.norm((control - bad) / self.scale)) < NEAR_FAILURE
+                for bad in self.failed):
+            check.skipped += 1
+            return False
+        self.left -= 1
+        result = check.module.run(context, control, 0, check.config)
+        ok = bool(result.valid and result.score > 0.0)
+        check.checked += 1
+        check.rejected += not ok
+        if not ok:
+            self.failed.append(np.asarray(control, dtype=float))
+        LOG.info("precheck %s: context=%s control=%s score=%.3f %s", check.skill,
+                 _tuple(context), _tuple(control), result.score,
+                 "accepted" if ok else "rejected",
+                 extra={"precheck": {"skill": check.skill, "score": float(result.score),
+                                     "accepted": ok}})
+        return ok
 
 
 def _prechecks(world: Mapping[str, Any], configs: Mapping[str, Any]) -> dict[str, SkillCheck]:
@@ -261,21 +411,24 @@ def _tuple(values: np.ndarray) -> tuple[float, ...]:
 def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str, Any]:
     scene = scene_from_world(world, rng)  # first draws: the executor repeats them
     geometry = KitchenGeometry(scene, motion_time=float(world.get("motion_time", 1.0)))
-    models = {**DEFAULT_MODELS, **dict(world.get("models", {}) or {})}
-    learned: dict[str, LearnedControls] = {}
+    configs = learned_configs(world)
     pour_config, scoop_config = pour_skill.PourConfig(), scoop_skill.ScoopConfig()
     prechecks = _prechecks(world, {"pour": pour_config, "scoop": scoop_config})
+    # Each model directory is loaded once per planning run, when its stream is first built.
+    models = ModelCache()
+    learned: dict[str, KitchenLearnedStream] = {}
 
-    def model(skill: str) -> LearnedControls:
-        if skill not in learned:
-            path = (HERE / str(models[skill])).resolve()
-            if not (path / "model.json").is_file():
-                raise InputError(f"world: models.{skill}: no model directory at {path}")
-            module, config = (pour_skill, pour_config) if skill == "pour" else (
-                scoop_skill, scoop_config)
-            learned[skill] = LearnedControls(
-                path, lambda c, u, m=module, k=config: m.valid_mask(c, u, k), rng)
-        return learned[skill]
+    def learned_stream(name: str) -> KitchenLearnedStream:
+        if name not in learned:
+            if name == "sample-pour":
+                learned[name] = pour_stream(configs[name], geometry, rng,
+                                            prechecks.get("pour"), models)
+            elif name == "sample-scoop":
+                learned[name] = scoop_stream(configs[name], geometry, rng,
+                                             prechecks.get("scoop"), models)
+            else:
+                learned[name] = push_stream(configs[name], geometry, rng, models)
+        return learned[name]
 
     def sample_placement(name: str, region: str) -> Iterator[tuple[Point]]:
         for pose in geometry.placements(name, region):
@@ -301,50 +454,6 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         path = geometry.plan_motion(tuple(q1), tuple(q2), name, tuple(grasp))
         return None if path is None else (path,)
 
-    def sample_pour(source: str, target: str, pose: Any, region: str
-                    ) -> Iterator[tuple[Any, ...]]:
-        src, dst = scene.object(source), scene.object(target)
-        if source == target or not src.material:
-            return
-        p = _pose(geometry, target, pose)
-        context = np.array([src.spec.width, src.spec.height, dst.spec.width, dst.spec.height])
-        setups: dict[bytes, Any] = {}
-        check = (prechecks["pour"].budget(model("pour").control_scale())
-                 if "pour" in prechecks else None)
-
-        def feasible(control: np.ndarray) -> bool:
-            setups[control.tobytes()] = geometry.pour_setup(source, target, p, control)
-            if setups[control.tobytes()] is None:
-                return False
-            return check is None or check(context, control)
-
-        for control in model("pour").controls(context, feasible):
-            grasp, conf, approach = setups[control.tobytes()]
-            yield (grasp, conf, approach, _tuple(control))
-
-    def sample_scoop(spoon: str, bowl: str, pose: Any) -> Iterator[tuple[Any, ...]]:
-        cup = scene.object(bowl)
-        if not cup.material:
-            return
-        p = _pose(geometry, bowl, pose)
-        context = np.array([cup.spec.width, cup.spec.height])
-        setups: dict[bytes, Any] = {}
-        check = (prechecks["scoop"].budget(model("scoop").control_scale())
-                 if "scoop" in prechecks else None)
-
-        def feasible(control: np.ndarray) -> bool:
-            setups[control.tobytes()] = geometry.scoop_setup(spoon, bowl, p, control)
-            if setups[control.tobytes()] is None:
-                return False
-            return check is None or check(context, control)
-
-        for control in model("scoop").controls(context, feasible):
-            grasp, conf, approach = setups[control.tobytes()]
-            yield (grasp, conf, approach, _tuple(control))
-
-    push, sample_push = push_stream(world, geometry, rng) if any(
-        o.kind == "block" for o in scene.objects) else (None, None)
-
     def sample_dump(spoon: str, grasp: Point, target: str, pose: Any, region: str
                     ) -> Iterator[tuple[Any, ...]]:
         p = _pose(geometry, target, pose)
@@ -362,20 +471,19 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         return geometry.distance(tuple(q1), tuple(q2))
 
     cheap = StreamInfo(overhead=0.01)
-    bindings: dict[str, Any] = {}
-    if push is not None:
-        bindings["sample-push"] = Binding(sample_push, StreamInfo(p_success=0.8, overhead=0.5),
-                                          on_unusable=push.on_unusable)
-    else:
-        bindings["sample-push"] = lambda block, pose, edge: iter(())
+    skill = StreamInfo(p_success=0.8, overhead=0.5)
+    kinds = {o.kind for o in scene.objects}
+    bindings: dict[str, Any] = {
+        name: learned_stream(name).binding(skill) if needed else (lambda *inputs: iter(()))
+        for name, needed in (("sample-pour", "cup" in kinds), ("sample-scoop", "spoon" in kinds),
+                             ("sample-push", "block" in kinds))
+    }
     return bindings | {
         "sample-placement": Binding(sample_placement, cheap),
         "sample-grasp": Binding(sample_grasp, cheap),
         "inverse-kinematics": Binding(inverse_kinematics, cheap),
         "plan-free-motion": Binding(plan_free_motion, StreamInfo(overhead=0.05)),
         "plan-holding-motion": Binding(plan_holding_motion, StreamInfo(overhead=0.05)),
-        "sample-pour": Binding(sample_pour, StreamInfo(p_success=0.8, overhead=0.5)),
-        "sample-scoop": Binding(sample_scoop, StreamInfo(p_success=0.8, overhead=0.5)),
         "sample-dump": Binding(sample_dump, cheap),
         "sample-stir": Binding(sample_stir, cheap),
         "test-cfree": Binding(test_cfree, StreamInfo(eager=True, overhead=0.001)),

@@ -5,7 +5,9 @@ target_height)``, scoop ``(cup_width, cup_height)``. By default the outputs are
 ``(control tuple, path)`` where the path is the object's waypoints relative to the target
 cup's rim centre: pour ``((rel_x, rel_y, 0), (rel_x, rel_y, dangle))`` (x, y, tilt);
 scoop the three spoon waypoints ``(x_i, y_i)`` scaled by the cup's width/height. A domain with
-its own geometry passes its own ``to_outputs``.
+its own geometry passes its own ``to_context`` (from its own stream inputs), ``to_outputs``
+and per-input hard test ``validity_for`` (see :class:`LearnedStream`); the Kitchen2D domain
+(``domains/kitchen2d/streams.py``) does.
 """
 
 from __future__ import annotations
@@ -47,8 +49,10 @@ class GoodPour(LearnedStream):
     def __init__(self, config: LearnedStreamConfig, rng: np.random.Generator,
                  to_outputs: Callable[..., tuple[Any, ...] | None] = _pour_outputs,
                  is_valid: PhysicalValidity | None = None,
-                 models: ModelCache | None = None) -> None:
-        super().__init__(config, _pour_context, to_outputs, rng, is_valid, models)
+                 models: ModelCache | None = None, *,
+                 to_context: Callable[..., np.ndarray] = _pour_context,
+                 validity_for: Callable[..., PhysicalValidity | None] | None = None) -> None:
+        super().__init__(config, to_context, to_outputs, rng, is_valid, models, validity_for)
 
 
 class GoodScoop(LearnedStream):
@@ -57,5 +61,7 @@ class GoodScoop(LearnedStream):
     def __init__(self, config: LearnedStreamConfig, rng: np.random.Generator,
                  to_outputs: Callable[..., tuple[Any, ...] | None] = _scoop_outputs,
                  is_valid: PhysicalValidity | None = None,
-                 models: ModelCache | None = None) -> None:
-        super().__init__(config, _scoop_context, to_outputs, rng, is_valid, models)
+                 models: ModelCache | None = None, *,
+                 to_context: Callable[..., np.ndarray] = _scoop_context,
+                 validity_for: Callable[..., PhysicalValidity | None] | None = None) -> None:
+        super().__init__(config, to_context, to_outputs, rng, is_valid, models, validity_for)

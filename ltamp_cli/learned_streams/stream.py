@@ -129,12 +129,32 @@ def _freeze(value: Any) -> Hashable:
     return value
 
 
+def _has_valid_member(sampler: SetSampler) -> bool:
+    """False when the set has a hard test and neither θ* nor any of the uniform controls
+    scored to build it passed: the valid part of the set is then too small to search for
+    (the samplers would spend all their proposal rounds on it)."""
+    superlevel = sampler.superlevel
+    if superlevel.is_valid is None:
+        return True
+    if superlevel.seed_members is not None and len(superlevel.seed_members):
+        return True
+    star = superlevel.theta_star
+    return star is not None and bool(superlevel.contains(star.reshape(1, -1))[0])
+
+
 class LearnedStream:
     """A planner stream drawing controls of a learned skill.
 
     ``to_context(*inputs) -> (dα,)`` physical context; ``to_outputs(control, *inputs)`` ->
     output tuple (or ``None`` to skip a control the stream cannot use);
-    ``is_valid(context, controls)`` an optional hard test applied inside the sampler.
+    ``is_valid(context, controls)`` an optional hard test applied inside the sampler;
+    ``validity_for(*inputs)`` an optional hard test *of one input tuple* (e.g. the tilt of a
+    pour must not graze the target cup *at its pose*, which the context does not hold):
+    it returns ``(context (dα,), controls (n, dθ)) -> (n,) bool`` (or ``None``: no test for
+    these inputs). Both are part of the membership of the sampler's super-level set, so θ*,
+    β and the proposals are built over valid controls only, not filtered afterwards. A
+    call whose set shows no valid member (θ* invalid and none of the sampler's first uniform
+    proposals valid) ends at once.
     """
 
     def __init__(
@@ -145,12 +165,14 @@ class LearnedStream:
         rng: np.random.Generator,
         is_valid: PhysicalValidity | None = None,
         models: ModelCache | None = None,
+        validity_for: Callable[..., PhysicalValidity | None] | None = None,
     ) -> None:
         self.config = config
         self.to_context = to_context
         self.to_outputs = to_outputs
         self.rng = rng
         self.is_valid = is_valid
+        self.validity_for = validity_for
         self.model = (models or ModelCache()).get(config.model_dir)
         self.kernel: DiversityKernel | None = None
         if config.sampler == "diverse-lk":
@@ -170,8 +192,26 @@ class LearnedStream:
         )
         return make_sampler(
             self.config.sampler, self.model, context, self.rng, beta=self.config.beta,
-            is_valid=self.is_valid, lam=self.config.lam, kernel=self.kernel,
+            is_valid=self.validity(*inputs), lam=self.config.lam, kernel=self.kernel,
         )
+
+    def validity(self, *inputs: Any) -> PhysicalValidity | None:
+        """The hard test of ``inputs``: ``is_valid`` and ``validity_for(*inputs)`` together."""
+        tests = [self.is_valid]
+        if self.validity_for is not None:
+            tests.append(self.validity_for(*inputs))
+        present = [t for t in tests if t is not None]
+        if len(present) <= 1:
+            return present[0] if present else None
+        first, second = present
+
+        def both(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
+            ok = np.asarray(first(context, controls), dtype=bool).copy()
+            if ok.any():  # the second (often dearer) test only where the first passed
+                ok[ok] = np.asarray(second(context, controls[ok]), dtype=bool)
+            return ok
+
+        return both
 
     def __call__(self, *inputs: Any) -> Iterator[tuple[Any, ...]]:
         """The planner's generator for one input tuple: one output tuple per ``next()``."""
@@ -180,6 +220,8 @@ class LearnedStream:
         while True:
             if sampler is None:
                 sampler = self.sampler_for(*inputs)
+                if not _has_valid_member(sampler):
+                    return
             control = next(sampler, None)
             if control is None:
                 return
