@@ -143,3 +143,25 @@ def test_good_scoop_outputs_a_path_inside_the_cup(synthetic, fit, tmp_path) -> N
     control, path = next(stream((6.0, 5.0)))
     assert len(control) == 7 and len(path) == 3
     assert all(abs(px) <= 3.0 and 0.0 <= py <= 5.0 for px, py in path)
+
+
+def test_validity_for_inputs_is_part_of_the_sampled_set(goodregion_model) -> None:
+    """A per-input hard test (here: x above a threshold given as a stream input) holds for
+    every yielded control of every sampler, the sampler's θ* included; a test no control
+    passes ends the call at once."""
+    for sampler in ("rejection", "adaptive", "diverse", "diverse-lk"):
+        config = LearnedStreamConfig(goodregion_model, sampler,
+                                     kernel_file=goodregion_model / f"{sampler}.json")
+        stream = LearnedStream(
+            config, lambda phase, x_min: np.array([phase]),
+            lambda control, phase, x_min: (tuple(control.tolist()),),
+            np.random.default_rng(0),
+            validity_for=lambda phase, x_min: (
+                lambda context, controls: controls[:, 0] > x_min))
+        made = stream.sampler_for(0.25, 3.0)
+        star = made.superlevel.to_physical(made.superlevel.theta_star)[0]
+        assert star[0] > 3.0  # (without the test, θ* lies at x < 3: see the problem above)
+        generator = stream(0.25, 3.0)
+        outputs = [next(generator)[0] for _ in range(20)]
+        assert all(x > 3.0 for x, _ in outputs), sampler
+        assert list(stream(0.25, 1e9)) == []  # nothing valid: no endless search
