@@ -38,11 +38,12 @@ SIZES: dict[str, dict[str, Any]] = {
               "budget": 30, "eval_every": 15, "seeds": 1, "contexts": 3, "success_at": [30],
               "candidates": 1000, "rep_init": 15, "rep_budget": 25, "rep_every": 5,
               "reps": 1},
-    # quick: the repeated protocol is scaled to 30 -> 60 trials: 50 -> 100 would use two
-    # thirds of the small quick pool and leave the active learners little to choose from.
-    "quick": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 150,
-              "n_test": 50, "budget": 100, "eval_every": 20, "seeds": 1, "contexts": 3,
-              "success_at": [100], "candidates": 1000, "rep_init": 30, "rep_budget": 60,
+    # quick: the pool-mode curves stop at 60 of the 100 pool trials and the repeated
+    # protocol is scaled to 30 -> 60 trials: with more, the active learners would have
+    # little left to choose from in the small quick pool.
+    "quick": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 100,
+              "n_test": 40, "budget": 60, "eval_every": 20, "seeds": 2, "contexts": 3,
+              "success_at": [60], "candidates": 1000, "rep_init": 30, "rep_budget": 60,
               "rep_every": 10, "reps": 2},
     "full": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 9000,
              "n_test": 1000, "budget": 400, "eval_every": 10, "seeds": 10, "contexts": 45,

@@ -133,6 +133,16 @@ def _best(table: dict[str, tuple[int, float]], learner: str) -> bool | None:
     return table[learner][1] >= max(values)
 
 
+def _mean_std(entry: dict[str, Any] | None, metric: str) -> str:
+    """``mean ± std`` over runs of one ``summarize`` entry (just the mean for one run)."""
+    value = entry.get(f"{metric}_mean") if entry else None
+    count = int(entry.get(f"{metric}_count", 1)) if entry else 0
+    if value is None or count < 2:
+        return _num(value)
+    std = float(entry[f"{metric}_stderr"]) * count ** 0.5  # summarize gives std / sqrt(n)
+    return f"{value:.2f} ± {std:.2f}"
+
+
 def _curve_table(summary: list[dict[str, Any]], learners: list[str], labels: dict[str, str],
                  metric: str) -> list[str]:
     checkpoints = sorted({e["n_trials"] for e in summary if e.get(f"{metric}_mean") is not None})
@@ -144,8 +154,7 @@ def _curve_table(summary: list[dict[str, Any]], learners: list[str], labels: dic
         cells = []
         for n in checkpoints:
             match = [e for e in summary if e["learner"] == learner and e["n_trials"] == n]
-            value = match[0].get(f"{metric}_mean") if match else None
-            cells.append(_num(value))
+            cells.append(_mean_std(match[0] if match else None, metric))
         lines.append(f"| {labels.get(learner, learner)} | " + " | ".join(cells) + " |")
     return lines
 
@@ -154,9 +163,17 @@ def _few_positives(pool: dict[str, Any]) -> str:
     """A warning when the held-out set has too few successes for F1 to say anything."""
     if pool["test_positives"] >= 5:
         return ""
-    return (f" **Only {pool['test_positives']} test positives: F1 is 0 or noise here; the "
-            "quick pool is far too small for this skill's rare successes (the paper used "
-            "10,000 trials).**")
+    return (f" **Only {pool['test_positives']} test positives: F1 is 0 or noise here; "
+            f"{pool['positive_fraction']:.0%} of this pool's trials succeed, so a test set of "
+            f"{pool['n_test']} holds too few successes (the paper's held out 1,000).**")
+
+
+def _pool_kind(data: dict[str, Any]) -> str:
+    """``"pre-check-valid "`` when the experiment's pools were drawn valid-only (as the
+    paper's collector did: a random control was redrawn until the pre-check passed)."""
+    pools = [entry.get("pool", {}) for entry in (data.get("skills") or data.get("table")
+                                                 or {}).values()]
+    return "pre-check-valid " if pools and all(p.get("valid_only") for p in pools) else ""
 
 
 def _png(out: Path, report: Path, name: str) -> str:
@@ -191,8 +208,10 @@ def section_al2d(out: Path, report: Path) -> list[str]:
         lines += ["", f"Claim \"GP-LSE best\" at the last checkpoint: "
                   f"{_verdict(_best(final, 'lse'))}.", ""]
     lines += [_png(out, report, "al2d.png"), "",
-              "Protocol difference: our NN_c/NN_r learn from uniformly random trials; the "
-              "paper's chose each next trial by their own argmax.", ""]
+              "Protocol as the paper's: after the same random initial trials, NN_c and NN_r "
+              "execute their own argmax θ* for a random context and are retrained after every "
+              "trial; GP-LSE picks the straddle maximiser; Random draws uniform controls. "
+              "Cells are mean ± std over seeds.", ""]
     return lines
 
 
@@ -207,7 +226,8 @@ def section_supervised(out: Path, report: Path) -> list[str]:
     sizes = data["sizes"]
     lines = [f"## {title}", "", f"Paper: {PAPER_CLAIMS['supervised3d']}", "",
              f"Ours ({data['mode']}, backend {data['backend']}): pool of {sizes['n_train']} "
-             f"uniform random trials + {sizes['n_test']} held-out test trials per skill "
+             f"uniform random {_pool_kind(data)}trials + {sizes['n_test']} held-out test "
+             "trials per skill "
              f"(paper: 10,000 trials; 400 training / 1,000 test), {sizes['seeds']} shuffle(s), "
              f"success rate on {sizes['contexts']} held-out contexts at "
              f"n = {', '.join(map(str, sizes['success_at']))} (paper: 45 contexts every 10).",
@@ -252,7 +272,8 @@ def section_active(out: Path, report: Path) -> list[str]:
     sizes = data["sizes"]
     lines = [f"## {title}", "", f"Paper: {PAPER_CLAIMS['active3d']}", "",
              f"Ours ({data['mode']}, backend {data['backend']}, MLP kernel, pool mode over "
-             f"{sizes['n_train']} random trials — the paper's pool had 10,000; "
+             f"{sizes['n_train']} random {_pool_kind(data)}trials — the paper's pool had "
+             "10,000; "
              f"{sizes['seeds']} run(s); repeated protocol {sizes['rep_init']}→"
              f"{sizes['rep_budget']} trials × {sizes['reps']} (paper: × 200)).", ""]
     for skill, entry in data["skills"].items():
@@ -409,7 +430,8 @@ def section_confident(out: Path, report: Path) -> list[str]:
     sizes = data["sizes"]
     lines = [f"## {title}", "",
              f"Ours ({data['mode']}, backend {data['backend']}, MLP-kernel GPs from a pool of "
-             f"{sizes['n_train']} random trials, {sizes['contexts']} held-out contexts per "
+             f"{sizes['n_train']} random {_pool_kind(data)}trials, {sizes['contexts']} "
+             "held-out contexts per "
              "skill). Valid = passes the skill's geometric pre-check (the paper: a full robot "
              "plan was found); Success and Filled over the valid ones. The paper's numbers are "
              "real-robot results (30 pours, 15 scoops) after the slash.", "",
