@@ -1,0 +1,31 @@
+"""Kitchen3D trial pools are drawn like the paper's: uniform random contexts, and controls
+redrawn until the skill's pre-check passes (synthetic skill with an invalid corner)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from bench.paper.common import Context
+from bench.paper.pools import get_pool
+from ltamp_cli.backends import load_backend
+
+
+def test_pool_trials_all_pass_the_precheck_and_resume(tmp_path: Path) -> None:
+    ctx = Context("smoke", tmp_path, False, 1)
+    pool = get_pool(ctx, "synthetic", "skill8d", 30, 10)
+    backend = load_backend("synthetic")
+    records = pool.train + pool.test
+    assert [r.index for r in records] == list(range(40))
+    for r in records:
+        assert r.valid
+        assert backend.is_valid("skill8d", np.array(r.context), np.array([r.control]))[0]
+    stats = pool.stats()
+    assert stats["valid_only"] and stats["valid_fraction"] == 1.0
+    assert stats["n_train"] == 30 and stats["n_test"] == 10
+    # A bigger request resumes the same file: the first 40 trials are unchanged.
+    bigger = get_pool(ctx, "synthetic", "skill8d", 45, 5)
+    assert [r.control for r in bigger.train[:40]] == [r.control for r in records]
+    files = list((tmp_path / "cache" / "pools").glob("*.jsonl"))
+    assert [f.name for f in files] == ["synthetic_skill8d_s10000_valid.jsonl"]
