@@ -38,6 +38,9 @@ class RRTConnectConfig:
     a fifth of the space's extent). ``shortcut_iterations``: random shortcutting attempts
     (:func:`~ltamp_cli.motion.interpolation.shortcut_path`, seeded from ``seed``; OMPL's
     own simplifier is time-bounded and so not reproducible); 0 disables it.
+    ``max_checks``: budget of validity checks for the search (``None``: none). A search
+    stopped by it depends only on the seed, not on the machine's speed or load;
+    ``time_limit`` then only caps the wall time.
     """
 
     time_limit: float = 2.0
@@ -45,6 +48,7 @@ class RRTConnectConfig:
     resolution: float = 0.02
     max_step: float | None = None
     shortcut_iterations: int = 20
+    max_checks: int | None = None
 
     def __post_init__(self) -> None:
         if self.time_limit <= 0:
@@ -55,6 +59,8 @@ class RRTConnectConfig:
             raise ValueError("max_step must be positive")
         if self.shortcut_iterations < 0:
             raise ValueError("shortcut_iterations must be >= 0")
+        if self.max_checks is not None and self.max_checks <= 0:
+            raise ValueError("max_checks must be positive")
 
 
 @dataclass(frozen=True)
@@ -195,7 +201,16 @@ def _solve_with_ompl(
             start_state[i] = float(q_start[i])
             goal_state[i] = float(q_goal[i])
         setup.setStartAndGoalStates(start_state, goal_state)
-        setup.solve(settings.time_limit)
+        if settings.max_checks is None:
+            setup.solve(settings.time_limit)
+        else:
+            deadline = time.perf_counter() + settings.time_limit
+            budget = is_valid.calls + settings.max_checks
+
+            def exhausted() -> bool:
+                return is_valid.calls >= budget or time.perf_counter() > deadline
+
+            setup.solve(ob.PlannerTerminationCondition(exhausted))
         if not setup.haveExactSolutionPath():
             return None
         solution = setup.getSolutionPath()

@@ -106,3 +106,33 @@ def test_self_collision_pairs_cover_sampled_contacts(
     seen = sample_self_collision_pairs(scene.arms[0], np.random.default_rng(11), 300)
     assert seen, "random configurations do self-collide sometimes"
     assert seen <= set(PANDA_SELF_COLLISION_PAIRS)
+
+
+def test_a_check_budget_makes_the_search_reproducible_and_bounded(
+    scene_with_wall: tuple[KitchenScene, int],
+) -> None:
+    """With ``max_checks`` a query's outcome depends on its seed, not on wall time: two runs
+    give the same path, and a search that cannot succeed stops after its budget."""
+    scene, wall = scene_with_wall
+    arm = scene.arms[0]
+    checker = ArmCollisionChecker(arm, scene.obstacles_for(0, [wall]))
+    rng = np.random.default_rng(0)
+    start = solve_ik(arm, _down(scene, [-0.2, -0.1, 0.1]), rng, is_valid=checker)
+    goal = solve_ik(arm, _down(scene, [0.1, 0.1, 0.1]), rng, is_valid=checker)
+    assert start is not None and goal is not None
+    config = RRTConnectConfig(seed=4, time_limit=60.0, max_checks=20_000)
+    first = plan_arm_motion(arm, start, goal, checker, config)
+    second = plan_arm_motion(arm, start, goal, checker, config)
+    assert first.path is not None and second.path is not None
+    np.testing.assert_array_equal(first.path, second.path)
+    assert first.n_validity_checks == second.n_validity_checks
+
+    # Nothing but the start is valid here: the search ends on its budget, long before 60 s.
+    def only_start(q: np.ndarray) -> bool:
+        return bool(np.allclose(q, start) or np.allclose(q, goal))
+
+    blocked = plan_arm_motion(arm, start, goal, only_start,
+                              RRTConnectConfig(seed=4, time_limit=60.0, max_checks=500))
+    assert blocked.status == "timeout"
+    assert 500 <= blocked.n_validity_checks <= 600
+    assert blocked.planning_time < 30.0
