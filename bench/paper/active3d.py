@@ -38,13 +38,13 @@ SIZES: dict[str, dict[str, Any]] = {
               "budget": 30, "eval_every": 15, "seeds": 1, "contexts": 3, "success_at": [30],
               "candidates": 1000, "rep_init": 15, "rep_budget": 25, "rep_every": 5,
               "reps": 1},
-    # quick: the pool-mode curves stop at 60 of the 100 pool trials and the repeated
-    # protocol is scaled to 30 -> 60 trials: with more, the active learners would have
+    # quick: the pool-mode curves stop at 50 of the 70 pool trials and the repeated
+    # protocol is scaled to 25 -> 50 trials: with more, the active learners would have
     # little left to choose from in the small quick pool.
-    "quick": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 100,
-              "n_test": 40, "budget": 60, "eval_every": 20, "seeds": 2, "contexts": 3,
-              "success_at": [60], "candidates": 1000, "rep_init": 30, "rep_budget": 60,
-              "rep_every": 10, "reps": 2},
+    "quick": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 70,
+              "n_test": 30, "budget": 50, "eval_every": 10, "seeds": 2, "contexts": 3,
+              "success_at": [50], "candidates": 1000, "rep_init": 25, "rep_budget": 50,
+              "rep_every": 5, "reps": 2},
     "full": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 9000,
              "n_test": 1000, "budget": 400, "eval_every": 10, "seeds": 10, "contexts": 45,
              "success_at": list(range(10, 201, 10)), "candidates": 1000, "rep_init": 50,

@@ -31,10 +31,10 @@ FILLED_KEY = {"pour": "fraction_in_bowl", "scoop": "fraction_of_capacity"}
 SIZES: dict[str, dict[str, Any]] = {
     "smoke": {"backend": "synthetic", "skills": ["skill8d"], "n_train": 60, "n_test": 40,
               "small": 20, "large": 40, "contexts": 3, "candidates": 1000},
-    # quick: 30 / 60 trials (the paper: 50 / 100) so that active-60 still chooses its last
-    # 30 among the 70 unused trials of the small quick pool.
-    "quick": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 100,
-              "n_test": 40, "small": 30, "large": 60, "contexts": 4, "candidates": 1000},
+    # quick: 25 / 50 trials (the paper: 50 / 100) so that active-50 still chooses its last
+    # 25 among the 45 unused trials of the small quick pool.
+    "quick": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 70,
+              "n_test": 30, "small": 25, "large": 50, "contexts": 4, "candidates": 1000},
     "full": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 9000,
              "n_test": 1000, "small": 50, "large": 100, "contexts": 30, "candidates": 1000},
 }

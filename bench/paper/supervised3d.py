@@ -43,11 +43,11 @@ SIZES: dict[str, dict[str, Any]] = {
     "smoke": {"backend": "synthetic", "skills": ["skill8d"], "n_train": 60, "n_test": 40,
               "budget": 30, "eval_every": 15, "seeds": 1, "contexts": 3,
               "success_at": [30], "candidates": 1000},
-    # quick: pools of pre-check-valid trials (as the paper's), so 100 of them carry what
-    # ~200 uniform ones did (pour) or ~400 (scoop); 80 of the 100 per shuffle.
-    "quick": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 100,
-              "n_test": 40, "budget": 80, "eval_every": 20, "seeds": 2, "contexts": 3,
-              "success_at": [80], "candidates": 1000},
+    # quick: pools of pre-check-valid trials (as the paper's), so 70 of them carry what ~140
+    # uniform ones did (pour) or ~300 (scoop; a valid scoop costs ~4 s CPU); 60 per shuffle.
+    "quick": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 70,
+              "n_test": 30, "budget": 60, "eval_every": 20, "seeds": 2, "contexts": 3,
+              "success_at": [60], "candidates": 1000},
     "full": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 9000,
              "n_test": 1000, "budget": 400, "eval_every": 10, "seeds": 10, "contexts": 45,
              "success_at": list(range(10, 201, 10)), "candidates": 1000},
