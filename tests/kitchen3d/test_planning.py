@@ -83,10 +83,6 @@ def test_planned_motion_is_collision_free_when_rechecked_densely(world) -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=False, reason=(
-    "known, open in issue 7: the seed-0 plan now places the block and picks it again; the "
-    "block settles ~1.5 cm off its planned pose (within the 2 cm place tolerance) and the "
-    "open-loop re-pick misses it by more than the 1 cm finger check"))
 def test_pour_blocked_is_planned_and_executed_with_beads_in_the_bowl(problem) -> None:  # type: ignore[no-untyped-def]
     from ltamp_cli.backends.execution import execute_plan
     from ltamp_cli.planner.algorithms.common import PlannerConfig
