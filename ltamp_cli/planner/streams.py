@@ -99,7 +99,11 @@ class StreamStats:
     calls: int = 0
     successes: int = 0
     outputs: int = 0
-    time_s: float = 0.0
+    time_s: float = 0.0  # wall seconds in the binding
+    # CPU seconds of this thread in the binding: what decides in-run "cheap" (auto-eager),
+    # because wall time on a loaded machine would make that decision, and so the run,
+    # depend on the load.
+    cpu_s: float = 0.0
 
     def as_dict(self) -> dict[str, float]:
         return {"calls": self.calls, "successes": self.successes, "outputs": self.outputs,
@@ -139,12 +143,14 @@ class StreamInstance:
             return []
         values = [objects.value(name) for name in self.inputs]
         start = time.perf_counter()
+        cpu_start = time.thread_time()
         self.num_calls += 1
         stats.calls += 1
         try:
             new = self._next(values, objects)
         finally:
             stats.time_s += time.perf_counter() - start
+            stats.cpu_s += time.thread_time() - cpu_start
         if new or (self.is_test and self.value):
             stats.successes += 1
         stats.outputs += len(new)

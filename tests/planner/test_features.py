@@ -142,7 +142,11 @@ def test_statistics_accumulate_across_runs(tmp_path: Path) -> None:
     first = solve(problem, config)
     second = solve(problem, config)
     calls = first.stats["streams"]["sample-pose"]["calls"]
-    assert second.stats["stream_history"]["sample-pose"]["calls"] == 2 * calls
+    # The second run starts from the first one's statistics (so it may take another path):
+    # the history then holds both runs' calls.
+    more = second.stats["streams"]["sample-pose"]["calls"]
+    assert calls > 0 and more > 0
+    assert second.stats["stream_history"]["sample-pose"]["calls"] == calls + more
     saved = json.loads((tmp_path / "tamp2d.json").read_text())
     assert saved["streams"]["test-cfree"]["calls"] > 0
 

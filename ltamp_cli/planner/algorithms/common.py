@@ -42,6 +42,12 @@ from ltamp_cli.planner.streams import (
 
 ALGORITHMS = ("adaptive", "binding", "focused", "incremental")
 MAX_REMEMBERED_SKELETONS = 3
+# First expansion budget of searches that may fail (doubles each time one runs out): the
+# example problems' successful searches expand tens to a few hundred states, while a failing
+# search explores the whole reachable space (thousands of states). As with PDDLStream's
+# per-search time limit, running out counts as a failed search. 250 cut a solvable
+# kitchen_symbolic search (about 450 expansions) and sent focused into 15-26 searches.
+INITIAL_SEARCH_EXPANSIONS = 600
 
 
 @dataclass(frozen=True)
@@ -136,6 +142,8 @@ class PlannerState:
     # enumerated for that purpose (eager evaluation, incremental sampling): later rounds only
     # join what was added since (facts only grow).
     enumerated: dict[tuple[str, str], dict[str, int]] = field(default_factory=dict)
+    # Expansions allowed to a budgeted search (see :meth:`search`).
+    search_budget: int = INITIAL_SEARCH_EXPANSIONS
 
     def new_bindings(self, external: External, purpose: str) -> list[tuple[str, ...]]:
         """Input tuples of ``external`` over the real facts that an earlier call with the
@@ -239,18 +247,28 @@ class PlannerState:
 
     def search(self, init: Iterable[Fact], objects: Mapping[str, str],
                function_values: Mapping[Fact, float], max_expansions: int | None = None,
-               context_blocks: Mapping[Fact, list[Context]] | None = None
-               ) -> DiscreteResult:
+               context_blocks: Mapping[Fact, list[Context]] | None = None,
+               budgeted: bool = False) -> DiscreteResult:
+        """One discrete search. ``budgeted``: bound it by :attr:`search_budget` expansions,
+        doubled whenever a search runs out of it (``DiscreteResult.capped``): a search that
+        fails is usually exhaustive, and the algorithms learn as much from a bounded failure
+        (sample more, raise the complexity) at a fraction of the cost, while the growing
+        budget keeps them complete."""
         start = time.perf_counter()
         self.searches += 1
+        if budgeted:
+            max_expansions = self.search_budget
         try:
-            return plan_discrete(
+            result = plan_discrete(
                 self.problem.domain, objects, init, function_values, self.problem.goal,
                 self.deadline, self.config.search, self.config.unit_costs, max_expansions,
                 self.config.skeleton, self.cost_bound, self.fluent_requirements,
                 context_blocks)
         finally:
             self.search_time += time.perf_counter() - start
+        if budgeted and result.capped:
+            self.search_budget *= 2
+        return result
 
     def remember_skeleton(self, actions: list[str]) -> None:
         """Keep the last optimistic plans, to explain a failure."""

@@ -75,7 +75,9 @@ def observed_cheap(history: Mapping[str, float] | None, run: StreamStats | None)
     """Whether the observed calls (persisted ``history`` plus this ``run``) show a stream to
     be cheap enough for eager evaluation; the prior does not count."""
     calls, seconds = 0.0, 0.0
-    for source in (history or {}, _as_totals(run)):
+    # This run's calls count with their CPU time (wall time depends on the machine's load).
+    current = {"calls": run.calls, "time_s": run.cpu_s} if run is not None else {}
+    for source in (history or {}, current):
         calls += float(source.get("calls", 0.0))
         seconds += float(source.get("time_s", 0.0))
     return calls >= AUTO_EAGER_MIN_CALLS and seconds / calls <= AUTO_EAGER_MAX_OVERHEAD_S

@@ -87,16 +87,16 @@ def solve_focused(state: PlannerState) -> PlanResult:
             evaluation = optimistic_evaluation(state, complexity, placeholders)
             discrete = state.search(evaluation.index.members, evaluation.object_types,
                                     evaluation.function_values,
-                                    context_blocks=evaluation.context_blocks)
+                                    context_blocks=evaluation.context_blocks, budgeted=True)
             if not discrete.solved:
                 disabled = [i for i in state.instances.values() if i.disabled]
-                if not evaluation.cut and not disabled:
+                if not evaluation.cut and not disabled and not discrete.capped:
                     return state.result(INFEASIBLE, None)
                 for instance in disabled:
                     instance.disabled = False
                 if evaluation.cut or not disabled:
                     complexity += 1
-                if complexity > state.config.max_complexity:
+                if complexity > state.config.max_complexity and not discrete.capped:
                     return state.result(INFEASIBLE, None)
                 continue
             facts, terms = plan_preimage(discrete)

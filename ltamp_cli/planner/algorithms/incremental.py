@@ -14,18 +14,22 @@ from ltamp_cli.planner.search.engine import SearchTimeout
 
 def solve_incremental(state: PlannerState) -> PlanResult:
     changed = True
+    capped = False
     try:
         while True:
             state.iterations += 1
             if changed:
                 discrete = state.search(state.facts.members, state.object_types,
-                                        state.function_values)
+                                        state.function_values, budgeted=True)
                 if discrete.solved:
                     facts, terms = plan_preimage(discrete)
                     return state.result(SOLVED, discrete, facts | terms)
+                capped = discrete.capped
             if state.timed_out():
                 return state.result(TIMEOUT, None)
-            changed = sample_all(state)
+            # A search stopped by its budget proves nothing: search again (with a larger
+            # budget) even when sampling adds nothing.
+            changed = sample_all(state) or capped
             if not changed and all(i.exhausted for i in state.instances.values()):
                 return state.result(INFEASIBLE, None)
     except SearchTimeout:

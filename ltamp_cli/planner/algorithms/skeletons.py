@@ -145,7 +145,8 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                 evaluation = optimistic_evaluation(state, complexity, placeholders)
                 discrete = state.search(evaluation.index.members, evaluation.object_types,
                                         evaluation.function_values,
-                                    context_blocks=evaluation.context_blocks)
+                                        context_blocks=evaluation.context_blocks,
+                                        budgeted=True)
                 last_search_work = discrete.outcome.evaluated if discrete.outcome else 0
                 state.diagnose(discrete, evaluation.index.members)
                 if discrete.solved:
@@ -167,11 +168,12 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                         retry_threshold += 1
                         complexity += 1
                 else:
-                    if not evaluation.cut and not len(queue):
+                    if not evaluation.cut and not len(queue) and not discrete.capped:
                         return state.result(INFEASIBLE, None)
                     retry_threshold += 1
                     complexity += 1
-                    if complexity > state.config.max_complexity and not len(queue):
+                    if (complexity > state.config.max_complexity and not len(queue)
+                            and not discrete.capped):
                         return state.result(INFEASIBLE, None)
             steps = max(1, round(last_search_work * STEPS_PER_EVALUATION))
             result = _process(state, queue, adaptive, steps, retry_threshold)

@@ -24,6 +24,8 @@ class SearchOutcome:
     evaluated: int
     time_s: float
     states: list[frozenset[int]] = field(default_factory=list)
+    # No plan because the expansion budget ran out (not because the space was exhausted).
+    capped: bool = False
 
 
 class SearchTimeout(Exception):
@@ -94,7 +96,8 @@ def lazy_greedy(task: Task, deadline: float, boost: int = 1000,
         if time.perf_counter() > deadline:
             raise SearchTimeout
         if max_expansions is not None and expanded > max_expansions:
-            break
+            return SearchOutcome(None, INFINITY, expanded, evaluated,
+                                 time.perf_counter() - start_time, capped=True)
         which = 1 if queues[1] and priorities[1] >= priorities[0] else 0
         if not queues[which]:
             which = 1 - which
@@ -161,17 +164,19 @@ def weighted_astar(task: Task, deadline: float, weight: float = 2.0,
     return SearchOutcome(None, INFINITY, expanded, evaluated, time.perf_counter() - start_time)
 
 
-def enforced_hill_climbing(task: Task, deadline: float, unit_costs: bool = False
-                           ) -> SearchOutcome | None:
+def enforced_hill_climbing(task: Task, deadline: float, unit_costs: bool = False,
+                           heuristic: FFHeuristic | None = None,
+                           max_expansions: int | None = None) -> SearchOutcome | None:
     """FF's enforced hill-climbing over helpful actions; ``None`` when it gets stuck.
 
     From the current state, breadth-first search (helpful actions only) for a state with a
-    strictly better heuristic value, commit to it, repeat until the goal holds.
+    strictly better heuristic value, commit to it, repeat until the goal holds. The greedy
+    search that escapes a plateau expands at most ``max_expansions`` states when that is set.
     """
     from collections import deque
 
     start_time = time.perf_counter()
-    heuristic = FFHeuristic(task, unit_costs=unit_costs)
+    heuristic = heuristic or FFHeuristic(task, unit_costs=unit_costs)
     expanded = evaluated = 0
     state = task.init
     vector = task.state_vector(state)
@@ -213,8 +218,11 @@ def enforced_hill_climbing(task: Task, deadline: float, unit_costs: bool = False
         if found is None:
             # Stuck on a plateau that helpful actions cannot leave: a budgeted greedy
             # search from here usually escapes it; else report failure.
+            budget = LOCAL_EXPANSIONS
+            if max_expansions is not None:
+                budget = min(budget, max_expansions)
             local = lazy_greedy(task, deadline, initial=state, heuristic=heuristic,
-                                max_expansions=LOCAL_EXPANSIONS)
+                                max_expansions=budget)
             if local.plan is None:
                 return None
             path_ops.extend(local.plan)
@@ -251,10 +259,14 @@ def run_search(task: Task, algorithm: str, deadline: float, unit_costs: bool = F
 def _search(task: Task, algorithm: str, deadline: float, unit_costs: bool,
             max_expansions: int | None) -> SearchOutcome:
     if algorithm == "ff":
-        outcome = enforced_hill_climbing(task, deadline, unit_costs=unit_costs)
+        # One heuristic (and its memo) for hill-climbing and the greedy fallback.
+        heuristic = FFHeuristic(task, unit_costs=unit_costs)
+        outcome = enforced_hill_climbing(task, deadline, unit_costs=unit_costs,
+                                         heuristic=heuristic, max_expansions=max_expansions)
         if outcome is not None:
             return outcome
-        return lazy_greedy(task, deadline, unit_costs=unit_costs, max_expansions=max_expansions)
+        return lazy_greedy(task, deadline, unit_costs=unit_costs, heuristic=heuristic,
+                           max_expansions=max_expansions)
     if algorithm == "lazy-greedy":
         return lazy_greedy(task, deadline, unit_costs=unit_costs, max_expansions=max_expansions)
     if algorithm == "wastar":

@@ -157,19 +157,33 @@ def _compile_join(literals: Sequence[LiftedLiteral], bound: set[str]) -> list[_S
 
 
 def _run_join(steps: Sequence[_Step], index: FactIndex, binding: dict[str, str]
-              ) -> Iterator[dict[str, str]]:
-    if not steps:
-        yield binding
+              ) -> list[dict[str, str]]:
+    """Every extension of ``binding`` matching ``steps``, collected eagerly (facts that the
+    caller adds while using them are found by its own semi-naive rounds)."""
+    found: list[dict[str, str]] = []
+    _extend(steps, 0, index, binding, found)
+    return found
+
+
+def _extend(steps: Sequence[_Step], depth: int, index: FactIndex, binding: dict[str, str],
+            found: list[dict[str, str]]) -> None:
+    if depth == len(steps):
+        found.append(binding)
         return
-    step, rest = steps[0], steps[1:]
-    key = tuple(binding.get(term, term) for term in step.key_terms)
+    step = steps[depth]
+    key = tuple([binding.get(term, term) for term in step.key_terms])
+    last = depth + 1 == len(steps)
+    checks, binds = step.checks, step.binds
     for args in index.lookup(step.predicate, step.positions, key):
-        if any(args[a] != args[b] for a, b in step.checks):
+        if checks and any(args[a] != args[b] for a, b in checks):
             continue
-        extended = dict(binding)
-        for position, variable in step.binds:
+        extended = binding.copy()
+        for position, variable in binds:
             extended[variable] = args[position]
-        yield from _run_join(rest, index, extended)
+        if last:
+            found.append(extended)
+        else:
+            _extend(steps, depth + 1, index, extended, found)
 
 
 def join(literals: Sequence[LiftedLiteral], index: FactIndex,
@@ -202,7 +216,7 @@ def join_new(literals: Sequence[LiftedLiteral], index: FactIndex, since: Mapping
 
 
 def _ground(args: Iterable[str], binding: Mapping[str, str]) -> tuple[str, ...]:
-    return tuple(binding.get(a, a) for a in args)
+    return tuple([binding.get(a, a) for a in args])
 
 
 def _match(literal: LiftedLiteral, args: tuple[str, ...]) -> dict[str, str] | None:
@@ -224,6 +238,7 @@ class _Rule:
     equalities: tuple[LiftedLiteral, ...]
     variables: tuple[str, ...]
     joins: dict[int, list[_Step]] = field(default_factory=dict)
+    compiled: _Compiled | None = None  # set by the first _emit of a grounding
 
 
 def _make_rule(source: NormalAction | NormalAxiom, clause: Clause) -> _Rule:
@@ -299,39 +314,66 @@ def ground_task(
     return result
 
 
+@dataclass
+class _Compiled:
+    """A rule's literals split once per grounding by whether their predicate is fluent."""
+
+    dynamic_pos: tuple[tuple[str, tuple[str, ...]], ...]
+    static_pos: tuple[tuple[str, tuple[str, ...]], ...]  # without type literals
+    dynamic_neg: tuple[tuple[str, tuple[str, ...]], ...]
+    static_neg: tuple[tuple[str, tuple[str, ...]], ...]
+
+
+def _compile_rule(rule: _Rule, fluent: frozenset[str]) -> _Compiled:
+    def split(literals: Iterable[LiftedLiteral], dynamic: bool
+              ) -> tuple[tuple[str, tuple[str, ...]], ...]:
+        return tuple((lit.predicate, lit.args) for lit in literals
+                     if (lit.predicate in fluent) == dynamic
+                     and (dynamic or not lit.predicate.startswith("type:")))
+
+    return _Compiled(split(rule.positive, True), split(rule.positive, False),
+                     split(rule.negative, True),
+                     tuple((lit.predicate, lit.args) for lit in rule.negative
+                           if lit.predicate not in fluent))
+
+
 def _emit(rule: _Rule, binding: dict[str, str], index: FactIndex, init: set[Fact],
           fluent: frozenset[str], function_values: Mapping[Fact, float],
           seen: set[tuple[int, tuple[str, ...]]], result: Grounding, delta: list[Fact]
           ) -> None:
-    key = (id(rule), tuple(binding[v] for v in rule.variables))
+    key = (id(rule), tuple([binding[v] for v in rule.variables]))
     if key in seen:
         return
     seen.add(key)
+    get = binding.get
     for literal in rule.equalities:
         left, right = _ground(literal.args, binding)
         if (left == right) != literal.positive:
             return
-    negative: list[Fact] = []
+    compiled = rule.compiled
+    if compiled is None:
+        compiled = rule.compiled = _compile_rule(rule, fluent)
     blocking: Fact | None = None
-    for literal in rule.negative:
-        fact = (literal.predicate, *_ground(literal.args, binding))
-        if literal.predicate in fluent:
-            negative.append(fact)
-        elif fact in init:
+    for predicate, terms in compiled.static_neg:
+        fact = (predicate, *[get(a, a) for a in terms])
+        if fact in init:
             blocking = fact
             break
-    positive = [(lit.predicate, *_ground(lit.args, binding)) for lit in rule.positive]
-    dynamic_pos = tuple(f for f in positive if f[0] in fluent)
-    static_pos = tuple(f for f in positive if f[0] not in fluent and not f[0].startswith("type:"))
+    dynamic_pos = tuple([(predicate, *[get(a, a) for a in terms])
+                         for predicate, terms in compiled.dynamic_pos])
     source = rule.source
     if blocking is not None:
         if isinstance(source, NormalAxiom):
             head = (source.predicate, *_ground(source.head_args, binding))
             result.blocked_axioms.append((head, dynamic_pos, blocking))
         return
+    negative = tuple([(predicate, *[get(a, a) for a in terms])
+                      for predicate, terms in compiled.dynamic_neg])
+    static_pos = tuple([(predicate, *[get(a, a) for a in terms])
+                        for predicate, terms in compiled.static_pos])
     if isinstance(source, NormalAxiom):
         head = (source.predicate, *_ground(source.head_args, binding))
-        result.axioms.append(GroundAxiom(head, dynamic_pos, tuple(negative), static_pos))
+        result.axioms.append(GroundAxiom(head, dynamic_pos, negative, static_pos))
         if index.add(head):
             delta.append(head)
         return
@@ -358,12 +400,12 @@ def _emit(rule: _Rule, binding: dict[str, str], index: FactIndex, init: set[Fact
                 possible &= (fact in init) == literal.positive
         if not possible:
             continue
-        fact = (effect.predicate, *_ground(effect.args, binding))
+        fact = (effect.predicate, *[get(a, a) for a in effect.args])
         effects.append(GroundEffect(tuple(cond_pos), tuple(cond_neg), fact, effect.positive))
         if effect.positive and index.add(fact):
             delta.append(fact)
-    args = tuple(binding[p] for p in source.parameters)
-    result.actions.append(GroundAction(source.name, args, dynamic_pos, tuple(negative),
+    args = tuple([binding[p] for p in source.parameters])
+    result.actions.append(GroundAction(source.name, args, dynamic_pos, negative,
                                        tuple(effects), cost, static_pos, cost_term))
 
 

@@ -23,6 +23,8 @@ class HeuristicResult:
 
 
 MAX_NEGATION_RULES = 64
+# Heuristic values remembered per heuristic object (a state vector's bytes -> result).
+MAX_MEMO = 100_000
 
 
 class FFHeuristic:
@@ -93,7 +95,13 @@ class FFHeuristic:
         self.achievers = achievers
         lists = [achievers[f] for f in self.achiever_facts]
         self.ach_flat, self.ach_starts = _flatten(lists, 0)
+        # Segment (position in achiever_facts) of every ach_flat entry, for picking each
+        # fact's best supporter with array operations.
+        counts = np.diff(np.append(self.ach_starts, len(self.ach_flat)))
+        self.ach_segment = np.repeat(np.arange(len(lists)), counts)
+        self.ach_counts = counts
         self.has_ops = len(preconditions) > 0
+        self._memo: dict[bytes, HeuristicResult] = {}
 
     @staticmethod
     def _negations(task: Task) -> tuple[dict[int, int], dict[int, list[list[int]]],
@@ -158,6 +166,18 @@ class FFHeuristic:
         return negation, derived_rules, deleters
 
     def __call__(self, vector: np.ndarray) -> HeuristicResult:
+        # Memoised per state: enforced hill-climbing, its local searches and the greedy
+        # search it falls back to evaluate many of the same states.
+        key = vector.tobytes()
+        result = self._memo.get(key)
+        if result is None:
+            if len(self._memo) >= MAX_MEMO:
+                self._memo.clear()
+            result = self._evaluate(vector)
+            self._memo[key] = result
+        return result
+
+    def _evaluate(self, vector: np.ndarray) -> HeuristicResult:
         task = self.task
         if vector[task.goal]:
             return HeuristicResult(0.0, [])
@@ -171,8 +191,10 @@ class FFHeuristic:
             return HeuristicResult(INFINITY, [])
         op_cost = self.costs
         for _ in range(self.num_facts + 1):
-            op_cost = np.add.reduceat(fact_cost[self.pre_flat], self.pre_starts) + self.costs
-            best = np.minimum.reduceat(op_cost[self.ach_flat], self.ach_starts)
+            op_cost = np.add.reduceat(fact_cost[self.pre_flat], self.pre_starts)
+            op_cost += self.costs
+            candidate_costs = op_cost[self.ach_flat]
+            best = np.minimum.reduceat(candidate_costs, self.ach_starts)
             current = fact_cost[self.achiever_facts]
             improved = best < current
             if not improved.any():
@@ -180,21 +202,32 @@ class FFHeuristic:
             fact_cost[self.achiever_facts[improved]] = best[improved]
         if fact_cost[task.goal] == INFINITY:
             return HeuristicResult(INFINITY, [])
-        return self._relaxed_plan(vector, fact_cost, op_cost)
+        return self._relaxed_plan(fact_cost, candidate_costs, best)
 
-    def _relaxed_plan(self, vector: np.ndarray, fact_cost: np.ndarray, op_cost: np.ndarray
-                      ) -> HeuristicResult:
+    def _best_supporters(self, candidate_costs: np.ndarray, best: np.ndarray) -> np.ndarray:
+        """Per fact, its first achiever of minimal cost (-1: none), as ``(num_facts,)``."""
+        hits = np.flatnonzero(candidate_costs == np.repeat(best, self.ach_counts))
+        segments = self.ach_segment[hits]
+        first = np.ones(len(hits), dtype=bool)
+        first[1:] = segments[1:] != segments[:-1]
+        supporters = np.full(self.num_facts, -1, dtype=np.int64)
+        supporters[self.achiever_facts[segments[first]]] = self.ach_flat[hits[first]]
+        return supporters
+
+    def _relaxed_plan(self, fact_cost: np.ndarray, candidate_costs: np.ndarray,
+                      best: np.ndarray) -> HeuristicResult:
         # Facts of cost 0 hold already (or are reached by cost-0 axioms from what holds).
+        supporters = self._best_supporters(candidate_costs, best).tolist()
+        zero = (fact_cost == 0.0).tolist()
         chosen: set[int] = set()
         marked: set[int] = set()
         stack = [self.task.goal]
         while stack:
             fact = stack.pop()
-            if fact in marked or fact_cost[fact] == 0.0:
+            if fact in marked or zero[fact]:
                 continue
             marked.add(fact)
-            candidates = self.achievers[fact]
-            supporter = min(candidates, key=lambda i: op_cost[i])
+            supporter = supporters[fact]
             if supporter in chosen:
                 continue
             chosen.add(supporter)
@@ -202,6 +235,6 @@ class FFHeuristic:
         value = float(sum(self.costs[i] for i in chosen))
         preferred = sorted({
             self.origin[i] for i in chosen
-            if self.origin[i] >= 0 and all(fact_cost[f] == 0.0 for f in self.preconditions[i])
+            if self.origin[i] >= 0 and all(zero[f] for f in self.preconditions[i])
         })
         return HeuristicResult(value, preferred)

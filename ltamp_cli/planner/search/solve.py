@@ -36,6 +36,11 @@ class DiscreteResult:
     def solved(self) -> bool:
         return self.actions is not None
 
+    @property
+    def capped(self) -> bool:
+        """Not solved only because the search's expansion budget ran out."""
+        return self.outcome is not None and self.outcome.capped
+
 
 def type_closure(domain: Domain) -> dict[str, list[str]]:
     """Each type's ancestors (itself included, and ``object``)."""
