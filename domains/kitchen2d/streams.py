@@ -40,7 +40,7 @@ can report how many controls the pre-check rejected.
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Collection, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -87,10 +87,12 @@ class _GiveUp(Exception):
     """Raised inside a learned stream's output mapping to end that stream call."""
 
 
-def learned_configs(world: Mapping[str, Any]) -> dict[str, LearnedStreamConfig]:
+def learned_configs(world: Mapping[str, Any], needed: Collection[str] = tuple(LEARNED_STREAMS)
+                    ) -> dict[str, LearnedStreamConfig]:
     """Model and sampler of each learned stream: ``world.learned_streams.<stream>`` if given
     (paths relative to this folder), else ``world.models.<skill>`` (the older form, model
-    only) or the shipped model, with the stream's default sampler."""
+    only) or the shipped model, with the stream's default sampler. The model directories of
+    the ``needed`` streams must exist."""
     configs = learned_stream_configs(world, HERE)
     unknown = sorted(set(configs) - set(LEARNED_STREAMS))
     if unknown:
@@ -110,7 +112,7 @@ def learned_configs(world: Mapping[str, Any]) -> dict[str, LearnedStreamConfig]:
             configs[name] = LearnedStreamConfig.from_mapping(
                 {"model": model, "sampler": sampler}, HERE, name)
             where = f"world.models.{skill}" if skill in models else name
-        if not (configs[name].model_dir / "model.json").is_file():
+        if name in needed and not (configs[name].model_dir / "model.json").is_file():
             raise InputError(f"{where}: no model directory at {configs[name].model_dir}")
     return configs
 
@@ -411,7 +413,15 @@ def _tuple(values: np.ndarray) -> tuple[float, ...]:
 def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str, Any]:
     scene = scene_from_world(world, rng)  # first draws: the executor repeats them
     geometry = KitchenGeometry(scene, motion_time=float(world.get("motion_time", 1.0)))
-    configs = learned_configs(world)
+    # A learned stream is built (its model loaded) only if the scene has something it can act
+    # on: a cup holding a material to pour, a spoon and a bowl or cup of material, a block.
+    poured = any(o.kind == "cup" and o.material for o in scene.objects)
+    scooped = any(o.kind == "spoon" for o in scene.objects) and any(
+        o.kind in ("cup", "bowl") and o.material for o in scene.objects)
+    pushed = any(o.kind == "block" for o in scene.objects)
+    needed = {name for name, flag in (("sample-pour", poured), ("sample-scoop", scooped),
+                                      ("sample-push", pushed)) if flag}
+    configs = learned_configs(world, needed)
     pour_config, scoop_config = pour_skill.PourConfig(), scoop_skill.ScoopConfig()
     prechecks = _prechecks(world, {"pour": pour_config, "scoop": scoop_config})
     # Each model directory is loaded once per planning run, when its stream is first built.
@@ -472,11 +482,10 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
 
     cheap = StreamInfo(overhead=0.01)
     skill = StreamInfo(p_success=0.8, overhead=0.5)
-    kinds = {o.kind for o in scene.objects}
     bindings: dict[str, Any] = {
-        name: learned_stream(name).binding(skill) if needed else (lambda *inputs: iter(()))
-        for name, needed in (("sample-pour", "cup" in kinds), ("sample-scoop", "spoon" in kinds),
-                             ("sample-push", "block" in kinds))
+        name: learned_stream(name).binding(skill) if name in needed else (
+            lambda *inputs: iter(()))
+        for name in LEARNED_STREAMS
     }
     return bindings | {
         "sample-placement": Binding(sample_placement, cheap),
