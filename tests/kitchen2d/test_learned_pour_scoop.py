@@ -131,9 +131,12 @@ def test_yaml_chooses_each_learned_streams_sampler(tmp_path: Path) -> None:
         made = stream.sampler_for("pitcher", "cup", "p_cup", "table")
         assert type(made) is kind
         assert (stream.kernel is not None) == (sampler == "diverse-lk")
-    # The coffee problem names its models the older way (world.models): default samplers.
+    # The older form names the models only (world.models): default samplers.
     coffee = load_problem(PROBLEMS / "coffee.yaml")
-    streams = coffee.streams_factory(dict(coffee.world), np.random.default_rng(0))
+    world = {key: value for key, value in coffee.world.items() if key != "learned_streams"}
+    world["models"] = {"pour": "../../models/kitchen2d/pour",
+                       "scoop": "../../models/kitchen2d/scoop"}
+    streams = coffee.streams_factory(world, np.random.default_rng(0))
     scoop = streams["sample-scoop"].function.__self__.stream
     assert isinstance(scoop, GoodScoop) and scoop.config.sampler == "diverse"
     assert scoop.config.model_dir == (ROOT / "models" / "kitchen2d" / "scoop").resolve()
