@@ -142,8 +142,18 @@ class PlannerState:
     # enumerated for that purpose (eager evaluation, incremental sampling): later rounds only
     # join what was added since (facts only grow).
     enumerated: dict[tuple[str, str], dict[str, int]] = field(default_factory=dict)
+    # Stream name -> every input tuple over real facts found so far (in discovery order),
+    # so that optimistic evaluations do not join the real facts again each time.
+    real_inputs: dict[str, list[tuple[str, ...]]] = field(default_factory=dict)
     # Expansions allowed to a budgeted search (see :meth:`search`).
     search_budget: int = INITIAL_SEARCH_EXPANSIONS
+
+    def all_real_bindings(self, external: External) -> list[tuple[str, ...]]:
+        """Every input tuple of ``external`` whose domain facts are real (kept up to date
+        semi-naively as facts grow)."""
+        known = self.real_inputs.setdefault(external.name, [])
+        known.extend(self.new_bindings(external, "real"))
+        return known
 
     def new_bindings(self, external: External, purpose: str) -> list[tuple[str, ...]]:
         """Input tuples of ``external`` over the real facts that an earlier call with the

@@ -51,14 +51,19 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
     evaluation = OptimisticEvaluation(index, dict(state.function_values),
                                       dict(state.object_types))
     done: set[InstanceKey] = set()
-    # Semi-naive fixpoint: after a first full round, each round only joins the facts the
-    # previous round added. An instance cut by the bound stays cut (its level depends only on
-    # its inputs), so it is not retried.
+    # Semi-naive fixpoint: the first round takes the inputs over real facts (enumerated
+    # incrementally across evaluations), each later round only joins the facts the previous
+    # round added. An instance cut by the bound stays cut (its level depends only on its
+    # inputs), so it is not retried.
     since: dict[str, int] | None = None
     while True:
         before = index.sizes()
         for external in state.externals.values():
-            for inputs in list(state.bindings_of(external, index, since)):
+            if since is None:
+                candidates = list(state.all_real_bindings(external))
+            else:
+                candidates = list(state.bindings_of(external, index, since))
+            for inputs in candidates:
                 key = (external.name, inputs)
                 if key in done:
                     continue
