@@ -127,15 +127,18 @@ class _Step:
     checks: tuple[tuple[int, int], ...]  # repeated new variable within the literal
 
 
-def _compile_join(literals: Sequence[LiftedLiteral], bound: set[str]) -> list[_Step]:
-    """Order literals greedily (most bound first) and precompute lookups."""
+def _compile_join(literals: Sequence[LiftedLiteral], bound: set[str],
+                  index: FactIndex | None = None) -> list[_Step]:
+    """Order literals greedily (most bound first; among equally bound ones, the predicate
+    with the fewest facts in ``index``) and precompute lookups."""
     remaining = list(literals)
     bound = set(bound)
     steps = []
+    sizes = index.by_predicate if index is not None else {}
     while remaining:
-        def score(lit: LiftedLiteral) -> tuple[int, int]:
+        def score(lit: LiftedLiteral) -> tuple[int, int, int]:
             known = sum(1 for a in lit.args if not is_variable(a) or a in bound)
-            return (-(known == len(lit.args)), -known)
+            return (-(known == len(lit.args)), -known, len(sizes.get(lit.predicate, ())))
 
         literal = min(remaining, key=score)
         remaining.remove(literal)
@@ -289,10 +292,17 @@ def ground_task(
 
     seen: set[tuple[int, tuple[str, ...]]] = set()
     result = Grounding([], [], index.members, frozenset(), frozenset(derived))
-    delta: list[Fact] = ordered_init
+    # Semi-naive: one full join per rule over the initial facts, then joins triggered only by
+    # the facts that rules add (a rule instance over initial facts is found once, not once
+    # per positive literal).
+    delta: list[Fact] = []
     for rule in rules:
         if not rule.positive:  # e.g. a parameterless action with an empty precondition
             _emit(rule, {}, index, init_facts, fluent, function_values, seen, result, delta)
+            continue
+        for binding in _run_join(_compile_join(rule.positive, set(), index), index, {}):
+            _emit(rule, binding, index, init_facts, fluent, function_values, seen, result,
+                  delta)
     while delta:
         current, delta = delta, []
         for fact in current:
@@ -303,7 +313,7 @@ def ground_task(
                 steps = rule.joins.get(position)
                 if steps is None:
                     others = [lit for i, lit in enumerate(rule.positive) if i != position]
-                    steps = _compile_join(others, set(start))
+                    steps = _compile_join(others, set(start), index)
                     rule.joins[position] = steps
                 for binding in _run_join(steps, index, start):
                     _emit(rule, binding, index, init_facts, fluent, function_values, seen,
@@ -311,6 +321,10 @@ def ground_task(
     result.static_predicates = frozenset(
         {fact[0] for fact in index.members} - fluent
     )
+    # A canonical order (the search breaks ties by operator index): plans then do not
+    # depend on the order in which the joins happened to find the instances.
+    result.actions.sort(key=lambda a: (a.name, a.args, a.pre_pos, a.pre_neg, a.static_pre))
+    result.axioms.sort(key=lambda a: (a.head, a.body_pos, a.body_neg, a.static_pos))
     return result
 
 
