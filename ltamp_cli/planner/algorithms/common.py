@@ -310,7 +310,7 @@ class PlannerState:
             return
         bindings = join(literals, index) if since is None else join_new(literals, index, since)
         for binding in bindings:
-            yield tuple(binding[v] for v in inputs)
+            yield tuple([binding[v] for v in inputs])
 
     def result(self, status: str, discrete: DiscreteResult | None,
                preimage: Iterable[Fact] = ()) -> PlanResult:

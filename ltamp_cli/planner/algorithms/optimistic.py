@@ -51,6 +51,7 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
     evaluation = OptimisticEvaluation(index, dict(state.function_values),
                                       dict(state.object_types))
     done: set[InstanceKey] = set()
+    levels = evaluation.level
     # Semi-naive fixpoint: the first round takes the inputs over real facts (enumerated
     # incrementally across evaluations), each later round only joins the facts the previous
     # round added. An instance cut by the bound stays cut (its level depends only on its
@@ -70,7 +71,7 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
                 done.add(key)
                 # Summed input complexity: values built from several placeholders cost more,
                 # so low bounds favour plans over real values.
-                level = sum(evaluation.level.get(x, 0) for x in inputs)
+                level = sum([levels.get(x, 0) for x in inputs])
                 real = state.instances.get(key)
                 if real is not None:
                     if real.disabled or (real.exhausted and not _pending_test(real)):
