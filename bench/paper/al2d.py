@@ -40,8 +40,11 @@ ARGMAX_LEARNERS = ("nn-r", "nn-c")
 SIZES: dict[str, dict[str, Any]] = {
     "smoke": {"skills": ["push"], "budget": 10, "init": 5, "eval_every": 5, "contexts": 2,
               "seeds": 1, "candidates": 2000},
+    # quick: Box2D pour and scoop trials cost ~0.3-0.5 s CPU each, so one seed; push trials
+    # cost milliseconds, so push gets 3 seeds x 20 contexts (``per_skill`` overrides).
     "quick": {"skills": ["pour", "scoop", "push"], "budget": 30, "init": 10, "eval_every": 10,
-              "contexts": 5, "seeds": 1, "candidates": 5000},
+              "contexts": 5, "seeds": 1, "candidates": 5000,
+              "per_skill": {"push": {"contexts": 20, "seeds": 3}}},
     # The paper does not state its repetitions for this figure; 5 seeds x 50 contexts.
     "full": {"skills": ["pour", "scoop", "push"], "budget": 100, "init": 10, "eval_every": 10,
              "contexts": 50, "seeds": 5, "candidates": 10_000},
@@ -57,16 +60,17 @@ def run(ctx: Context) -> dict[str, Any]:
     skills: dict[str, Any] = {}
     try:
         for skill in sizes["skills"]:
+            own = {**sizes, **sizes.get("per_skill", {}).get(skill, {})}
             spec = backend.skills()[skill]
             context_rng = np.random.default_rng([2024, len(skill)])
             contexts = np.array([backend.sample_context(skill, context_rng)
-                                 for _ in range(sizes["contexts"])]).reshape(-1, spec.context.dim)
+                                 for _ in range(own["contexts"])]).reshape(-1, spec.context.dim)
 
             def is_valid(context: np.ndarray, controls: np.ndarray, skill: str = skill
                          ) -> np.ndarray:
                 return backend.is_valid(skill, context, controls)
 
-            jobs = [(learner, seed) for learner in LEARNERS for seed in range(sizes["seeds"])]
+            jobs = [(learner, seed) for learner in LEARNERS for seed in range(own["seeds"])]
             for learner, seed in tqdm(jobs, desc=f"al2d {skill}", disable=not ctx.progress):
                 evaluator = SkillEvaluator(
                     spec, None, live_score(backend, skill, seed=1000 + seed), contexts,
@@ -87,7 +91,7 @@ def run(ctx: Context) -> dict[str, Any]:
                                  "run_s": round(seconds, 2)})
             skill_rows = [r for r in rows if r["skill"] == skill]
             skills[skill] = {"summary": summarize(skill_rows),
-                             "n_contexts": len(contexts)}
+                             "n_contexts": len(contexts), "seeds": own["seeds"]}
     finally:
         backend.close()
     panels = [{"title": f"Kitchen2D {skill}", "ylabel": "success rate of θ*",
@@ -95,7 +99,8 @@ def run(ctx: Context) -> dict[str, Any]:
                                       LABELS)}
               for skill in sizes["skills"]]
     plot_panels(panels, ctx.out / f"{NAME}.png",
-                title=f"Kitchen2D active learning ({ctx.mode}, {sizes['seeds']} seed(s))")
+                title=f"Kitchen2D active learning ({ctx.mode}; seeds: " + ", ".join(
+                    f"{k} {v['seeds']}" for k, v in skills.items()) + ")")
     payload = {"sizes": sizes, "learners": LEARNERS, "skills": skills, "runs": rows,
                "pngs": [f"{NAME}.png"]}
     write_json(ctx, NAME, payload, started)

@@ -1,7 +1,8 @@
 """Experiment 2 — Kitchen3D supervised comparison (the paper's ``fig:nn-rf-gp`` and
 ``fig:kernel``).
 
-Learners trained on uniformly random trials from the pool (in a seeded random order):
+Learners trained on uniformly random trials from the pool (pre-check-valid, as the paper's;
+see :mod:`bench.paper.pools`), in a seeded random order per shuffle:
 NN_c, NN_r, RF_c, RF_r (scikit-learn) and the GP with the MLP kernel. Top: success rate of the
 most confident valid control (1,000 random candidates, as the paper) for held-out contexts,
 simulated on PyBullet; bottom: F1 on the held-out test trials. Kernel comparison: the GP's
