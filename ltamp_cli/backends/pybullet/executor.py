@@ -61,7 +61,8 @@ from ltamp_cli.backends.pybullet.robot.arm import (
     PANDA_FINGER_JOINTS,
     PANDA_HOME,
 )
-from ltamp_cli.backends.pybullet.robot.pose import Pose
+from ltamp_cli.backends.pybullet.robot.cartesian import follow_tool_path
+from ltamp_cli.backends.pybullet.robot.pose import Pose, rotation_distance
 from ltamp_cli.backends.pybullet.robot.scene import KitchenScene, build_kitchen_scene
 from ltamp_cli.backends.pybullet.skills.stir import TipTracker
 from ltamp_cli.backends.pybullet.tamp.grasping import object_grasps
@@ -85,6 +86,13 @@ SCOOP_CONTAINS_FRACTION = 0.5
 SCOOP_CONTAINS_MIN_BEADS = 3
 #: Joint motor force (N·m) holding a driven arm's joint velocities during a push step.
 DRIVE_FORCE_N = 500.0
+#: A pick looks at its object first: when the object stands more than this far (m) or
+#: turned more than :data:`REPERCEIVE_RAD` from where the plan expected it, the approach is
+#: re-solved relative to where it is (closed-loop pick); beyond :data:`REPERCEIVE_MAX_M`
+#: the pick fails.
+REPERCEIVE_M = 0.003
+REPERCEIVE_RAD = 0.05
+REPERCEIVE_MAX_M = 0.05
 #: Object kinds that are tools: pinned where they stand while not held.
 TOOL_KINDS = ("spoon", "stirrer")
 #: A held object's mass is multiplied by this while it is carried. The carry is kinematic
@@ -380,9 +388,45 @@ class Kitchen3DRun:
                                   self.settings.carry_acceleration, self.world.config.time_step)
         self._follow_dense(path.arm, dense, held, drive=False)
 
+    def perceived_approach(self, name: str, grasp: Any, path: ArmPath) -> np.ndarray:
+        """The approach ``(n, 7)`` of ``path`` moved with the object: the plan's approach
+        when ``name`` stands where the plan expected it (the pose the grasp reaches at the
+        path's end), otherwise the hand poses of the approach carried along with the
+        object's actual offset and re-solved by IK from the current configuration."""
+        arm = self.scene.arms[path.arm]
+        configurations = np.asarray(path.configurations)
+        current = arm.get_configuration()
+        in_hand = self.grasp_pose(name, grasp)
+        expected = arm.forward_kinematics(configurations[-1]) @ in_hand
+        hands = [arm.forward_kinematics(q) for q in configurations]
+        arm.set_configuration(current)
+        actual = Pose(*self.bodies[name].pose())
+        offset = float(np.linalg.norm(actual.position - expected.position))
+        turn = rotation_distance(actual, expected)
+        if offset <= REPERCEIVE_M and turn <= REPERCEIVE_RAD:
+            return configurations
+        if offset > REPERCEIVE_MAX_M:
+            raise ActionFailed(f"pick {name}: it stands {offset:.3f} m from where it was "
+                               "expected")
+        shift = actual @ expected.inverse()
+        # From where the hand is now (the plan's pre-grasp) over to the shifted approach.
+        here = arm.end_effector_pose()
+        found = follow_tool_path(arm, [here, *(shift @ hand for hand in hands)], Pose(),
+                                 np.random.default_rng(0), start_configuration=current)
+        if not found.success or found.configurations is None:
+            raise ActionFailed(f"pick {name}: no approach to where it stands "
+                               f"({offset:.3f} m off): {found.status}")
+        self.log.append({"action": "perceive", "object": name, "offset_m": offset,
+                         "turn_rad": turn})
+        approach = np.asarray(found.configurations).copy()
+        approach[0] = current  # the IK solve of the hand's own pose: back to it exactly
+        return approach
+
     def pick(self, name: str, grasp: Any, path: ArmPath) -> None:
         arm = self.scene.arms[path.arm]
         arm.open_gripper()
+        approach = self.perceived_approach(name, grasp, path)
+        path = ArmPath(path.arm, approach, path.kind, path.held, path.touching, path.target)
         self.follow(path.arm, path.configurations, self.settings.free_speed / 2)
         width = object_grasps(self.spec.objects[name], self.spec.n_arms)[int(grasp[1])].width
         arm.set_finger_opening(max(width - 0.002, 0.0))
