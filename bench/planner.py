@@ -10,7 +10,8 @@ timeouts / infeasible counts, median and max wall time, median CPU time of this 
 (the machine is shared), median cost and how many plans validated.
 
 Targets (median wall time, no timeouts, per algorithm): ``kitchen_symbolic`` ≤ 0.2 s,
-``tamp2d_4blocks`` ≤ 0.1 s. Printed as PASS/FAIL lines; the exit code does not depend on them.
+``tamp2d_4blocks`` ≤ 0.1 s. Printed as PASS/FAIL lines, with a second verdict on median CPU
+time (what a quiet machine's wall time would be); the exit code does not depend on them.
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/planner.py [--seeds 5] [--max-time 10]
         [--examples a,b] [--algorithms incremental,focused] [--histories cold,warm]
@@ -102,13 +103,16 @@ def check_targets(summary: list[dict[str, Any]]) -> list[dict[str, Any]]:
         limit = TARGETS_S.get(row["example"])
         if limit is None:
             continue
-        passed = (row["median_wall_s"] <= limit and row["timeouts"] == 0
-                  and row["solved"] == row["runs"] and row["valid"] == row["solved"])
+        complete = (row["timeouts"] == 0 and row["solved"] == row["runs"]
+                    and row["valid"] == row["solved"])
+        # On a loaded machine wall time overstates single-core speed; the CPU verdict says
+        # what a quiet machine would show.
         checks.append({"example": row["example"], "algorithm": row["algorithm"],
                        "history": row["history"],
                        "target_median_s": limit, "median_wall_s": row["median_wall_s"],
                        "median_cpu_s": row["median_cpu_s"], "timeouts": row["timeouts"],
-                       "passed": passed})
+                       "passed": complete and row["median_wall_s"] <= limit,
+                       "passed_cpu": complete and row["median_cpu_s"] <= limit})
     return checks
 
 
@@ -175,10 +179,12 @@ def main(argv: list[str] | None = None) -> int:
     print()
     for check in checks:
         verdict = "PASS" if check["passed"] else "FAIL"
+        cpu_verdict = "PASS" if check["passed_cpu"] else "FAIL"
         print(f"{verdict}: {check['example']} / {check['algorithm']} / {check['history']}: "
               f"median "
               f"{check['median_wall_s']:.4f} s wall (target ≤ {check['target_median_s']} s; "
-              f"CPU {check['median_cpu_s']:.4f} s), {check['timeouts']} timeout(s)")
+              f"CPU {check['median_cpu_s']:.4f} s: {cpu_verdict}), "
+              f"{check['timeouts']} timeout(s)")
     invalid = [r for r in runs if r["valid"] is False]
     for row in invalid:
         print(f"INVALID PLAN: {row['example']} / {row['algorithm']} / seed {row['seed']}: "

@@ -21,8 +21,7 @@ MakeProblem = Callable[..., Path]
 
 FAST_EXAMPLES = ("blocksworld", "tamp2d_blocked", "tamp2d_4blocks", "synthetic_goodregion")
 # kitchen_symbolic takes ~0.5 s to plan per algorithm now (see bench/planner.py; ~2-3 s
-# with validation on a loaded machine), so it is no
-# longer a slow test.
+# with validation on a loaded machine), so it is no longer a slow test.
 EXAMPLE_CASES = [(name, algorithm) for name in (*FAST_EXAMPLES, "kitchen_symbolic")
                  for algorithm in ALGORITHMS]
 

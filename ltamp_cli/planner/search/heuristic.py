@@ -196,10 +196,10 @@ class FFHeuristic:
             candidate_costs = op_cost[self.ach_flat]
             best = np.minimum.reduceat(candidate_costs, self.ach_starts)
             current = fact_cost[self.achiever_facts]
-            improved = best < current
-            if not improved.any():
+            if not (best < current).any():
                 break
-            fact_cost[self.achiever_facts[improved]] = best[improved]
+            # Scatter the element-wise minimum: cheaper than boolean-indexing the changes.
+            fact_cost[self.achiever_facts] = np.minimum(best, current)
         if fact_cost[task.goal] == INFINITY:
             return HeuristicResult(INFINITY, [])
         return self._relaxed_plan(fact_cost, candidate_costs, best)
