@@ -3,10 +3,14 @@
 The arm is driven kinematically along the planned joint paths (one configuration per
 simulation step, at a bounded joint speed); a held object is rigidly carried at
 ``EE pose @ grasp`` with the velocity that reaches its next pose, so contacts push beads the
-way the pour trials do. Cups, blocks and beads are dynamic: a released object falls and
-settles, beads slosh and pour under gravity. Picks verify that both fingers are at the
-object before carrying it; places verify where the object came to rest. The goal is checked
-from bead positions and object poses, never from the plan.
+way the pour trials do (and is made heavy while held, so a bead pile cannot push it down
+within a step); motions carrying contents start and stop each path segment at a bounded
+acceleration. The fingers are kinematic too (held where they were set). Cups, blocks and
+beads are dynamic: a released object falls and settles, beads slosh and pour under gravity.
+Picks are closed-loop: they read where the object actually stands and re-solve the
+approach when it is off its planned pose, then verify that both fingers are at the object
+before carrying it; places verify where the object came to rest. The goal is checked from
+bead positions and object poses, never from the plan.
 
 Actions (the arm is the last argument; every path value carries its arm index, so two-arm
 plans need nothing more): ``move-free``, ``move-holding``, ``pick``, ``place``, ``pour``,
