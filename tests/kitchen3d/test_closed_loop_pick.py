@@ -3,6 +3,7 @@ and re-solves the approach relative to it, as a robot that re-perceives before g
 
 from __future__ import annotations
 
+import importlib.util
 from pathlib import Path
 
 import numpy as np
@@ -17,9 +18,18 @@ from ltamp_cli.planner.problem import load_problem
 
 ROOT = Path(__file__).resolve().parents[2]
 BLOCK_XY = (-0.068, 0.15)
+HAS_SAPIEN = importlib.util.find_spec("sapien") is not None
 
 
-def _pick_block(offset: tuple[float, float], perceive: bool) -> Kitchen3DRun:
+def _run_class(backend: str) -> type[Kitchen3DRun]:
+    if backend == "sapien":
+        from ltamp_cli.backends.sapien.executor import SapienKitchen3DRun
+
+        return SapienKitchen3DRun
+    return Kitchen3DRun
+
+
+def _pick_block(offset: tuple[float, float], perceive: bool, backend: str) -> Kitchen3DRun:
     """Plan a pick of pour_blocked's block where the problem has it; execute it with the
     block standing ``offset`` (m) from there. Returns the run (closed by the caller)."""
     spec = scene_from_world(load_problem(ROOT / "problems/kitchen3d/pour_blocked.yaml").world)
@@ -33,7 +43,8 @@ def _pick_block(offset: tuple[float, float], perceive: bool) -> Kitchen3DRun:
     finally:
         planning.close()
     actual = (BLOCK_XY[0] + offset[0], BLOCK_XY[1] + offset[1])
-    run = Kitchen3DRun(spec, {"cup": (0.0, 0.15), "block": actual}, 0, ExecutionSettings(), None)
+    run = _run_class(backend)(spec, {"cup": (0.0, 0.15), "block": actual}, 0,
+                              ExecutionSettings(), None)
     if not perceive:  # the open-loop pick, for contrast
         run.perceived_approach = lambda name, grasp, path: path.configurations  # type: ignore[method-assign]
     try:
@@ -47,12 +58,14 @@ def _pick_block(offset: tuple[float, float], perceive: bool) -> Kitchen3DRun:
 
 
 @pytest.mark.slow
-def test_a_pick_reaches_an_object_that_stands_off_its_planned_pose() -> None:
+@pytest.mark.parametrize("backend", ["pybullet", pytest.param("sapien", marks=pytest.mark.skipif(
+    not HAS_SAPIEN, reason="sapien is not installed"))])
+def test_a_pick_reaches_an_object_that_stands_off_its_planned_pose(backend: str) -> None:
     # 2.5 cm along the fingers' closing direction (away from the cup): the open-loop pick
     # closes one finger inside it and the other beside it.
     with pytest.raises(ActionFailed, match="fingers"):
-        _pick_block((-0.025, 0.0), perceive=False).close()
-    run = _pick_block((-0.025, 0.0), perceive=True)
+        _pick_block((-0.025, 0.0), perceive=False, backend=backend).close()
+    run = _pick_block((-0.025, 0.0), perceive=True, backend=backend)
     try:
         perceived = [e for e in run.log if e["action"] == "perceive"]
         assert len(perceived) == 1 and perceived[0]["offset_m"] == pytest.approx(0.025, abs=3e-3)

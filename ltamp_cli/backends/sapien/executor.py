@@ -51,6 +51,7 @@ from ltamp_cli.backends.pybullet.robot.scene import KitchenScene, build_kitchen_
 from ltamp_cli.backends.pybullet.tamp.grasping import object_grasps
 from ltamp_cli.backends.pybullet.tamp.planning import pose_of
 from ltamp_cli.backends.pybullet.tamp.scene import SceneSpec
+from ltamp_cli.backends.pybullet.tamp.values import ArmPath
 from ltamp_cli.backends.pybullet.world import PhysicsWorld
 from ltamp_cli.backends.sapien.bodies import (
     Beads,
@@ -380,6 +381,9 @@ class SapienKitchen3DRun(Kitchen3DRun):
         arm = self.scene.arms[path.arm]
         width = object_grasps(self.spec.objects[name], self.spec.n_arms)[int(grasp[1])].width
         self._preshape(path.arm, width)
+        # Closed-loop, as in PyBullet: the approach moves with the object if it stands off.
+        path = ArmPath(path.arm, self.perceived_approach(name, grasp, path), path.kind,
+                       path.held, path.touching, path.target)
         self.follow(path.arm, path.configurations, self.settings.free_speed / 2)
         arm.set_finger_opening(max(width - 0.002, 0.0))
         gaps = self.finger_gaps(path.arm, name)
