@@ -192,3 +192,38 @@ def test_kernel_learning_bench_plans_tasks_1_to_3_with_each_sampler(tmp_path: Pa
             stream = streams[name].function.__self__.stream
             assert stream.config.sampler == sampler
             assert stream.config.kernel_path.parent == tmp_path
+
+
+def test_push_model_is_confident_only_on_the_strip_the_sampling_table_uses() -> None:
+    """Why the sampling table's push row draws goals on the push model's training strip: off
+    it the GP (goal_y found irrelevant) is confidently wrong — its most confident push for
+    goal (2.7, -3.9) has μ/σ > 1 and fails in a real push trial — while on it the most
+    confident push succeeds."""
+    if str(ROOT) not in sys.path:
+        sys.path.insert(0, str(ROOT))
+    from bench.paper.sampling_table import LiveScores, _push_strip
+    from ltamp_cli.backends import load_backend
+    from ltamp_cli.backends.box2d.tamp import section_mask
+    from ltamp_cli.sampling.superlevel import build_superlevel_set
+
+    strip = _push_strip("models/kitchen2d/push")
+    assert strip == {"goal_x_abs": [3.0, 5.0], "goal_y_abs_max": 0.5}
+    backend = load_backend("box2d")
+    try:
+        scores = LiveScores(backend, "push", strip)
+        rng = np.random.default_rng(0)
+        goals = np.array([scores.sample_context("push", rng) for _ in range(50)])
+        assert ((np.abs(goals[:, 0]) >= 3.0) & (np.abs(goals[:, 0]) <= 5.0)).all()
+        assert (np.abs(goals[:, 1]) <= 0.5).all() and (goals[:, 0] < 0).any()
+        model = load_model(ROOT / "models" / "kitchen2d" / "push").model
+        for goal, succeeds in (((2.7, -3.88), False), ((-4.5, 0.0), True)):
+            context = np.array(goal)
+            level = build_superlevel_set(
+                model, context, np.random.default_rng(1),
+                is_valid=lambda c, u: scores.is_valid("push", c, u))
+            star = level.to_physical(level.theta_star)
+            assert section_mask(context, star)[0] and level.phi_star > 1.0
+            score = backend.run_trial("push", context, star[0], 4242).score
+            assert (score > 0) == succeeds, (goal, score)
+    finally:
+        backend.close()
