@@ -27,8 +27,9 @@ MIN_FAILURE_PROBABILITY = 1e-3
 # input is cheaper than the searches and failed stream plans its optimistic placeholders
 # would cause. The threshold is far above the cost of closed-form Python samplers
 # (~10-50 us) and below GP predictions and simulations, so measured time noise does not
-# flip the decision in practice.
-AUTO_EAGER_MIN_CALLS = 3
+# flip the decision in practice; with the current run's calls timed in CPU seconds, one
+# call is enough to decide (three made cold kitchen_symbolic runs search 5-6 times, not 4).
+AUTO_EAGER_MIN_CALLS = 1
 AUTO_EAGER_MAX_OVERHEAD_S = 2.5e-4
 
 InstanceKey = tuple[str, tuple[str, ...]]
