@@ -13,12 +13,16 @@ from dataclasses import dataclass, field
 
 from ltamp_cli.planner.algorithms.common import (
     PlannerState,
-    certified_facts,
     external_inputs,
     instantiate_atoms,
 )
 from ltamp_cli.planner.algorithms.effort import order_by_effort
-from ltamp_cli.planner.pddl.syntax import OBJECT_TYPE, Stream, StreamFunction
+from ltamp_cli.planner.pddl.syntax import (
+    OBJECT_TYPE,
+    ExternalPredicate,
+    Stream,
+    StreamFunction,
+)
 from ltamp_cli.planner.search.ground import Context, Fact, FactIndex
 from ltamp_cli.planner.search.solve import DiscreteResult
 from ltamp_cli.planner.streams import StreamInstance
@@ -115,9 +119,10 @@ def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: 
             evaluation.object_producer[placeholder] = key
         mapping.update(zip(external.outputs, outputs, strict=True))
         facts = instantiate_atoms(external.certified, mapping)
-    else:
-        instance = StreamInstance(external, state.bindings[name], inputs)
-        facts = certified_facts(instance, ())
+    elif isinstance(external, ExternalPredicate):
+        facts = instantiate_atoms((external.head,), mapping)
+    else:  # a test stream: what it certifies for its inputs
+        facts = instantiate_atoms(external.certified, mapping)
     added = False
     failed = state.failed_contexts.get(key, [])
     for fact in facts:
