@@ -29,7 +29,7 @@ from ltamp_cli.planner.result import (
     PlanStep,
     StreamResult,
 )
-from ltamp_cli.planner.search.ground import Context, Fact, FactIndex, join, join_new
+from ltamp_cli.planner.search.ground import Context, Fact, FactIndex, join_tuples
 from ltamp_cli.planner.search.normalize import LiftedLiteral
 from ltamp_cli.planner.search.solve import DiscreteResult, plan_discrete
 from ltamp_cli.planner.streams import (
@@ -308,9 +308,7 @@ class PlannerState:
             if since is None:
                 yield ()
             return
-        bindings = join(literals, index) if since is None else join_new(literals, index, since)
-        for binding in bindings:
-            yield tuple([binding[v] for v in inputs])
+        yield from join_tuples(literals, index, tuple(inputs), since)
 
     def result(self, status: str, discrete: DiscreteResult | None,
                preimage: Iterable[Fact] = ()) -> PlanResult:

@@ -169,14 +169,24 @@ def _run_join(steps: Sequence[_Step], index: FactIndex, binding: dict[str, str]
 
 
 def _extend(steps: Sequence[_Step], depth: int, index: FactIndex, binding: dict[str, str],
-            found: list[dict[str, str]]) -> None:
+            found: list, project: tuple[str, ...] | None = None) -> None:
+    """Append the extensions of ``binding`` by ``steps[depth:]`` to ``found``: as dicts, or
+    with ``project`` as tuples of those variables' values (no dict per result)."""
     if depth == len(steps):
-        found.append(binding)
+        found.append(binding if project is None else tuple([binding[v] for v in project]))
         return
     step = steps[depth]
     key = tuple([binding.get(term, term) for term in step.key_terms])
     last = depth + 1 == len(steps)
     checks, binds = step.checks, step.binds
+    if last and project is not None:
+        here = {variable: position for position, variable in binds}
+        plan = [(here.get(v, -1), v) for v in project]
+        for args in index.lookup(step.predicate, step.positions, key):
+            if checks and any(args[a] != args[b] for a, b in checks):
+                continue
+            found.append(tuple([args[p] if p >= 0 else binding[v] for p, v in plan]))
+        return
     for args in index.lookup(step.predicate, step.positions, key):
         if checks and any(args[a] != args[b] for a, b in checks):
             continue
@@ -186,7 +196,7 @@ def _extend(steps: Sequence[_Step], depth: int, index: FactIndex, binding: dict[
         if last:
             found.append(extended)
         else:
-            _extend(steps, depth + 1, index, extended, found)
+            _extend(steps, depth + 1, index, extended, found, project)
 
 
 def join(literals: Sequence[LiftedLiteral], index: FactIndex,
@@ -216,6 +226,32 @@ def join_new(literals: Sequence[LiftedLiteral], index: FactIndex, since: Mapping
             if steps is None:
                 steps = _compile_join(others, set(binding))
             yield from _run_join(steps, index, binding)
+
+
+def join_tuples(literals: Sequence[LiftedLiteral], index: FactIndex,
+                variables: tuple[str, ...], since: Mapping[str, int] | None = None
+                ) -> list[tuple[str, ...]]:
+    """:func:`join` (or, with ``since``, :func:`join_new`) with each binding given as the
+    tuple of ``variables``' values."""
+    found: list[tuple[str, ...]] = []
+    if since is None:
+        _extend(_compile_join(literals, set()), 0, index, {}, found, variables)
+        return found
+    for position, literal in enumerate(literals):
+        facts = index.by_predicate.get(literal.predicate, ())
+        start = since.get(literal.predicate, 0)
+        if start >= len(facts):
+            continue
+        others = [lit for i, lit in enumerate(literals) if i != position]
+        steps: list[_Step] | None = None
+        for args in facts[start:]:
+            binding = _match(literal, args)
+            if binding is None:
+                continue
+            if steps is None:
+                steps = _compile_join(others, set(binding))
+            _extend(steps, 0, index, binding, found, variables)
+    return found
 
 
 def _ground(args: Iterable[str], binding: Mapping[str, str]) -> tuple[str, ...]:
