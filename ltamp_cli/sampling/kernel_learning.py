@@ -9,6 +9,11 @@ When the planner reports that a sample ``θ`` drawn after ``S`` was unusable, th
 made ``θ`` look most different from ``S`` — ``argmax_d τ(d)``, where ``τ(d)`` is ``η_S(θ)``
 computed with the kernel restricted to feature ``d`` but the full ``(Ξ_S + ζ² I)⁻¹`` — has its
 inverse lengthscale shrunk to ``(1 − ε) l_d``: differences along it stop counting as diversity.
+Shrinking stops at :data:`MIN_INVERSE_LENGTHSCALE`, where a feature's whole normalised range
+changes ``ξ`` by under 0.1 %: the paper's rule has no floor, and a planner that keeps
+rejecting samples (hundreds of reports in one hard problem) otherwise drives every ``l_d``
+to underflow and persists that kernel for later tasks. Features already at the floor are
+passed over for the next most important one.
 
 The learned kernel persists per skill as JSON at a path the caller chooses
 (:func:`load_kernel` / :func:`save_kernel`), e.g. ``<model_dir>/diversity_kernel.json``.
@@ -30,6 +35,7 @@ from ltamp_cli.backends.protocol import SkillSpec
 from ltamp_cli.errors import InputError, location_in
 
 EPSILON = 0.3
+MIN_INVERSE_LENGTHSCALE = 0.03
 ZETA = 0.1
 FORMAT = "ltamp-diversity-kernel"
 VERSION = 1
@@ -103,13 +109,18 @@ class DiversityKernel:
     def update(self, theta: np.ndarray, selected: np.ndarray) -> int | None:
         """Algorithm 5's step for an unusable ``theta`` drawn after ``selected``.
 
-        Returns the feature whose inverse lengthscale was shrunk (``None`` when ``S`` is empty).
+        Returns the feature whose inverse lengthscale was shrunk (``None`` when ``S`` is empty
+        or every feature is already at :data:`MIN_INVERSE_LENGTHSCALE`).
         """
         selected = np.asarray(selected, dtype=float).reshape(-1, self.dim)
-        if len(selected) == 0:
+        shrinkable = self.inverse_lengthscales > MIN_INVERSE_LENGTHSCALE
+        if len(selected) == 0 or not shrinkable.any():
             return None
-        feature = int(np.argmax(self.feature_importance(theta, selected)))
-        self.inverse_lengthscales[feature] *= 1.0 - self.epsilon
+        importance = np.where(shrinkable, self.feature_importance(theta, selected), -np.inf)
+        feature = int(np.argmax(importance))
+        self.inverse_lengthscales[feature] = max(
+            self.inverse_lengthscales[feature] * (1.0 - self.epsilon), MIN_INVERSE_LENGTHSCALE
+        )
         self.updates += 1
         return feature
 

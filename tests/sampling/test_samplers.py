@@ -8,7 +8,11 @@ import pytest
 from ltamp_cli.learning.confidence import relaxed_beta
 from ltamp_cli.sampling.adaptive import AdaptiveSampler
 from ltamp_cli.sampling.factory import SAMPLER_NAMES, make_sampler
-from ltamp_cli.sampling.kernel_learning import DiversityKernel, diversity
+from ltamp_cli.sampling.kernel_learning import (
+    MIN_INVERSE_LENGTHSCALE,
+    DiversityKernel,
+    diversity,
+)
 from ltamp_cli.sampling.metrics import false_positive_rate
 from ltamp_cli.sampling.superlevel import build_superlevel_set
 
@@ -116,6 +120,22 @@ def test_kernel_update_shrinks_the_most_different_feature() -> None:
     assert kernel.inverse_lengthscales == pytest.approx([1.0, 0.7, 1.0])
     assert kernel.update(theta, np.empty((0, 3))) is None
     assert kernel.updates == 1
+
+
+def test_kernel_learning_stops_at_the_floor_instead_of_collapsing() -> None:
+    """Hundreds of unusable reports (a hard problem) leave every l_d at the floor, never 0."""
+    kernel = DiversityKernel.unit(3)
+    rng = np.random.default_rng(5)
+    shrunk = [kernel.update(rng.random(3), rng.random((4, 3))) for _ in range(400)]
+    assert np.all(kernel.inverse_lengthscales == pytest.approx(MIN_INVERSE_LENGTHSCALE))
+    assert shrunk[-1] is None  # nothing left to learn: the report is ignored
+    # Each feature needs ceil(log(floor) / log(1 - eps)) steps to reach the floor.
+    steps = int(np.ceil(np.log(MIN_INVERSE_LENGTHSCALE) / np.log(1.0 - kernel.epsilon)))
+    assert kernel.updates == 3 * steps
+    # A feature already at the floor is passed over for the next most important one.
+    kernel = DiversityKernel(np.array([MIN_INVERSE_LENGTHSCALE, 1.0, 1.0]))
+    selected = np.array([[0.0, 0.0, 0.0], [0.0, 0.1, 0.0]])
+    assert kernel.update(np.array([0.9, 0.05, 0.3]), selected) == 2
 
 
 def test_diverse_lk_uses_the_learned_kernel_after_feedback(skill8d_model) -> None:
