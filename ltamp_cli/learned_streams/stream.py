@@ -7,7 +7,7 @@ A problem YAML configures each learned stream under ``world.learned_streams.<str
         model: model            # model directory (relative paths: see from_mapping's base)
         sampler: diverse-lk     # rejection | adaptive | diverse | diverse-lk
         lambda: 0.95            # relaxed-β λ (optional), or beta: 1.5 (optional)
-        kernel_file: null       # diverse-lk only; default <model>/diversity_kernel.json
+        kernel_file: null       # diverse-lk only; default: the user cache (see kernel_path)
 
 The model is loaded once per :class:`LearnedStream` (pass a shared :class:`ModelCache` to load
 a directory once for several streams) and never retrained. Each call of the stream (one input
@@ -18,6 +18,9 @@ learns its diversity kernel from it and the kernel is saved to ``kernel_file``).
 
 from __future__ import annotations
 
+import hashlib
+import json
+import os
 from collections.abc import Callable, Hashable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -39,6 +42,17 @@ KERNEL_FILE = "diversity_kernel.json"
 _FIELDS = ("model", "sampler", "lambda", "beta", "kernel_file")
 
 
+def model_identity(model_dir: Path) -> str:
+    """A short id of a model: its recorded weights digest, else its resolved path's digest."""
+    try:
+        digest = json.loads((model_dir / "model.json").read_text()).get("weights_sha256")
+    except (OSError, ValueError, AttributeError):
+        digest = None
+    if not isinstance(digest, str) or not digest:
+        digest = hashlib.sha256(str(model_dir.resolve()).encode()).hexdigest()
+    return digest[:16]
+
+
 @dataclass(frozen=True)
 class LearnedStreamConfig:
     """Which model and sampler a learned stream uses. Paths are absolute or cwd-relative."""
@@ -57,8 +71,18 @@ class LearnedStreamConfig:
 
     @property
     def kernel_path(self) -> Path:
-        """Where ``diverse-lk`` keeps its learned kernel."""
-        return self.kernel_file if self.kernel_file is not None else self.model_dir / KERNEL_FILE
+        """Where ``diverse-lk`` keeps its learned kernel.
+
+        Default: ``$XDG_CACHE_HOME/ltamp/diversity-kernels/<model id>/diversity_kernel.json``,
+        shared by every task that uses the same model (the paper transfers kernels across
+        tasks) but never written into the model directory, which may be shipped read-only
+        and whose kernel would otherwise carry one run's learning into the next test.
+        """
+        if self.kernel_file is not None:
+            return self.kernel_file
+        base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+        kernels = Path(base) / "ltamp" / "diversity-kernels"
+        return kernels / model_identity(self.model_dir) / KERNEL_FILE
 
     @staticmethod
     def from_mapping(data: Any, base: Path, where: str) -> LearnedStreamConfig:

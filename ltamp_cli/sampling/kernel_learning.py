@@ -16,7 +16,7 @@ to underflow and persists that kernel for later tasks. Features already at the f
 passed over for the next most important one.
 
 The learned kernel persists per skill as JSON at a path the caller chooses
-(:func:`load_kernel` / :func:`save_kernel`), e.g. ``<model_dir>/diversity_kernel.json``.
+(:func:`load_kernel` / :func:`save_kernel`); learned streams default to the user cache.
 """
 
 from __future__ import annotations

@@ -126,6 +126,29 @@ def test_bad_learned_stream_settings(tmp_path, goodregion_model, moving2d_model)
         LearnedStream(config, np.array, lambda c: (c,), np.random.default_rng(0))
 
 
+def test_default_kernel_lives_in_the_user_cache_not_the_model(
+    repo_root, tmp_path, synthetic, goodregion_model, monkeypatch
+) -> None:
+    """Without ``kernel_file`` the learned kernel goes to the user cache, keyed by the model's
+    weights digest (copies of one model share it); the model directory is left untouched."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    path = _problem_with_model(repo_root, tmp_path, goodregion_model, "diverse-lk")
+    data = yaml.safe_load(path.read_text())
+    data["world"]["learned_streams"]["sample-good-control"]["kernel_file"] = None
+    path.write_text(yaml.safe_dump(data))
+    before = sorted(p.name for p in goodregion_model.iterdir())
+    assert solve(load_problem(path), PlannerConfig(max_time=60, seed=0)).status == "solved"
+    assert sorted(p.name for p in goodregion_model.iterdir()) == before
+    kernels = list((tmp_path / "cache" / "ltamp" / "diversity-kernels").glob("*/*.json"))
+    assert len(kernels) == 1
+    assert load_kernel(kernels[0], synthetic.skills()["moving2d"]).updates >= 1
+    copy = tmp_path / "copy"
+    copy.mkdir()
+    for item in goodregion_model.iterdir():
+        (copy / item.name).write_bytes(item.read_bytes())
+    assert LearnedStreamConfig(copy, "diverse-lk").kernel_path == kernels[0]
+
+
 def test_good_scoop_outputs_a_path_inside_the_cup(synthetic, fit, tmp_path) -> None:
     from ltamp_cli.backends.protocol import ParamSpace, SkillSpec
     from ltamp_cli.learning.gp import fit_gp
