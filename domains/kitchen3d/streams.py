@@ -257,6 +257,8 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         for hand_yaw in (heading, heading + math.pi / 2):  # fingers across or along the line
             poses = skill_paths.push_hand_poses(scene.object(name), a, b, table_z, hand_yaw)
             path = planning.follow_hand_path(poses, arm, rng, "push", touching=name)
+            if path is not None and planning.approach_collides(path, name, a, poses[1]):
+                path = None  # the hand would come down on the object, not behind it
             yield [] if path is None else [(path.start, path.end, path)]
 
     def test_cfree(a: str, pa: Any, b: str, pb: Any) -> bool:

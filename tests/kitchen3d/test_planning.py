@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from ltamp_cli.backends.pybullet.robot.arm import PANDA_HOME
+from ltamp_cli.backends.pybullet.robot.pose import Pose
 from ltamp_cli.backends.pybullet.tamp.planning import PlanningWorld
 from ltamp_cli.backends.pybullet.tamp.scene import scene_from_world
 from ltamp_cli.backends.pybullet.tamp.values import ArmConf
@@ -102,3 +103,38 @@ def test_pour_blocked_is_planned_and_executed_with_beads_in_the_bowl(problem) ->
     # through the table, and most are in the bowl.
     assert counts["total"] == 60
     assert counts["bowl"] >= 0.8 * 60
+
+
+def test_a_push_approach_must_come_down_behind_the_object_not_on_it() -> None:
+    """push_to_reach's bowl: the stream's push comes down behind the rim (clear); a hand
+    coming down onto the rim collides before its contact pose."""
+    import math
+
+    from ltamp_cli.backends.pybullet.tamp import skill_paths
+
+    spec = scene_from_world(load_problem(ROOT / "problems/kitchen3d/push_to_reach.yaml").world)
+    planning = PlanningWorld(spec)
+    try:
+        start, goal = (0.45, 0.3), (0.1, 0.2)
+        rng = np.random.default_rng(0)
+        heading = math.atan2(goal[1] - start[1], goal[0] - start[0])
+        yaw = heading + math.pi / 2
+        bowl = spec.objects["bowl"]
+        poses = skill_paths.push_hand_poses(bowl, start, goal, planning.table_z, yaw)
+        path = planning.follow_hand_path(poses, 1, rng, "push", touching="bowl")
+        assert path is not None
+        assert not planning.approach_collides(path, "bowl", start, poses[1])
+        # The same push planned as if the bowl were 8 cm narrower: the hand comes down on
+        # the rim of the real bowl.
+        behind_rim = start[0] + 0.1 + skill_paths.FINGER_HALF_M + skill_paths.PUSH_GAP_M - 0.08
+        direction = np.subtract(goal, start) / np.linalg.norm(np.subtract(goal, start))
+        down = [Pose(np.array([start[0] - direction[0] * (behind_rim - start[0]),
+                               start[1] - direction[1] * (behind_rim - start[0]), z]))
+                @ Pose.from_euler(np.zeros(3), yaw=yaw)
+                @ Pose.from_euler(np.zeros(3), roll=math.pi)
+                for z in (planning.table_z + 0.135, planning.table_z + 0.035)]
+        onto = planning.follow_hand_path(down, 1, rng, "push", touching="bowl")
+        assert onto is not None
+        assert planning.approach_collides(onto, "bowl", start, down[1])
+    finally:
+        planning.close()

@@ -308,6 +308,27 @@ class PlanningWorld:
             if path.held is not None:
                 self.park(path.held[0])
 
+    def approach_collides(self, path: ArmPath, name: str, xy: XY, contact: Pose) -> bool:
+        """Does the arm hit ``name`` (standing at ``xy``) on ``path`` before its hand first
+        reaches ``contact`` (a push's pose behind the object, where touching it starts)?
+        Push paths may touch what they push, but not on the way down to it (a palm coming
+        down on a bowl's rim). The fingers are closed, as the executor pushes."""
+        arm = self.scene.arms[path.arm]
+        configurations = np.asarray(path.configurations)
+        # The hand passes ``contact`` once (straight down, then straight along the push).
+        distances = [float(np.linalg.norm(arm.forward_kinematics(q).position - contact.position))
+                     for q in configurations]
+        end = int(np.argmin(distances)) + 1
+        # A push is made with the fingers closed (the executor closes them first); open,
+        # they reach 4 cm further along the push.
+        opening = arm.finger_opening()
+        arm.set_finger_opening(0.0)
+        try:
+            return self.path_collides(ArmPath(path.arm, configurations[:end], path.kind),
+                                      name, xy)
+        finally:
+            arm.set_finger_opening(opening)
+
     def footprints_overlap(self, a: str, pa: XY, b: str, pb: XY) -> bool:
         ha = self.spec.objects[a].footprint()
         hb = self.spec.objects[b].footprint()

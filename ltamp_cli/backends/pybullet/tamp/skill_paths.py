@@ -35,9 +35,14 @@ STIR_TIP_CLEARANCE_M = 0.015
 STIR_RADIUS_FRACTION = 0.45
 STIR_WAYPOINTS = 8
 STIR_TURNS = 2
-#: Push: hand height (m) above the table, clearance (m) behind the object before contact,
-#: and the lift (m) before and after.
+#: Push: lowest hand (grasp-target) height (m) above the table, clearance (m) behind the
+#: object before contact, and the lift (m) before and after. The closed fingertips reach
+#: ``FINGERTIP_BELOW_M`` below the grasp target and push ``PUSH_BELOW_TOP_M`` below the
+#: object's top, so the palm (~5 cm above the fingertips) passes above a bowl's rim: at
+#: the old fixed 3.5 cm the palm skimmed push_to_reach's 7 cm bowl rim by 2 mm.
 PUSH_HEIGHT_M = 0.035
+FINGERTIP_BELOW_M = 0.011
+PUSH_BELOW_TOP_M = 0.02
 PUSH_GAP_M = 0.03
 PUSH_LIFT_M = 0.1
 #: Half the closed fingers' thickness along the push direction (m).
@@ -129,7 +134,7 @@ def push_hand_poses(obj: ObjectSpec, start: XY, goal: XY, table_z: float, hand_y
     behind = float(obj.footprint()[0]) + FINGER_HALF_M
     down = Pose.from_euler(np.zeros(3), roll=math.pi, yaw=0.0)
     turn = Pose.from_euler(np.zeros(3), yaw=hand_yaw)
-    z = table_z + PUSH_HEIGHT_M
+    z = table_z + max(PUSH_HEIGHT_M, obj.height - PUSH_BELOW_TOP_M + FINGERTIP_BELOW_M)
 
     def at(xy: np.ndarray, height: float) -> Pose:
         return Pose(np.array([xy[0], xy[1], height])) @ turn @ down
