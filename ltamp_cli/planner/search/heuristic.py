@@ -23,8 +23,9 @@ class HeuristicResult:
 
 
 MAX_NEGATION_RULES = 64
-# Heuristic values remembered per heuristic object (a state vector's bytes -> result).
-MAX_MEMO = 100_000
+# Heuristic values remembered per heuristic object (a state vector's bytes -> result); the
+# memo is emptied when its keys would exceed this many bytes.
+MAX_MEMO_BYTES = 50_000_000
 
 
 class FFHeuristic:
@@ -171,7 +172,7 @@ class FFHeuristic:
         key = vector.tobytes()
         result = self._memo.get(key)
         if result is None:
-            if len(self._memo) >= MAX_MEMO:
+            if len(self._memo) * len(key) >= MAX_MEMO_BYTES:
                 self._memo.clear()
             result = self._evaluate(vector)
             self._memo[key] = result

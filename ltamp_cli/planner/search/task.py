@@ -16,8 +16,9 @@ from ltamp_cli.planner.search.ground import Fact, GroundAction, GroundAxiom, Gro
 from ltamp_cli.planner.search.normalize import GOAL_PREDICATE
 
 TRUE_FACT, FALSE_FACT = 0, 1
-# State vectors kept per task (a few kB each); the cache is emptied when it reaches this.
-MAX_CACHED_VECTORS = 20_000
+# Bytes of state vectors kept per task (one byte per fact and state); the cache is emptied
+# when it would exceed this.
+MAX_CACHED_VECTOR_BYTES = 50_000_000
 GOAL_FACT: Fact = (GOAL_PREDICATE,)
 
 
@@ -131,7 +132,7 @@ class Task:
         same states again."""
         vector = self._vectors.get(state)
         if vector is None:
-            if len(self._vectors) >= MAX_CACHED_VECTORS:
+            if len(self._vectors) * self.num_facts >= MAX_CACHED_VECTOR_BYTES:
                 self._vectors.clear()
             vector = self._compute_vector(state)
             vector.flags.writeable = False
