@@ -95,7 +95,10 @@ def test_push_path_moves_the_hand_along_the_line_at_push_height(push_world) -> N
         arm.set_configuration(q)
         hand.append(arm.end_effector_pose().position)
     hand = np.array(hand)
-    low = hand[:, 2] < TABLE_Z + skill_paths.PUSH_HEIGHT_M + 0.005
+    # Pushing 2 cm below the 7 cm rim (the palm passes above it).
+    height = skill_paths.push_hand_height(spec)
+    assert height == pytest.approx(0.07 - 0.02 + skill_paths.FINGERTIP_BELOW_M)
+    low = hand[:, 2] < TABLE_Z + height + 0.005
     assert low.sum() >= 10
     # While low, the hand stays on the push line, and ends just behind the goal.
     rel = hand[low, :2] - np.asarray(start)

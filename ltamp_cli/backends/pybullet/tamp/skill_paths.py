@@ -122,6 +122,11 @@ def stir_tool_poses(stirrer: ObjectSpec, cup: ObjectSpec, cup_xy: XY, table_z: f
     return [frame @ Pose(point) @ spin for point in points]
 
 
+def push_hand_height(obj: ObjectSpec) -> float:
+    """Height (m) of the grasp target above the table while pushing ``obj``."""
+    return max(PUSH_HEIGHT_M, obj.height - PUSH_BELOW_TOP_M + FINGERTIP_BELOW_M)
+
+
 def push_hand_poses(obj: ObjectSpec, start: XY, goal: XY, table_z: float, hand_yaw: float
                     ) -> list[Pose]:
     """World poses of the gripper (palm down, closed fingers) pushing ``obj`` in a straight
@@ -134,7 +139,7 @@ def push_hand_poses(obj: ObjectSpec, start: XY, goal: XY, table_z: float, hand_y
     behind = float(obj.footprint()[0]) + FINGER_HALF_M
     down = Pose.from_euler(np.zeros(3), roll=math.pi, yaw=0.0)
     turn = Pose.from_euler(np.zeros(3), yaw=hand_yaw)
-    z = table_z + max(PUSH_HEIGHT_M, obj.height - PUSH_BELOW_TOP_M + FINGERTIP_BELOW_M)
+    z = table_z + push_hand_height(obj)
 
     def at(xy: np.ndarray, height: float) -> Pose:
         return Pose(np.array([xy[0], xy[1], height])) @ turn @ down
