@@ -57,13 +57,14 @@ class PlanningSettings:
     RRT budgets count collision checks (``rrt_checks``; ``rrt_carry_checks`` for motions
     carrying contents, whose tilt limit leaves a thin free space), so a query's outcome
     depends on its seed, not on the machine's load; ``rrt_time_s``/``rrt_carry_time_s``
-    (wall seconds) only cap a query on a very slow machine. A check costs ~0.15 ms free and
-    ~0.5 ms carrying (pour_blocked, one core): 6,000 checks match the earlier 1 s / 3 s
-    wall budgets on an idle machine (one push_to_reach carry: 4/12 solved with 1 s, 9/12
-    with 3 s). Free motions solved pour_blocked's queries with at most ~2,600 checks."""
+    (wall seconds) only cap a query on a very slow machine. A check costs ~0.15-0.27 ms
+    free and ~0.55-0.67 ms carrying (pour_blocked, coffee; one core), so 5,000 checks are
+    about the earlier wall budgets of 1 s free / 3 s carrying on an idle core (one
+    push_to_reach carry: 4/12 solved with 1 s, 9/12 with 3 s). Solved queries used ~1,000
+    checks (median), at most ~5,800."""
 
-    rrt_checks: int = 6000
-    rrt_carry_checks: int = 6000
+    rrt_checks: int = 5000
+    rrt_carry_checks: int = 5000
     rrt_time_s: float = 6.0
     rrt_carry_time_s: float = 15.0
     ik_restarts: int = 8
