@@ -96,18 +96,21 @@ def test_pour_blocked_is_solved_and_executed_on_sapien() -> None:
     assert again.details["goal"] == report.details["goal"]
 
 
-# Known, open in issue 7: push_to_reach's plan can exceed its time limit on a loaded
-# machine and its PyBullet push ends short (the palm lands on the bowl's rim); in coffee's
-# PyBullet run the carry to the pour tilts the cup within the pi/6 roll/pitch limit but far
-# enough (~35 deg) to spill the beads before the pour.
-_KNOWN_PYBULLET_GAPS = {"push_to_reach.yaml", "coffee.yaml"}
+# Known, open in issue 7: planning these two within the problems' 120 s wall limit is not
+# reliable on a loaded machine (seed 0, load 3-9: push_to_reach 52-134 s CPU, 175-614 s
+# wall; coffee 20-102 s CPU, timed out twice at 120 s wall in this test). Their PyBullet
+# executions are no longer a gap: both seed-0 plans hold the goal on PyBullet (push_to_reach:
+# push 1.4 cm from its target, 60/60 beads in the bowl; coffee: cream 36-38/40, the whole
+# spoonful of sugar, stirred), as on SAPIEN.
+_KNOWN_PLANNING_GAPS = {"push_to_reach.yaml", "coffee.yaml"}
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize(
     "problem_file",
-    [pytest.param(name, marks=pytest.mark.xfail(strict=False, reason="known gap, issue 7"))
-     if name in _KNOWN_PYBULLET_GAPS else name
+    [pytest.param(name, marks=pytest.mark.xfail(
+        strict=False, reason="planning may exceed its time limit under load, issue 7"))
+     if name in _KNOWN_PLANNING_GAPS else name
      for name in sorted(p.name for p in POUR_BLOCKED.parent.glob("*.yaml")
                         if p != POUR_BLOCKED)],
 )
