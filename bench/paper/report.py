@@ -316,7 +316,8 @@ def section_active(out: Path, report: Path) -> list[str]:
         claims = [("GP-LSE and GP-LSE2 ≥ GP (success)", active_beats(sr)),
                   ("GP-LSE2 best success", _best(sr, "lse2")),
                   ("GP-LSE and GP-LSE2 ≥ GP (F1)", active_beats(f1)),
-                  ("GP-LSE2 best F1 at 100 trials (repeated)", _best(rep, "lse2"))]
+                  (f"GP-LSE2 best F1 at {sizes['rep_budget']} trials (repeated)",
+                   _best(rep, "lse2"))]
         lines += [""] + [f"- Claim \"{c}\": {_verdict(ok)}." for c, ok in claims] + [""]
     lines += [_png(out, report, "active3d.png"), "", _png(out, report, "active3d_100.png"), ""]
     return lines

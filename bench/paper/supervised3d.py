@@ -46,8 +46,10 @@ SIZES: dict[str, dict[str, Any]] = {
               "success_at": [30], "candidates": 1000},
     # quick: pools of pre-check-valid trials (as the paper's), so 70 of them carry what ~140
     # uniform ones did (pour) or ~300 (scoop; a valid scoop costs ~4 s CPU); 60 per shuffle.
+    # One shuffle: each costs ~125 s CPU (mostly the simulated θ*), and the valid-only pools
+    # already add ~300 s CPU to the quick run.
     "quick": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 70,
-              "n_test": 30, "budget": 60, "eval_every": 20, "seeds": 2, "contexts": 3,
+              "n_test": 30, "budget": 60, "eval_every": 20, "seeds": 1, "contexts": 3,
               "success_at": [60], "candidates": 1000},
     "full": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 9000,
              "n_test": 1000, "budget": 400, "eval_every": 10, "seeds": 10, "contexts": 45,
