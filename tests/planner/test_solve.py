@@ -111,6 +111,41 @@ def test_interleaved_planners_do_not_interfere(solved) -> None:  # type: ignore[
     assert found == alone
 
 
+
+def test_solve_restores_garbage_collector(solved, monkeypatch: pytest.MonkeyPatch  # type: ignore[no-untyped-def]
+                                          ) -> None:
+    # solve() collects less often while it runs (process-wide settings): overlapping solves
+    # in threads and a solve that raises must all leave the collector as they found it.
+    import gc
+
+    from ltamp_cli.planner import api
+
+    before = (gc.get_threshold(), gc.get_freeze_count(), gc.isenabled())
+    seen: list[tuple[int, ...]] = []
+    problem = solved.problem("blocksworld")
+
+    def run(seed: int) -> None:
+        result = solve(problem, PlannerConfig(algorithm="focused", seed=seed, max_time=60))
+        seen.append(gc.get_threshold())
+        assert result.solved
+
+    threads = [threading.Thread(target=run, args=(seed,)) for seed in range(3)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert len(seen) == 3
+    assert (gc.get_threshold(), gc.get_freeze_count(), gc.isenabled()) == before
+
+    def fail(*args: object) -> None:
+        assert gc.get_threshold()[0] == api.SOLVE_GC_THRESHOLD0  # relaxed while solving
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(api, "initial_state", fail)
+    with pytest.raises(RuntimeError, match="boom"):
+        solve(problem, PlannerConfig(algorithm="focused", seed=0, max_time=60))
+    assert (gc.get_threshold(), gc.get_freeze_count(), gc.isenabled()) == before
+
 SYMBOLIC_DOMAIN = """
 (define (domain d)
   (:predicates (P ?x) (Q ?x ?y))
