@@ -137,3 +137,43 @@ def test_budgeted_searches_still_prove_infeasibility(make_problem: MakeProblem,
     result = run_with_budget(problem, algorithm, budget=1)
     assert result.status == "infeasible"
     assert result.stats["searches"] >= 2  # the first, cut-off search proved nothing
+
+
+# A corridor s <-> a <-> b where every room also opens onto a pit with no way out. The goal
+# asks to be in s and b at once: the delete relaxation thinks that reachable, so a greedy
+# search is exhaustive and pops every pit state.
+PIT_DOMAIN = """
+(define (domain pits)
+  (:predicates (At ?x) (Door ?x ?y))
+  (:action go
+    :parameters (?x ?y)
+    :precondition (and (At ?x) (Door ?x ?y))
+    :effect (and (At ?y) (not (At ?x)))))
+"""
+
+
+def test_greedy_search_skips_the_heuristic_in_dead_ends(
+        make_problem: MakeProblem, monkeypatch: pytest.MonkeyPatch) -> None:
+    from ltamp_cli.planner.search.heuristic import FFHeuristic
+
+    rooms = ("s", "a", "b")
+    doors = [("s", "a"), ("a", "s"), ("a", "b"), ("b", "a"), *((r, f"pit-{r}") for r in rooms)]
+    objects = ", ".join(f"{o}: null" for o in (*rooms, *(f"pit-{r}" for r in rooms)))
+    init = ", ".join(['"(At s)"', *(f'"(Door {x} {y})"' for x, y in doors)])
+    problem = load_problem(make_problem(
+        PIT_DOMAIN, f"domain: dom\nobjects: {{{objects}}}\ninit: [{init}]\n"
+        "goal: (and (At s) (At b))\n"))
+    evaluated: list[set[tuple[str, ...]]] = []
+    original = FFHeuristic._evaluate
+
+    def spy(self: FFHeuristic, vector):  # type: ignore[no-untyped-def]
+        evaluated.append({self.task.facts[i] for i in vector.nonzero()[0]})
+        return original(self, vector)
+
+    monkeypatch.setattr(FFHeuristic, "_evaluate", spy)
+    result = discrete(problem, algorithm="lazy-greedy")
+    assert not result.solved and result.outcome is not None and not result.capped
+    at = [{f[1] for f in facts if f[0].lower() == "at"} for facts in evaluated]
+    assert {"s", "a", "b"} <= set().union(*at)  # the search did evaluate the corridor...
+    assert not any(room.startswith("pit") for rooms_at in at for room in rooms_at)  # ...no pit
+    assert result.outcome.evaluated >= 6  # the pits still count as visited states
