@@ -93,3 +93,22 @@ def test_statistics_make_cheap_samplers_eager_when_asked(tmp_path) -> None:
                                          eager_cheap_streams=True))
     assert plain.solved and eager.solved
     assert eager.stats["iterations"] == 1 < plain.stats["iterations"]
+
+
+def test_cheap_decision_uses_cpu_time_persisted_in_the_history(tmp_path) -> None:
+    """A 20 us sampler preempted on a loaded machine measures milliseconds of wall time; the
+    persisted CPU time decides, and histories without it fall back to their wall time."""
+    from ltamp_cli.planner.algorithms.effort import observed_cheap
+    from ltamp_cli.planner.statistics import StreamStatistics
+
+    statistics = StreamStatistics.load(tmp_path, "toy")
+    statistics.totals["slot"] = {"calls": 4, "successes": 4, "time_s": 0.02}  # older file
+    statistics.update({"slot": StreamStats(calls=2, successes=2, outputs=2, time_s=0.01,
+                                           cpu_s=4e-5)})
+    statistics.save()
+    totals = StreamStatistics.load(tmp_path, "toy").totals["slot"]
+    assert totals["calls"] == 6 and totals["cpu_s"] == pytest.approx(0.02 + 4e-5)
+    assert not observed_cheap(totals, None)  # the old calls' wall time still counts
+    loaded_machine = {"calls": 6, "successes": 6, "time_s": 0.03, "cpu_s": 1.2e-4}
+    assert observed_cheap(loaded_machine, None)
+    assert not observed_cheap({"calls": 6, "time_s": 0.03}, None)

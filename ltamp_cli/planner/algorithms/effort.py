@@ -76,11 +76,13 @@ def observed_cheap(history: Mapping[str, float] | None, run: StreamStats | None)
     """Whether the observed calls (persisted ``history`` plus this ``run``) show a stream to
     be cheap enough for eager evaluation; the prior does not count."""
     calls, seconds = 0.0, 0.0
-    # This run's calls count with their CPU time (wall time depends on the machine's load).
-    current = {"calls": run.calls, "time_s": run.cpu_s} if run is not None else {}
+    # Calls count with their CPU time: wall time depends on the machine's load, and one
+    # preempted call of a 20 us sampler measures milliseconds. Histories from before CPU time
+    # was persisted only have wall time.
+    current = {"calls": run.calls, "cpu_s": run.cpu_s} if run is not None else {}
     for source in (history or {}, current):
         calls += float(source.get("calls", 0.0))
-        seconds += float(source.get("time_s", 0.0))
+        seconds += float(source.get("cpu_s", source.get("time_s", 0.0)))
     return calls >= AUTO_EAGER_MIN_CALLS and seconds / calls <= AUTO_EAGER_MAX_OVERHEAD_S
 
 
