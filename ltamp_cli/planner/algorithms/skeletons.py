@@ -40,11 +40,12 @@ from ltamp_cli.planner.streams import StreamInstance
 
 REAL_SEARCH_EXPANSIONS = 500
 # Sampling effort after a search, in binding steps per state the search evaluated: a work
-# measure rather than seconds, so that runs are deterministic for a given seed. At 0.1 a
-# search of ~20 states allowed 2 steps, so adaptive searched again after nearly every failed
-# collision test (tamp2d_4blocks: 7-10 searches, median 2,001 heuristic evaluations); at
-# 0.5 it searches 6-8 times (835), as binding does.
-STEPS_PER_EVALUATION = 0.5
+# measure rather than seconds, so that runs are deterministic for a given seed. A step may
+# cost microseconds (a collision test) or seconds (a learned pour with its physics checks), so
+# the ratio stays small: 0.5 saved tamp2d_4blocks a few searches (7-10 -> 6-8) but spent the
+# Kitchen3D pour_blocked budget on 42 GoodPour calls for stale skeletons (timeout at 90 s,
+# where 0.1 plans in ~20 s CPU).
+STEPS_PER_EVALUATION = 0.1
 
 
 @dataclass(frozen=True)
