@@ -212,6 +212,14 @@ def join_new(literals: Sequence[LiftedLiteral], index: FactIndex, since: Mapping
     (a :meth:`FactIndex.sizes` snapshot): semi-naive evaluation, so a fixpoint loop does not
     redo every earlier join. A binding using several new facts may be yielded more than once.
     """
+    for steps, binding in _new_fact_seeds(literals, index, since):
+        yield from _run_join(steps, index, binding)
+
+
+def _new_fact_seeds(literals: Sequence[LiftedLiteral], index: FactIndex,
+                    since: Mapping[str, int]) -> Iterator[tuple[list[_Step], dict[str, str]]]:
+    """For each fact added after ``since`` that matches one of ``literals``: the join of the
+    other literals and the binding that fact gives (the seeds of a semi-naive round)."""
     for position, literal in enumerate(literals):
         facts = index.by_predicate.get(literal.predicate, ())
         start = since.get(literal.predicate, 0)
@@ -225,7 +233,7 @@ def join_new(literals: Sequence[LiftedLiteral], index: FactIndex, since: Mapping
                 continue
             if steps is None:
                 steps = _compile_join(others, set(binding))
-            yield from _run_join(steps, index, binding)
+            yield steps, binding
 
 
 def join_tuples(literals: Sequence[LiftedLiteral], index: FactIndex,
@@ -237,20 +245,8 @@ def join_tuples(literals: Sequence[LiftedLiteral], index: FactIndex,
     if since is None:
         _extend(_compile_join(literals, set()), 0, index, {}, found, variables)
         return found
-    for position, literal in enumerate(literals):
-        facts = index.by_predicate.get(literal.predicate, ())
-        start = since.get(literal.predicate, 0)
-        if start >= len(facts):
-            continue
-        others = [lit for i, lit in enumerate(literals) if i != position]
-        steps: list[_Step] | None = None
-        for args in facts[start:]:
-            binding = _match(literal, args)
-            if binding is None:
-                continue
-            if steps is None:
-                steps = _compile_join(others, set(binding))
-            _extend(steps, 0, index, binding, found, variables)
+    for steps, binding in _new_fact_seeds(literals, index, since):
+        _extend(steps, 0, index, binding, found, variables)
     return found
 
 
