@@ -151,6 +151,25 @@ class KitchenLearnedStream:
         return Binding(self.generate, info, on_unusable=self.stream.on_unusable)
 
 
+def _held_tool_outputs(wired: KitchenLearnedStream, inputs: tuple[Any, ...], setup: Any,
+                       control: np.ndarray, budgets: Mapping[tuple[str, ...], Budget],
+                       context: Callable[..., np.ndarray]) -> tuple[Any, ...] | None:
+    """Pour/scoop outputs ``(grasp, conf, approach, control)`` of a control whose kitchen
+    ``setup`` exists and that passes the call's physics pre-check budget (if any); otherwise
+    the control counts as rejected and ``None`` is returned (the call ends once the budget
+    is spent)."""
+    budget = budgets.get(tuple(map(str, inputs)))
+    if setup is None or (budget is not None and not budget(
+            context(*inputs), np.asarray(control, dtype=float))):
+        if budget is not None and budget.spent:
+            raise _GiveUp
+        wired.reject(inputs)
+        return None
+    wired.accept(inputs)
+    grasp, conf, approach = setup
+    return (grasp, conf, approach, _tuple(control))
+
+
 def control_scale(stream: LearnedStream) -> np.ndarray:
     """The GP's ARD lengthscales of the controls in physical units, ``(dθ,)``."""
     space = stream.model.spec.control
@@ -188,16 +207,7 @@ def pour_stream(config: LearnedStreamConfig, geometry: KitchenGeometry,
                 ) -> tuple[Any, ...] | None:
         inputs = (source, target, pose, region)
         setup = geometry.pour_setup(source, target, _pose(geometry, target, pose), control)
-        budget = budgets.get(tuple(map(str, inputs)))
-        if setup is None or (budget is not None and not budget(
-                context(*inputs), np.asarray(control, dtype=float))):
-            if budget is not None and budget.spent:
-                raise _GiveUp
-            wired.reject(inputs)
-            return None
-        wired.accept(inputs)
-        grasp, conf, approach = setup
-        return (grasp, conf, approach, _tuple(control))
+        return _held_tool_outputs(wired, inputs, setup, control, budgets, context)
 
     def applies(source: str, target: str, pose: Any, region: str) -> bool:
         if source == target or not scene.object(source).material:
@@ -241,16 +251,7 @@ def scoop_stream(config: LearnedStreamConfig, geometry: KitchenGeometry,
                 ) -> tuple[Any, ...] | None:
         inputs = (spoon, bowl, pose)
         setup = geometry.scoop_setup(spoon, bowl, _pose(geometry, bowl, pose), control)
-        budget = budgets.get(tuple(map(str, inputs)))
-        if setup is None or (budget is not None and not budget(
-                context(*inputs), np.asarray(control, dtype=float))):
-            if budget is not None and budget.spent:
-                raise _GiveUp
-            wired.reject(inputs)
-            return None
-        wired.accept(inputs)
-        grasp, conf, approach = setup
-        return (grasp, conf, approach, _tuple(control))
+        return _held_tool_outputs(wired, inputs, setup, control, budgets, context)
 
     def applies(spoon: str, bowl: str, pose: Any) -> bool:
         if not scene.object(bowl).material:
