@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 import pybullet
@@ -41,9 +42,9 @@ def _down(scene: KitchenScene, offset: list[float]) -> Pose:
     return Pose.from_euler(scene.table_centre + np.asarray(offset), roll=np.pi)
 
 
-def test_plan_around_a_wall_is_collision_free_when_rechecked_densely(
-    scene_with_wall: tuple[KitchenScene, int],
-) -> None:
+def _query_across_the_wall(scene_with_wall: tuple[KitchenScene, int]
+                           ) -> tuple[Any, ArmCollisionChecker, np.ndarray, np.ndarray]:
+    """``(arm, checker, start, goal)``: two IK solutions on either side of the wall."""
     scene, wall = scene_with_wall
     arm = scene.arms[0]
     checker = ArmCollisionChecker(arm, scene.obstacles_for(0, [wall]))
@@ -51,6 +52,14 @@ def test_plan_around_a_wall_is_collision_free_when_rechecked_densely(
     start = solve_ik(arm, _down(scene, [-0.2, -0.1, 0.1]), rng, is_valid=checker)
     goal = solve_ik(arm, _down(scene, [0.1, 0.1, 0.1]), rng, is_valid=checker)
     assert start is not None and goal is not None
+    return arm, checker, start, goal
+
+
+def test_plan_around_a_wall_is_collision_free_when_rechecked_densely(
+    scene_with_wall: tuple[KitchenScene, int],
+) -> None:
+    scene, wall = scene_with_wall
+    arm, checker, start, goal = _query_across_the_wall(scene_with_wall)
     # The wall matters: the straight joint-space line between them collides.
     assert not is_path_valid(np.stack([start, goal]), checker, 0.01)
 
@@ -113,13 +122,7 @@ def test_a_check_budget_makes_the_search_reproducible_and_bounded(
 ) -> None:
     """With ``max_checks`` a query's outcome depends on its seed, not on wall time: two runs
     give the same path, and a search that cannot succeed stops after its budget."""
-    scene, wall = scene_with_wall
-    arm = scene.arms[0]
-    checker = ArmCollisionChecker(arm, scene.obstacles_for(0, [wall]))
-    rng = np.random.default_rng(0)
-    start = solve_ik(arm, _down(scene, [-0.2, -0.1, 0.1]), rng, is_valid=checker)
-    goal = solve_ik(arm, _down(scene, [0.1, 0.1, 0.1]), rng, is_valid=checker)
-    assert start is not None and goal is not None
+    arm, checker, start, goal = _query_across_the_wall(scene_with_wall)
     config = RRTConnectConfig(seed=4, time_limit=60.0, max_checks=20_000)
     first = plan_arm_motion(arm, start, goal, checker, config)
     second = plan_arm_motion(arm, start, goal, checker, config)
