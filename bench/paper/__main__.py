@@ -3,13 +3,17 @@
 Regenerates the seed paper's experiments (one module each, listed in :data:`EXPERIMENTS`) into
 ``--out`` (JSON + PNG; regenerable trial pools under ``--out/cache``), then writes the report
 (``docs/RESULTS.md`` for quick/full, ``<out>/RESULTS.md`` for smoke unless ``--report`` says
-otherwise). ``--jobs 2`` runs two experiments at a time in separate processes. An experiment
-that fails is recorded as failed in its JSON (with the error line) and the others still run.
+otherwise). ``--jobs 2`` keeps two processes busy: the work is cut into units (trial-pool
+collections, experiments, and the independent parts of a split experiment such as the
+sampling table's rows) started critical-path first (``bench.paper.schedule``), one per
+process. An experiment that fails is recorded as failed in its JSON (with the error line) and
+the others still run.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import importlib
 import json
 import os
@@ -17,13 +21,16 @@ import resource
 import sys
 import time
 import traceback
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from collections.abc import Callable
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from pathlib import Path
+from typing import Any
 
 for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
 
 from bench.paper.common import REPO, Context  # noqa: E402
+from bench.paper.schedule import Unit, pick, ranks, ready_units, simulate  # noqa: E402
 
 # name -> module; the order is the report's (and the paper's) order.
 EXPERIMENTS = {
@@ -35,29 +42,187 @@ EXPERIMENTS = {
     "confident": "bench.paper.confident",
     "coffee": "bench.paper.coffee",
 }
-# Experiments that need no trial pool start at once, longest first (quick, last runs: sampling
-# ~550 s CPU, al2d ~160, kernel_learning ~80, coffee ~30): with two at a time the two lanes
-# then end closer together than cheapest-first, where sampling started last and ran alone.
-# The pool experiments start when the pools are collected.
-UNPOOLED_ORDER = ["sampling", "al2d", "kernel_learning", "coffee"]
-POOLED_ORDER = ["confident", "supervised3d", "active3d"]
+#: Experiments that read the Kitchen3D trial pools (collected first, see ``pool_units``).
+POOLED = ("confident", "supervised3d", "active3d")
+#: Estimated CPU seconds per experiment (quick run, 2 cores shared with other jobs): they
+#: only order the work (``bench.paper.schedule``). Split experiments estimate their parts.
+ESTIMATED_CPU_S = {"al2d": 230.0, "supervised3d": 130.0, "active3d": 130.0,
+                   "kernel_learning": 85.0, "confident": 90.0, "coffee": 120.0}
+#: Estimated CPU seconds per collected pool trial (valid-only: redrawn until the pre-check
+#: passes; a Kitchen3D scoop is ~4 s).
+POOL_TRIAL_CPU_S = {("pybullet", "pour"): 2.0, ("pybullet", "scoop"): 4.0}
 
 
-def run_one(name: str, ctx: Context) -> tuple[str, float, float, str]:
-    """Run one experiment; returns ``(name, wall s, CPU s of this process, error or "")``."""
+def pool_units(ctx: Context, pooled: list[str]) -> list[Unit]:
+    """One collection unit per pool file the pooled experiments need (the largest size)."""
+    wanted: dict[tuple[str, str], int] = {}
+    for name in pooled:
+        entry = ctx.sizes(importlib.import_module(EXPERIMENTS[name]).SIZES)
+        for skill in entry["skills"]:
+            key = (str(entry["backend"]), str(skill))
+            wanted[key] = max(wanted.get(key, 0), int(entry["n_train"]) + int(entry["n_test"]))
+    return [Unit(f"pool:{backend}_{skill}", None, f"{backend}:{skill}:{n}",
+                 n * POOL_TRIAL_CPU_S.get((backend, skill), 0.05))
+            for (backend, skill), n in wanted.items()]
+
+
+def plan(ctx: Context, names: list[str]) -> list[Unit]:
+    """The units of work for the experiments ``names``: pools, parts and whole experiments."""
+    pooled = [n for n in names if n in POOLED]
+    pools = pool_units(ctx, pooled) if pooled else []
+    units = list(pools)
+    for name in names:
+        module = importlib.import_module(EXPERIMENTS[name])
+        after = tuple(p.key for p in pools) if name in POOLED else ()
+        if hasattr(module, "parts"):
+            units += [Unit(f"{name}:{part}", name, part, cost, after)
+                      for part, cost in module.parts(ctx)]
+        else:
+            units.append(Unit(name, name, None, ESTIMATED_CPU_S.get(name, 60.0), after))
+    return units
+
+
+Result = tuple[str, float, float, str]  # (unit key, wall s, CPU s of its process, error)
+
+
+def run_unit(unit: Unit, ctx: Context, collection_workers: int) -> Result:
+    """Run one unit in this process; an error is returned (its traceback printed), not
+    raised. A failed whole experiment still gets its JSON, marked failed."""
     import torch
 
     torch.set_num_threads(1)
     started, cpu = time.perf_counter(), time.process_time()
     try:
-        importlib.import_module(EXPERIMENTS[name]).run(ctx)
-        return name, time.perf_counter() - started, time.process_time() - cpu, ""
+        if unit.experiment is None:
+            from bench.paper.pools import get_pool
+
+            backend, skill, n = str(unit.part).split(":")
+            get_pool(dataclasses.replace(ctx, workers=collection_workers), backend, skill,
+                     int(n), 0)
+        elif unit.part is None:
+            importlib.import_module(EXPERIMENTS[unit.experiment]).run(ctx)
+        else:
+            importlib.import_module(EXPERIMENTS[unit.experiment]).run_part(ctx, unit.part)
+        return unit.key, time.perf_counter() - started, time.process_time() - cpu, ""
     except Exception as error:
         traceback.print_exc()
         message = f"{type(error).__name__}: {error}".splitlines()[0][:300]
-        (ctx.out / f"{name}.json").write_text(json.dumps(
-            {"experiment": name, "mode": ctx.mode, "failed": True, "error": message}, indent=2))
-        return name, time.perf_counter() - started, time.process_time() - cpu, message
+        if unit.experiment is not None and unit.part is None:
+            _write_failed(ctx, unit.experiment, message)
+        return unit.key, time.perf_counter() - started, time.process_time() - cpu, message
+
+
+def _write_failed(ctx: Context, name: str, message: str) -> None:
+    (ctx.out / f"{name}.json").write_text(json.dumps(
+        {"experiment": name, "mode": ctx.mode, "failed": True, "error": message}, indent=2))
+
+
+def run_units(units: list[Unit], ctx: Context, jobs: int, collection_workers: int,
+              on_done: Callable[[Result], None]) -> list[Result]:
+    """Run ``units`` on ``jobs`` lanes (``<= 1``: in this process) in :func:`pick` order and
+    merge each split experiment once all its parts are done. Returns a result per unit, plus
+    one per split experiment's merge (key ``<name>:merge``).
+
+    A failed pool fails the experiments waiting for it without running them (an experiment
+    would otherwise collect the rest itself, and two of them could append to one file); a
+    failed part fails its experiment (its JSON says which part and why).
+    """
+    rank = ranks(units)
+    pending = list(units)
+    finished: set[str] = set()
+    failed: dict[str, str] = {}  # unit key -> error
+    results: list[Result] = []
+    left = {u.experiment: 0 for u in units if u.part is not None and u.experiment}
+    for unit in units:
+        if unit.experiment in left:
+            left[unit.experiment] += 1
+
+    def finish(result: Result) -> None:
+        key = result[0]
+        unit = next(u for u in units if u.key == key)
+        results.append(result)
+        on_done(result)
+        finished.add(key)
+        if result[3]:
+            failed[key] = result[3]
+        name = unit.experiment
+        if name in left:
+            left[name] -= 1
+            if left[name] == 0:
+                results.append(merge_parts(name, units, failed, ctx))
+                on_done(results[-1])
+
+    def startable() -> Unit | None:
+        """The next unit to start; units whose pools failed are finished as failed."""
+        while True:
+            ready = ready_units(pending, finished)
+            if not ready:
+                return None
+            unit = pick(ready, rank)
+            pending.remove(unit)
+            broken = [k for k in unit.after if k in failed]
+            if not broken:
+                return unit
+            message = f"not run: {broken[0]} failed ({failed[broken[0]]})"[:300]
+            if unit.experiment is not None and unit.part is None:
+                _write_failed(ctx, unit.experiment, message)
+            finish((unit.key, 0.0, 0.0, message))
+
+    if jobs <= 1:
+        while (unit := startable()) is not None:
+            finish(run_unit(unit, ctx, collection_workers))
+        return results
+    with ProcessPoolExecutor(max_workers=jobs) as executor:
+        running: dict[Future[Result], Unit] = {}
+        while True:
+            while len(running) < jobs and (unit := startable()) is not None:
+                running[executor.submit(run_unit, unit, ctx, collection_workers)] = unit
+            if not running:
+                break
+            done, _ = wait(running, return_when=FIRST_COMPLETED)
+            for future in done:
+                running.pop(future)
+                finish(future.result())
+    return results
+
+
+def merge_parts(name: str, units: list[Unit], failed: dict[str, str], ctx: Context) -> Result:
+    """Join the parts of experiment ``name`` (in this process; cheap) or record its failure."""
+    broken = [u.key for u in units if u.experiment == name and u.key in failed]
+    started, cpu = time.perf_counter(), time.process_time()
+    message = f"part {broken[0]} failed: {failed[broken[0]]}"[:300] if broken else ""
+    if not message:
+        try:
+            importlib.import_module(EXPERIMENTS[name]).merge(ctx)
+        except Exception as error:
+            traceback.print_exc()
+            message = f"{type(error).__name__}: {error}".splitlines()[0][:300]
+    if message:
+        _write_failed(ctx, name, message)
+    return f"{name}:merge", time.perf_counter() - started, time.process_time() - cpu, message
+
+
+def experiment_records(units: list[Unit], results: list[Result]) -> dict[str, dict[str, Any]]:
+    """Per experiment: wall and CPU seconds summed over its units (a split experiment's parts
+    ran on several lanes, so its wall time is the sum of theirs, not a span), and the first
+    error. Pools are not experiments: they are listed under ``units`` only."""
+    by_key = {r[0]: r for r in results}
+    records: dict[str, dict[str, Any]] = {}
+    for unit in units:
+        if unit.experiment is None or unit.key not in by_key:
+            continue
+        _key, wall, cpu, error = by_key[unit.key]
+        entry = records.setdefault(unit.experiment, {"wall_s": 0.0, "cpu_s": 0.0, "error": ""})
+        entry["wall_s"] = round(entry["wall_s"] + wall, 1)
+        entry["cpu_s"] = round(entry["cpu_s"] + cpu, 1)
+        entry["error"] = entry["error"] or error
+    for name, entry in records.items():
+        merged = by_key.get(f"{name}:merge")
+        if merged is not None:
+            entry["wall_s"] = round(entry["wall_s"] + merged[1], 1)
+            entry["cpu_s"] = round(entry["cpu_s"] + merged[2], 1)
+            entry["error"] = merged[3] or entry["error"]
+    return records
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -68,8 +233,10 @@ def main(argv: list[str] | None = None) -> int:
     mode.add_argument("--smoke", action="store_const", dest="mode", const="smoke")
     parser.add_argument("--out", type=Path, default=REPO / "bench" / "results" / "paper")
     parser.add_argument("--only", default="", help="comma-separated experiment names")
-    parser.add_argument("--jobs", type=int, default=2, help="experiments run at once")
-    parser.add_argument("--workers", type=int, default=2, help="trial-collection workers")
+    parser.add_argument("--jobs", type=int, default=2, help="units of work (processes) run at once")
+    parser.add_argument("--workers", type=int, default=2,
+                        help="trial-collection workers with --jobs 1 (with more jobs a pool "
+                             "is collected in its own job's process)")
     parser.add_argument("--report", type=Path, default=None,
                         help="Markdown report path (default: docs/RESULTS.md; smoke: OUT)")
     parser.add_argument("--no-report", action="store_true")
@@ -83,42 +250,20 @@ def main(argv: list[str] | None = None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     ctx = Context(args.mode, args.out.resolve(), sys.stderr.isatty(), args.workers)
     started = time.perf_counter()
-    unpooled = [n for n in UNPOOLED_ORDER if n in names]
-    pooled = [n for n in POOLED_ORDER if n in names]
-    results: list[tuple[str, float, float, str]] = []
+    units = plan(ctx, names)
+    estimate, _lanes = simulate(units, max(1, args.jobs))
+    print(f"[{0.0:7.1f} s] {len(units)} unit(s) on {max(1, args.jobs)} lane(s), estimated "
+          f"{estimate:.0f} s on idle cores", flush=True)
 
-    def report_done(result: tuple[str, float, float, str]) -> None:
-        results.append(result)
-        name, seconds, _, error = result
-        print(f"[{time.perf_counter() - started:7.1f} s] {name}: "
+    def report_done(result: Result) -> None:
+        key, seconds, _, error = result
+        print(f"[{time.perf_counter() - started:7.1f} s] {key}: "
               f"{'FAILED ' + error if error else f'done in {seconds:.1f} s'}", flush=True)
 
-    def collect_pools() -> None:
-        from bench.paper.pools import prepare_pools
-
-        t0 = time.perf_counter()
-        prepare_pools(ctx, [ctx.sizes(importlib.import_module(EXPERIMENTS[n]).SIZES)
-                            for n in pooled])
-        print(f"[{time.perf_counter() - started:7.1f} s] trial pools ready "
-              f"({time.perf_counter() - t0:.1f} s)", flush=True)
-
-    if args.jobs <= 1:
-        for name in unpooled:
-            report_done(run_one(name, ctx))
-        if pooled:
-            collect_pools()
-        for name in pooled:
-            report_done(run_one(name, ctx))
-    else:
-        with ProcessPoolExecutor(max_workers=args.jobs) as executor:
-            futures = [executor.submit(run_one, name, ctx) for name in unpooled]
-            if pooled:
-                # Collected here while the workers run the other experiments: the pools are
-                # complete before any experiment reads them, and only one process writes them.
-                collect_pools()
-            futures += [executor.submit(run_one, name, ctx) for name in pooled]
-            for future in as_completed(futures):
-                report_done(future.result())
+    # Collection runs in its lane's process when lanes run in parallel (one process per
+    # core), with ``--workers`` processes only when nothing else runs beside it.
+    results = run_units(units, ctx, args.jobs, args.workers if args.jobs <= 1 else 1,
+                        report_done)
     total = time.perf_counter() - started
     # CPU of this process and of every finished child (experiment and collection workers):
     # what the run would cost on dedicated cores, whatever else shares the machine.
@@ -127,8 +272,9 @@ def main(argv: list[str] | None = None) -> int:
     total_cpu = sum(u.ru_utime + u.ru_stime for u in usage)
     record = {"mode": args.mode, "total_wall_s": round(total, 1),
               "total_cpu_s": round(total_cpu, 1), "jobs": args.jobs,
-              "experiments": {n: {"wall_s": round(s, 1), "cpu_s": round(c, 1), "error": e}
-                              for n, s, c, e in results}}
+              "experiments": experiment_records(units, results),
+              "units": {k: {"wall_s": round(s, 1), "cpu_s": round(c, 1), "error": e}
+                        for k, s, c, e in results}}
     # An --only rerun into the same folder updates the record of the earlier run(s).
     previous = ctx.out / "run.json"
     if previous.is_file() and args.only:
@@ -137,9 +283,10 @@ def main(argv: list[str] | None = None) -> int:
             record["invocations"] = earlier.get("invocations", 1) + 1
             for key in ("total_wall_s", "total_cpu_s"):
                 record[key] = round(record[key] + earlier.get(key, 0.0), 1)
-            record["experiments"] = {**earlier.get("experiments", {}), **record["experiments"]}
+            for key in ("experiments", "units"):
+                record[key] = {**earlier.get(key, {}), **record[key]}
     previous.write_text(json.dumps(record, indent=2))
-    print(f"{args.mode}: {len(results)} experiment(s) in {total:.1f} s wall, "
+    print(f"{args.mode}: {len(record['experiments'])} experiment(s) in {total:.1f} s wall, "
           f"{total_cpu:.1f} s CPU", flush=True)
     if not args.no_report:
         from bench.paper.report import write_report

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import json
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -113,37 +114,86 @@ def _push_strip(source: str) -> dict[str, Any] | None:
     return contexts
 
 
-def run(ctx: Context) -> dict[str, Any]:
-    """Writes ``sampling.json`` and ``sampling.png`` (FP and Diversity per sampler)."""
-    started = time.perf_counter()
+#: Estimated CPU seconds of one run of a row (quick runs, 2 cores; orders the parts only).
+RUN_CPU_S = {("box2d", "pour"): 70.0, ("box2d", "scoop"): 260.0, ("box2d", "push"): 3.0,
+             ("pybullet", "pour"): 300.0, ("pybullet", "scoop"): 400.0}
+
+
+def _part_name(row: tuple[str, str, str, int]) -> str:
+    table_name, name, skill, _runs = row
+    return f"{table_name}-{name}-{skill}"
+
+
+def parts(ctx: Context) -> list[tuple[str, float]]:
+    """The independent parts of this experiment (one per table row, in the report's order)
+    with their estimated CPU seconds: ``python -m bench.paper`` runs them on separate lanes
+    and :func:`merge` joins them. A row's numbers do not depend on the other rows (each has
+    its own backend, model and true-score seed)."""
+    return [(_part_name(row), row[3] * RUN_CPU_S.get((row[1], row[2]), 10.0))
+            for row in ctx.sizes(SIZES)["rows"]]
+
+
+def _part_path(ctx: Context, part: str) -> Path:
+    return ctx.cache / "parts" / NAME / f"{part}.json"
+
+
+def run_part(ctx: Context, part: str) -> dict[str, Any]:
+    """Measure one row (``part`` from :func:`parts`) into ``<out>/cache/parts/sampling/``."""
+    sizes = ctx.sizes(SIZES)
+    rows = {_part_name(r): r for r in sizes["rows"]}
+    if part not in rows:
+        raise KeyError(f"sampling has no part {part!r} in {ctx.mode} mode "
+                       f"(known: {', '.join(rows)})")
+    path = _part_path(ctx, part)
+    path.unlink(missing_ok=True)  # a stale row from an earlier run must never be merged
+    table_name, name, skill, runs = rows[part]
+    backend = load_backend(name)
+    try:
+        model, source = model_for(ctx, backend, name, skill, sizes["train_budget"])
+        strip = _push_strip(source) if (name, skill) == ("box2d", "push") else None
+        if strip is not None:
+            source += (f" (goals |x| in {strip['goal_x_abs']}, |y| <= "
+                       f"{strip['goal_y_abs_max']}, in-line pushes: where it was trained)")
+        t0, cpu0 = time.perf_counter(), time.process_time()
+        table = bench_skill(LiveScores(backend, skill, strip), skill, model, runs, LAMBDA,
+                            validate=True)
+        row = {"table": table_name, "backend": name, "skill": skill, "runs": runs,
+               "model": source, "metrics": table,
+               "wall_s": round(time.perf_counter() - t0, 1),
+               "cpu_s": round(time.process_time() - cpu0, 1)}
+    finally:
+        backend.close()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(row, indent=2) + "\n")
+    return row
+
+
+def merge(ctx: Context) -> dict[str, Any]:
+    """Join the parts (all must have run in this mode) into ``sampling.json`` and
+    ``sampling.png``; the JSON's ``wall_s`` is the parts' summed wall time."""
     sizes = ctx.sizes(SIZES)
     tables: list[dict[str, Any]] = []
-    backends: dict[str, SkillBackend] = {}
-    try:
-        for table_name, name, skill, runs in sizes["rows"]:
-            backend = backends.get(name) or backends.setdefault(name, load_backend(name))
-            model, source = model_for(ctx, backend, name, skill, sizes["train_budget"])
-            strip = _push_strip(source) if (name, skill) == ("box2d", "push") else None
-            if strip is not None:
-                source += (f" (goals |x| in {strip['goal_x_abs']}, |y| <= "
-                           f"{strip['goal_y_abs_max']}, in-line pushes: where it was trained)")
-            t0 = time.perf_counter()
-            table = bench_skill(LiveScores(backend, skill, strip), skill, model, runs, LAMBDA,
-                                validate=True)
-            tables.append({"table": table_name, "backend": name, "skill": skill,
-                           "runs": runs, "model": source, "metrics": table,
-                           "wall_s": round(time.perf_counter() - t0, 1)})
-    finally:
-        for backend in backends.values():
-            backend.close()
+    for part, _cost in parts(ctx):
+        path = _part_path(ctx, part)
+        if not path.is_file():
+            raise FileNotFoundError(f"sampling part {part!r} did not finish (no {path})")
+        tables.append(json.loads(path.read_text()))
     _plot(tables, ctx)
     payload = {"sizes": {"rows": [list(r) for r in sizes["rows"]],
                          "train_budget": sizes["train_budget"]},
                "lambda": LAMBDA, "samplers": list(SAMPLERS),
                "metrics": [{"key": k, "label": label} for k, label, _ in METRICS],
                "tables": tables, "pngs": [f"{NAME}.png"]}
-    write_json(ctx, NAME, payload, started)
+    write_json(ctx, NAME, payload, time.perf_counter() - sum(t["wall_s"] for t in tables))
     return payload
+
+
+def run(ctx: Context) -> dict[str, Any]:
+    """Writes ``sampling.json`` and ``sampling.png`` (FP and Diversity per sampler): every
+    part in turn, then :func:`merge`."""
+    for part, _cost in parts(ctx):
+        run_part(ctx, part)
+    return merge(ctx)
 
 
 def _plot(tables: list[dict[str, Any]], ctx: Context) -> None:

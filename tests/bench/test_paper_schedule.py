@@ -1,0 +1,100 @@
+"""How ``python -m bench.paper`` cuts its work into units and orders them on its lanes
+(``bench.paper.schedule`` and the runner in ``bench.paper.__main__``)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from bench.paper import sampling_table
+from bench.paper.__main__ import plan, run_units
+from bench.paper.common import Context
+from bench.paper.schedule import Unit, ranks, simulate
+
+
+def test_longest_first_ends_the_lanes_together() -> None:
+    # Listed cheapest first: in listing order the 300 s unit would start at 100 s and end at
+    # 400 s; longest first it runs alone on one lane while the others share the other one.
+    units = [Unit("a", "a", cost=100.0), Unit("b", "b", cost=100.0), Unit("c", "c", cost=300.0)]
+    makespan, lanes = simulate(units, 2)
+    assert makespan == pytest.approx(300.0)
+    assert lanes[0] == ["c"] and sorted(lanes[1]) == ["a", "b"]
+
+
+def test_a_pool_on_the_critical_path_starts_before_longer_independent_work() -> None:
+    # The pool (100 s) gates a 300 s experiment: rank 400 beats the 250 s units. Longest
+    # first by own cost would start both 250 s units, then pool + experiment: 650 s.
+    units = [Unit("a", "a", cost=250.0), Unit("b", "b", cost=250.0),
+             Unit("pool:x", None, "x", cost=100.0),
+             Unit("exp", "exp", cost=300.0, after=("pool:x",))]
+    assert ranks(units)["pool:x"] == pytest.approx(400.0)
+    makespan, lanes = simulate(units, 2)
+    assert makespan == pytest.approx(500.0)
+    assert lanes[0][:2] == ["pool:x", "exp"]
+
+
+def test_ranks_reject_unknown_dependencies_and_cycles() -> None:
+    with pytest.raises(ValueError, match="unknown unit 'nope'"):
+        ranks([Unit("a", "a", after=("nope",))])
+    with pytest.raises(ValueError, match="cycle"):
+        ranks([Unit("a", "a", after=("b",)), Unit("b", "b", after=("a",))])
+
+
+def test_quick_plan_splits_sampling_by_row_and_gates_pool_experiments(tmp_path: Path) -> None:
+    ctx = Context("quick", tmp_path, False)
+    units = {u.key: u for u in plan(ctx, ["sampling", "confident", "al2d"])}
+    rows = sampling_table.SIZES["quick"]["rows"]
+    parts = [k for k in units if k.startswith("sampling:")]
+    assert parts == [f"sampling:{t}-{b}-{s}" for t, b, s, _ in rows]
+    assert all(units[k].experiment == "sampling" and units[k].cost > 0 for k in parts)
+    pools = sorted(k for k in units if k.startswith("pool:"))
+    assert pools == ["pool:pybullet_pour", "pool:pybullet_scoop"]
+    assert sorted(units["confident"].after) == pools and units["al2d"].after == ()
+    assert units["pool:pybullet_scoop"].part == "pybullet:scoop:100"  # 70 train + 30 test
+    # Every sampling part costs less than the whole table did: the lanes can share it.
+    _, lanes = simulate(list(units.values()), 2)
+    assert all(any(k.startswith("sampling:") for k in lane) for lane in lanes)
+
+
+def test_failed_pool_fails_its_experiments_without_running_them(tmp_path: Path) -> None:
+    ctx = Context("smoke", tmp_path, False, 1)
+    units = [Unit("pool:synthetic_nope", None, "synthetic:nope:5", 1.0),
+             Unit("confident", "confident", None, 1.0, ("pool:synthetic_nope",))]
+    done: list[str] = []
+    results = {r[0]: r for r in run_units(units, ctx, 1, 1, lambda r: done.append(r[0]))}
+    assert done == ["pool:synthetic_nope", "confident"]
+    assert results["pool:synthetic_nope"][3]
+    assert results["confident"][3].startswith("not run: pool:synthetic_nope failed")
+    assert results["confident"][2] == 0.0  # no CPU: it never ran
+    data = json.loads((tmp_path / "confident.json").read_text())
+    assert data["failed"] and "pool:synthetic_nope" in data["error"]
+
+
+def test_sampling_parts_merge_in_row_order_and_never_from_stale_files(tmp_path: Path) -> None:
+    ctx = Context("smoke", tmp_path, False, 1)
+    names = [name for name, _ in sampling_table.parts(ctx)]
+    assert len(names) == 2
+    stale = ctx.cache / "parts" / "sampling" / f"{names[0]}.json"
+    stale.parent.mkdir(parents=True)
+    stale.write_text(json.dumps({"table": "stale"}))
+    # The first row's unit fails (it names no row of this mode): although an earlier run's
+    # file for that row exists, the experiment is failed, not merged from it.
+    units = [Unit(f"sampling:{names[1]}", "sampling", names[1], 2.0),
+             Unit(f"sampling:{names[0]}", "sampling", "no-such-row", 1.0)]
+    results = {r[0]: r for r in run_units(units, ctx, 1, 1, lambda r: None)}
+    assert results[f"sampling:{names[0]}"][3].startswith("KeyError")
+    assert results["sampling:merge"][3].startswith(f"part sampling:{names[0]} failed")
+    assert json.loads((tmp_path / "sampling.json").read_text())["failed"]
+    stale.unlink()
+    with pytest.raises(FileNotFoundError, match=names[0]):
+        sampling_table.merge(ctx)
+    # Parts run in any order; the merged table keeps the report's row order.
+    sampling_table.run_part(ctx, names[0])
+    merged = sampling_table.merge(ctx)
+    assert [f"{t['table']}-{t['backend']}-{t['skill']}" for t in merged["tables"]] == names
+    written = json.loads((tmp_path / "sampling.json").read_text())
+    assert not written.get("failed") and written["tables"] == merged["tables"]
+    assert all(1 <= t["metrics"][s]["n5"]["mean"] <= 100 for t in merged["tables"]
+               for s in merged["samplers"])
