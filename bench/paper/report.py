@@ -527,7 +527,7 @@ def write_report(out: Path, report: Path) -> Path:
         "everything runs and a first look, not a statistically meaningful replication; "
         "`--full` uses the paper's repetitions).",
         f"- Total wall time: {run.get('total_wall_s', '?')} s with {run.get('jobs', '?')} "
-        f"experiments at a time; total CPU time {run.get('total_cpu_s', '?')} s (all "
+        f"jobs (processes) at a time; total CPU time {run.get('total_cpu_s', '?')} s (all "
         "processes: what the run costs on otherwise idle cores)"
         + (f", summed over {run['invocations']} invocations (`--only` reruns)"
            if run.get("invocations", 1) > 1 else "") + ".",
@@ -535,11 +535,19 @@ def write_report(out: Path, report: Path) -> Path:
         f"{machine.get('cpus', '?')} CPUs shared with other jobs (1-min load "
         f"{machine.get('load_1min', '?')} when an experiment finished), "
         f"OMP_NUM_THREADS={machine.get('omp_num_threads', '?')}.",
-        "- Per-experiment wall time: " + ", ".join(
+        "- Per-experiment time (an experiment split into parts that ran side by side: "
+        "summed over its parts): " + ", ".join(
             f"{n} {e['wall_s']:.0f} s wall / {e.get('cpu_s', float('nan')):.0f} s CPU"
             + (" (FAILED)" if e["error"] else "")
             for n, e in run.get("experiments", {}).items()),
     ]
+    pools = {k: e for k, e in run.get("units", {}).items() if k.startswith("pool:")}
+    if pools:
+        lines.append("- Trial-pool collection (before the pool experiments, each in its own "
+                     "job): " + ", ".join(
+                         f"{k.removeprefix('pool:')} {e['wall_s']:.0f} s wall / "
+                         f"{e['cpu_s']:.0f} s CPU" + (" (FAILED)" if e["error"] else "")
+                         for k, e in pools.items()))
     # Free-text notes about how this run went (e.g. reruns), kept in run.json by the operator.
     lines += [f"- Note: {note}" for note in run.get("notes", [])]
     lines.append("")
