@@ -6,6 +6,7 @@ Roll/pitch/yaw follow pybullet's ``getEulerFromQuaternion``: ``R = Rz(yaw) Ry(pi
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -44,7 +45,7 @@ class Pose:
 
     def rotation(self) -> np.ndarray:
         """Rotation matrix, shape ``(3, 3)``."""
-        return Rotation.from_quat(self.quaternion).as_matrix()
+        return _quat_matrix(self.quaternion)
 
     def matrix(self) -> np.ndarray:
         """Homogeneous matrix, shape ``(4, 4)``."""
@@ -55,23 +56,61 @@ class Pose:
 
     def __matmul__(self, other: Pose) -> Pose:
         """Composition: ``(A_T_B @ B_T_C) = A_T_C``."""
-        rotation = Rotation.from_quat(self.quaternion)
+        # Plain quaternion algebra: this runs in every collision check and IK verification,
+        # where building scipy Rotation objects cost ~15 % of a Kitchen3D planning run.
         return Pose(
-            self.position + rotation.apply(other.position),
-            (rotation * Rotation.from_quat(other.quaternion)).as_quat(),
+            self.position + _rotate(self.quaternion, other.position),
+            _quat_product(self.quaternion, other.quaternion),
         )
 
     def inverse(self) -> Pose:
-        inverse_rotation = Rotation.from_quat(self.quaternion).inv()
-        return Pose(-inverse_rotation.apply(self.position), inverse_rotation.as_quat())
+        conjugate = self.quaternion * np.array([-1.0, -1.0, -1.0, 1.0])
+        return Pose(-_rotate(conjugate, self.position), conjugate)
 
     def euler(self) -> np.ndarray:
         """``(roll, pitch, yaw)`` in radians, pybullet's convention."""
-        return Rotation.from_quat(self.quaternion).as_euler("xyz")
+        x, y, z, w = (float(v) for v in self.quaternion)
+        roll = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
+        pitch = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
+        yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+        return np.array([roll, pitch, yaw])
 
     def as_tuples(self) -> tuple[tuple[float, ...], tuple[float, ...]]:
         """``(position, quaternion)`` as plain tuples for pybullet calls."""
         return tuple(map(float, self.position)), tuple(map(float, self.quaternion))
+
+
+def _quat_product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product ``a * b`` of ``(x, y, z, w)`` quaternions (rotation ``b`` first)."""
+    ax, ay, az, aw = (float(v) for v in a)
+    bx, by, bz, bw = (float(v) for v in b)
+    return np.array([
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    ])
+
+
+def _rotate(quaternion: np.ndarray, vector: np.ndarray) -> np.ndarray:
+    """``vector`` (shape ``(3,)``) rotated by the unit ``(x, y, z, w)`` quaternion."""
+    # v + w t + u x t with t = 2 u x v, in scalars (np.cross costs ~40 µs a call).
+    x, y, z, w = (float(q) for q in quaternion)
+    vx, vy, vz = (float(c) for c in vector)
+    tx, ty, tz = 2.0 * (y * vz - z * vy), 2.0 * (z * vx - x * vz), 2.0 * (x * vy - y * vx)
+    return np.array([vx + w * tx + y * tz - z * ty,
+                     vy + w * ty + z * tx - x * tz,
+                     vz + w * tz + x * ty - y * tx])
+
+
+def _quat_matrix(quaternion: np.ndarray) -> np.ndarray:
+    """Rotation matrix (shape ``(3, 3)``) of a unit ``(x, y, z, w)`` quaternion."""
+    x, y, z, w = (float(v) for v in quaternion)
+    return np.array([
+        [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w)],
+        [2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w)],
+        [2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y)],
+    ])
 
 
 def rotation_distance(a: Pose, b: Pose) -> float:
