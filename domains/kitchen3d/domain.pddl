@@ -9,6 +9,9 @@
 ; it stands), so the planner sees which object is in the way and moves it.
 ; Two arms take turns: the streams check each arm against the other one resting at its home
 ; conf ((Home ?r ?q)), so an arm acts only while the other is at home (not (OtherBusy ?r)).
+; An arm moves between a pick and a place of the same object (JustPicked / JustPlaced): a pick
+; right after a place at the same conf (or the reverse) only undoes it, and would let a search
+; chain carries through intermediate placements (place-pick-place) instead of one move.
 (define (domain kitchen3d)
   (:requirements :strips :equality :negative-preconditions :derived-predicates :action-costs)
   (:predicates
@@ -25,7 +28,7 @@
     (AtPose ?o ?p) (AtGrasp ?r ?o ?g) (AtConf ?r ?q) (HandEmpty ?r) (CanMove ?r)
     (Contains ?o ?m) (Stirred ?c)
     (On ?o ?r) (Holding ?o) (UnsafePose ?o ?p) (UnsafeTraj ?t)
-    (Home ?r ?q) (Busy ?r) (OtherBusy ?r))
+    (Home ?r ?q) (Busy ?r) (OtherBusy ?r) (JustPicked ?r) (JustPlaced ?r))
   (:functions (Distance ?r ?q1 ?q2) (total-cost))
   (:derived (On ?o ?r)
     (exists (?p) (and (Contained ?o ?p ?r) (AtPose ?o ?p))))
@@ -45,26 +48,26 @@
     :parameters (?q1 ?t ?q2 ?r)
     :precondition (and (not (OtherBusy ?r)) (FreeMotion ?r ?q1 ?t ?q2) (AtConf ?r ?q1) (HandEmpty ?r) (CanMove ?r)
                        (not (UnsafeTraj ?t)))
-    :effect (and (AtConf ?r ?q2) (not (AtConf ?r ?q1)) (not (CanMove ?r))
+    :effect (and (AtConf ?r ?q2) (not (AtConf ?r ?q1)) (not (CanMove ?r)) (not (JustPlaced ?r))
                  (increase (total-cost) (Distance ?r ?q1 ?q2))))
   (:action move-holding
     :parameters (?o ?g ?q1 ?t ?q2 ?r)
     :precondition (and (not (OtherBusy ?r)) (HoldingMotion ?r ?o ?g ?q1 ?t ?q2) (AtConf ?r ?q1) (AtGrasp ?r ?o ?g)
                        (CanMove ?r) (not (UnsafeTraj ?t)))
-    :effect (and (AtConf ?r ?q2) (not (AtConf ?r ?q1)) (not (CanMove ?r))
+    :effect (and (AtConf ?r ?q2) (not (AtConf ?r ?q1)) (not (CanMove ?r)) (not (JustPicked ?r))
                  (increase (total-cost) (Distance ?r ?q1 ?q2))))
   (:action pick
     :parameters (?o ?p ?g ?q ?a ?r)
     :precondition (and (not (OtherBusy ?r)) (Kin ?r ?o ?p ?g ?q ?a) (AtPose ?o ?p) (HandEmpty ?r) (AtConf ?r ?q)
-                       (not (UnsafeTraj ?a)))
+                       (not (JustPlaced ?r)) (not (UnsafeTraj ?a)))
     :effect (and (AtGrasp ?r ?o ?g) (CanMove ?r) (not (AtPose ?o ?p)) (not (HandEmpty ?r))
-                 (increase (total-cost) 1)))
+                 (JustPicked ?r) (increase (total-cost) 1)))
   (:action place
     :parameters (?o ?p ?g ?q ?a ?r)
     :precondition (and (not (OtherBusy ?r)) (Kin ?r ?o ?p ?g ?q ?a) (AtGrasp ?r ?o ?g) (AtConf ?r ?q)
-                       (not (UnsafePose ?o ?p)) (not (UnsafeTraj ?a)))
+                       (not (JustPicked ?r)) (not (UnsafePose ?o ?p)) (not (UnsafeTraj ?a)))
     :effect (and (AtPose ?o ?p) (HandEmpty ?r) (CanMove ?r) (not (AtGrasp ?r ?o ?g))
-                 (increase (total-cost) 1)))
+                 (JustPlaced ?r) (increase (total-cost) 1)))
   ; Learned (GoodPour): tilt the held cup about a pivot over the receptacle and back.
   ; New contents undo a stir.
   (:action pour

@@ -42,8 +42,10 @@ DEFAULT_LEARNED = {
     "sample-pour": {"model": "../../models/kitchen3d/pour", "sampler": "adaptive"},
     "sample-scoop": {"model": "../../models/kitchen3d/scoop", "sampler": "adaptive"},
 }
-#: RRT-Connect attempts (each a separate stream call) between two confs.
+#: Motion searches (each a separate stream call) between two confs, and how many distinct
+#: paths they may give at most.
 MOTION_ATTEMPTS = 3
+MOTION_ALTERNATIVES = 2
 #: Targets of tool skills (pour, scoop, dump, stir) farther than this (m, horizontally) from
 #: an arm's base are out of its reach: the Panda reaches 0.855 m, plus the held tool and the
 #: skill's offsets; pours were found up to 0.92 m. Skipping them spares futile IK.
@@ -99,6 +101,11 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
     configs = learned_stream_configs({"learned_streams": learned}, HERE)
     table_z = planning.table_z
     motion_seed = iter(range(1, 1_000_000))
+    # What must stand where whenever an arm is at a conf: a pick/place conf of object o at
+    # pose p has o at p (it is about to be picked or has just been placed). Motions to and
+    # from such confs avoid those objects (they would otherwise sweep through the object
+    # the arm reaches for, and the planner, seeing it via CFreeTraj, had no other path).
+    standing_at: dict[ArmConf, set[tuple[str, tuple[float, float]]]] = {}
 
     def arm_of(r: Any) -> int | None:
         arm = int(r)
@@ -134,20 +141,32 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         arm = arm_of(r)
         if arm is None:
             return
-        yield list(planning.pick_kinematics(name, _xy(pose), tuple(grasp), rng,  # type: ignore[arg-type]
-                                            arms=(arm,)))
+        found = list(planning.pick_kinematics(name, _xy(pose), tuple(grasp), rng,  # type: ignore[arg-type]
+                                              arms=(arm,)))
+        for conf, _ in found:
+            standing_at.setdefault(conf, set()).add((name, _xy(pose)))
+        yield found
 
     def motion(r: Any, q1: ArmConf, q2: ArmConf, held: tuple[str, GraspValue] | None
                ) -> Iterator[list[tuple[ArmPath]]]:
         a, b = as_conf(q1), as_conf(q2)
         if a.arm != arm_of(r) or b.arm != a.arm:
             return
-        # RRT-Connect has a wall-clock budget: on a loaded machine a feasible motion can
-        # miss it, so a failed call yields nothing *this* call and may be retried later.
+        standing = standing_at.get(a, set()) | standing_at.get(b, set())
+        names = [name for name, _ in standing]
+        # An object held, or (ambiguously) at two poses, is not an obstacle of this motion.
+        standing = {(name, xy) for name, xy in standing
+                    if names.count(name) == 1 and (held is None or held[0] != name)}
+        # A failed search yields nothing *this* call and may be retried later; a found path
+        # may still hit a movable object elsewhere (CFreeTraj), so a later call gives
+        # another one (a new RRT-Connect seed).
+        found = 0
         for _ in range(MOTION_ATTEMPTS):
-            path = planning.plan_motion(a, b, held, next(motion_seed))
+            path = planning.plan_motion(a, b, held, next(motion_seed), sorted(standing),
+                                        straight_first=found == 0)
             yield [] if path is None else [(path,)]
-            if path is not None:
+            found += path is not None
+            if found >= MOTION_ALTERNATIVES:
                 return
 
     def plan_free_motion(r: Any, q1: ArmConf, q2: ArmConf) -> Iterator[list[tuple[ArmPath]]]:

@@ -65,9 +65,11 @@ def plan_arm_motion(
     goal: np.ndarray,
     is_valid: Callable[[np.ndarray], bool],
     config: RRTConnectConfig | None = None,
+    straight_first: bool = True,
 ) -> MotionPlan:
     """A valid path from ``start`` to ``goal`` (shape ``(7,)``) for ``arm``: the straight
-    joint-space segment when it is valid, else RRT-Connect (``config``).
+    joint-space segment when it is valid (and ``straight_first``), else RRT-Connect
+    (``config``).
 
     ``is_valid`` is usually an :class:`ArmCollisionChecker` (with a grasped body attached
     and the tilt limit when carrying contents). Checks are remembered per configuration
@@ -84,7 +86,7 @@ def plan_arm_motion(
         # Many kitchen motions (lifting, short transfers) are straight in joint space: a
         # segment costs ~|dq|/resolution checks, an RRT query with shortcutting many more.
         direct = (straight_segment(q_start, q_goal, memo, settings.resolution)
-                  if inside else None)
+                  if inside and straight_first else None)
         if direct is not None:
             return MotionPlan(direct, "solved", time.perf_counter() - began, memo.calls)
         plan = plan_rrt_connect(start, goal, arm.lower_limits, arm.upper_limits, memo, settings)

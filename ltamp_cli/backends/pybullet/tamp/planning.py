@@ -185,22 +185,41 @@ class PlanningWorld:
                    ArmPath(arm, configs, "approach", None, touching=name))
 
     def plan_motion(self, q1: ArmConf, q2: ArmConf, held: tuple[str, GraspValue] | None,
-                    seed: int) -> ArmPath | None:
-        """RRT-Connect between two confs of the same arm (carrying ``held``)."""
+                    seed: int, standing: Sequence[tuple[str, XY]] = (),
+                    straight_first: bool = True) -> ArmPath | None:
+        """A collision-free path between two confs of the same arm (carrying ``held``): the
+        straight joint-space segment (unless not ``straight_first``), else RRT-Connect.
+
+        ``standing``: movable objects known to stand at these poses whenever the arm is at
+        ``q1`` or ``q2`` (the object a pick conf picks or a place conf has just placed);
+        they are obstacles too, so that the path does not sweep through the very object the
+        arm is about to pick. When an end conf itself touches one of them, they are left
+        out (the planner's ``CFreeTraj`` tests still see them)."""
         if q1.arm != q2.arm or q1 == q2:
             return None
         arm = self.scene.arms[q1.arm]
-        checker = self.checker(q1.arm, held)
+        names = [name for name, _ in standing]
+        for name, xy in standing:
+            self.place(name, xy)
+        checker = self.checker(q1.arm, held, extra=names)
+        if names and not (checker(q1.array) and checker(q2.array)):
+            for name in names:
+                self.park(name)
+            checker = self.checker(q1.arm, held)
+            names = []
         budget, checks = self.settings.rrt_time_s, self.settings.rrt_checks
         if checker.attached is not None and checker.attached.carries_contents:
             budget, checks = self.settings.rrt_carry_time_s, self.settings.rrt_carry_checks
         try:
             plan = plan_arm_motion(arm, q1.array, q2.array, checker,
                                    RRTConnectConfig(time_limit=budget, seed=seed,
-                                                    max_checks=checks))
+                                                    max_checks=checks),
+                                   straight_first=straight_first)
         finally:
             if held is not None:
                 self.park(held[0])
+            for name in names:
+                self.park(name)
         if plan.path is None:
             return None
         return ArmPath(q1.arm, plan.path, "holding" if held else "free", held)
