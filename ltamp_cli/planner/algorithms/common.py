@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -29,7 +29,13 @@ from ltamp_cli.planner.result import (
     PlanStep,
     StreamResult,
 )
-from ltamp_cli.planner.search.ground import Context, Fact, FactIndex, join_tuples
+from ltamp_cli.planner.search.ground import (
+    Context,
+    Fact,
+    FactIndex,
+    SeedFilter,
+    join_tuples,
+)
 from ltamp_cli.planner.search.normalize import LiftedLiteral
 from ltamp_cli.planner.search.solve import DiscreteResult, plan_discrete
 from ltamp_cli.planner.streams import (
@@ -146,17 +152,25 @@ class PlannerState:
     # enumerated for that purpose (eager evaluation, incremental sampling): later rounds only
     # join what was added since (facts only grow).
     enumerated: dict[tuple[str, str], dict[str, int]] = field(default_factory=dict)
-    # Stream name -> every input tuple over real facts found so far (in discovery order),
-    # so that optimistic evaluations do not join the real facts again each time.
+    # Stream name -> the input tuples over real facts found so far (in discovery order)
+    # whose instance is not exhausted, so that optimistic evaluations do not join the real
+    # facts again each time.
     real_inputs: dict[str, list[tuple[str, ...]]] = field(default_factory=dict)
     # Expansions allowed to a budgeted search (see :meth:`search`).
     search_budget: int = INITIAL_SEARCH_EXPANSIONS
 
-    def all_real_bindings(self, external: External) -> list[tuple[str, ...]]:
-        """Every input tuple of ``external`` whose domain facts are real (kept up to date
-        semi-naively as facts grow)."""
-        known = self.real_inputs.setdefault(external.name, [])
+    def open_real_bindings(self, external: External) -> list[tuple[str, ...]]:
+        """The input tuples of ``external`` whose domain facts are real (kept up to date
+        semi-naively as facts grow), in discovery order, without those whose instance is
+        exhausted: it can certify nothing more, and instances are never un-exhausted, so
+        they are dropped for good."""
+        known = self.real_inputs.get(external.name, [])
         known.extend(self.new_bindings(external, "real"))
+        instances = self.instances
+        name = external.name
+        known = [inputs for inputs in known
+                 if (found := instances.get((name, inputs))) is None or not found.exhausted]
+        self.real_inputs[name] = known
         return known
 
     def new_bindings(self, external: External, purpose: str) -> list[tuple[str, ...]]:
@@ -262,12 +276,14 @@ class PlannerState:
     def search(self, init: Iterable[Fact], objects: Mapping[str, str],
                function_values: Mapping[Fact, float], max_expansions: int | None = None,
                context_blocks: Mapping[Fact, list[Context]] | None = None,
-               budgeted: bool = False) -> DiscreteResult:
+               budgeted: bool = False,
+               guess: Sequence[tuple[str, tuple[str, ...]]] | None = None) -> DiscreteResult:
         """One discrete search. ``budgeted``: bound it by :attr:`search_budget` expansions,
         doubled whenever a search runs out of it (``DiscreteResult.capped``): a search that
         fails is usually exhaustive, and the algorithms learn as much from a bounded failure
         (sample more, raise the complexity) at a fraction of the cost, while the growing
-        budget keeps them complete."""
+        budget keeps them complete. ``guess``: a candidate plan checked before searching
+        (see :func:`.plan_discrete`)."""
         start = time.perf_counter()
         self.searches += 1
         if budgeted:
@@ -277,7 +293,7 @@ class PlannerState:
                 self.problem.domain, objects, init, function_values, self.problem.goal,
                 self.deadline, self.config.search, self.config.unit_costs, max_expansions,
                 self.config.skeleton, self.cost_bound, self.fluent_requirements,
-                context_blocks)
+                context_blocks, guess)
         finally:
             self.search_time += time.perf_counter() - start
         if budgeted and result.capped:
@@ -299,10 +315,11 @@ class PlannerState:
             if atom not in reachable]
 
     def bindings_of(self, external: External, index: FactIndex,
-                    since: Mapping[str, int] | None = None) -> Iterator[tuple[str, ...]]:
+                    since: Mapping[str, int] | None = None,
+                    keep: SeedFilter | None = None) -> Iterator[tuple[str, ...]]:
         """Input tuples whose domain facts all hold in ``index``; with ``since`` (a
         :meth:`FactIndex.sizes` snapshot), only those using a fact added after it (possibly
-        repeated)."""
+        repeated) that ``keep`` accepts (see :func:`.join_tuples`)."""
         inputs = external_inputs(external)
         literals = [LiftedLiteral(a.predicate, a.args) for a in external_domain(external)]
         if not literals:
@@ -312,7 +329,7 @@ class PlannerState:
             if since is None:
                 yield ()
             return
-        yield from join_tuples(literals, index, tuple(inputs), since)
+        yield from join_tuples(literals, index, tuple(inputs), since, keep)
 
     def result(self, status: str, discrete: DiscreteResult | None,
                preimage: Iterable[Fact] = ()) -> PlanResult:
@@ -385,6 +402,13 @@ class PlannerState:
         for fact in needed:
             visit(fact)
         return ordered
+
+
+def bound_plan(actions: Iterable[tuple[str, tuple[str, ...]]], mapping: Mapping[str, str]
+               ) -> list[tuple[str, tuple[str, ...]]]:
+    """An optimistic plan (action names and arguments) with placeholders replaced by the
+    values ``mapping`` bound them to."""
+    return [(name, tuple(mapping.get(x, x) for x in args)) for name, args in actions]
 
 
 def goal_atoms(problem: PlanningProblem) -> list[Fact]:

@@ -9,15 +9,18 @@ the next search failure, which re-enables everything and raises the complexity b
 
 from __future__ import annotations
 
-from ltamp_cli.planner.algorithms.common import PlannerState
+from ltamp_cli.planner.algorithms.common import PlannerState, bound_plan
 from ltamp_cli.planner.algorithms.optimistic import (
+    MAX_LOCAL_REPAIRS,
     InstanceKey,
     OptimisticEvaluation,
     bind_context,
     evaluate_eager,
     fluent_contexts,
     optimistic_evaluation,
+    repairable,
     report_unusable,
+    sampled_inputs,
     stream_plan,
 )
 from ltamp_cli.planner.algorithms.preimage import plan_preimage
@@ -33,15 +36,24 @@ REAL_SEARCH_EXPANSIONS = 500
 
 def process_stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
                         plan: list[InstanceKey],
-                        contexts: dict[InstanceKey, tuple[Fact, ...]] | None = None) -> bool:
-    """Call the stream plan in order; True when every instance succeeded.
+                        contexts: dict[InstanceKey, tuple[Fact, ...]] | None = None,
+                        binding: dict[str, str] | None = None) -> bool:
+    """Call the stream plan in order; True when every instance succeeded. ``binding``
+    (filled in when given) maps placeholders to the values bound to them.
 
     When an instance fails, every output this stream plan produced that the failed
     instance consumed is reported unusable to its stream (``Binding.on_unusable``).
     """
-    binding: dict[str, str] = {}
+    binding = {} if binding is None else binding
     made_by: dict[str, tuple[StreamInstance, tuple[str, ...]]] = {}
-    for name, inputs in plan:
+    # Per generator position: (instance, index of its next output to use, binding and
+    # made_by before it), so that a local repair can go on from its next output.
+    sampled: dict[int, tuple[StreamInstance, int, dict[str, str],
+                             dict[str, tuple[StreamInstance, tuple[str, ...]]]]] = {}
+    repairs = 0
+    position = 0
+    while position < len(plan):
+        name, inputs = plan[position]
         if state.timed_out():
             return False
         real_inputs = tuple(binding.get(x, x) for x in inputs)
@@ -57,22 +69,67 @@ def process_stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
             if instance.num_calls == 0:
                 state.call(instance)
             if isinstance(instance.external, StreamFunction) or instance.value:
+                position += 1
                 continue
             instance.disabled = True
             state.record_failure(instance)
             report_unusable(state, real_inputs, made_by)
-            return False
-        outputs = state.call(instance)
-        if not outputs:
-            instance.disabled = True
-            state.record_failure(instance)
-            report_unusable(state, real_inputs, made_by)
-            return False
+            repair = _repair_position(state, sampled, made_by, real_inputs)
+            if repair is None or repairs >= MAX_LOCAL_REPAIRS:
+                return False
+            repairs += 1
+            position = repair
+            for later in [p for p in sampled if p > position]:
+                del sampled[later]
+            producer, used, before, made_before = sampled[position]
+            binding.clear()
+            binding.update(before)
+            made_by = dict(made_before)
+            output = _output(state, producer, used)
+            if output is None:
+                return False
+            sampled[position] = (producer, used + 1, before, made_before)
+            name, inputs = plan[position]
+            instance = producer
+        else:
+            # Called afresh even when it has outputs already (they did not lead to a plan).
+            sampled[position] = (instance, len(instance.results) + 1, dict(binding),
+                                 dict(made_by))
+            outputs = state.call(instance)
+            if not outputs:
+                instance.disabled = True
+                state.record_failure(instance)
+                report_unusable(state, real_inputs, made_by)
+                return False
+            output = outputs[0]
         placeholders = evaluation.outputs.get((name, inputs), ())
-        binding.update(zip(placeholders, outputs[0], strict=True))
-        for output in outputs[0]:
-            made_by[output] = (instance, outputs[0])
+        binding.update(zip(placeholders, output, strict=True))
+        for value in output:
+            made_by[value] = (instance, output)
+        position += 1
     return True
+
+
+def _repair_position(state: PlannerState, sampled: dict[int, tuple[StreamInstance, int,
+                                                                   dict[str, str], dict]],
+                     made_by: dict[str, tuple[StreamInstance, tuple[str, ...]]],
+                     rejected: tuple[str, ...]) -> int | None:
+    """The stream plan position of the cheap generator that sampled the latest of the
+    ``rejected`` values (``None``: none can be repaired)."""
+    producers = sampled_inputs(state, rejected, made_by)
+    for position in sorted(sampled, reverse=True):
+        instance, used, _, _ = sampled[position]
+        if instance in producers:
+            return position if repairable(state, instance, used) else None
+    return None
+
+
+def _output(state: PlannerState, instance: StreamInstance, index: int
+            ) -> tuple[str, ...] | None:
+    """Output ``index`` of a generator, calling it once more when it has not made it yet."""
+    if index >= len(instance.results) and not instance.exhausted:
+        state.call(instance)
+    return instance.results[index] if index < len(instance.results) else None
 
 
 def solve_focused(state: PlannerState) -> PlanResult:
@@ -104,11 +161,16 @@ def solve_focused(state: PlannerState) -> PlanResult:
             if not plan:
                 return state.result(SOLVED, discrete, facts | terms)
             contexts = fluent_contexts(state, evaluation, discrete)
-            if process_stream_plan(state, evaluation, plan, contexts):
-                # The stream plan made the optimistic plan's facts real, so a plan over real
-                # facts is usually easy; bound the search so a miss does not get exhaustive.
+            mapping: dict[str, str] = {}
+            if process_stream_plan(state, evaluation, plan, contexts, mapping):
+                # The stream plan made the optimistic plan's facts real, so the bound
+                # optimistic plan is checked first and a plan over real facts is usually
+                # easy; bound the search so a miss does not get exhaustive.
+                guess = bound_plan([(a.name, a.args) for a in discrete.actions or []],
+                                   mapping)
                 real = state.search(state.facts.members, state.object_types,
-                                    state.function_values, REAL_SEARCH_EXPANSIONS)
+                                    state.function_values, REAL_SEARCH_EXPANSIONS,
+                                    guess=guess)
                 if real.solved:
                     real_facts, real_terms = plan_preimage(real)
                     return state.result(SOLVED, real, real_facts | real_terms)

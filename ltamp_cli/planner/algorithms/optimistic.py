@@ -16,18 +16,31 @@ from ltamp_cli.planner.algorithms.common import (
     external_inputs,
     instantiate_atoms,
 )
-from ltamp_cli.planner.algorithms.effort import order_by_effort
+from ltamp_cli.planner.algorithms.effort import observed_cheap, order_by_effort
 from ltamp_cli.planner.pddl.syntax import (
     OBJECT_TYPE,
     ExternalPredicate,
     Stream,
     StreamFunction,
 )
-from ltamp_cli.planner.search.ground import Context, Fact, FactIndex
+from ltamp_cli.planner.search.ground import Context, Fact, FactIndex, SeedFilter
+from ltamp_cli.planner.search.normalize import LiftedLiteral
 from ltamp_cli.planner.search.solve import DiscreteResult
-from ltamp_cli.planner.streams import StreamInstance
+from ltamp_cli.planner.streams import External, StreamInstance
 
 InstanceKey = tuple[str, tuple[str, ...]]
+
+# Local repair: when a test of a stream plan fails on two (or more) values that streams
+# sampled, the cheap generator that sampled the later one for this stream plan is asked for
+# its next value and the test is repeated, at most this many times per stream plan (binding
+# path), before the failure sends the algorithm back to search. In tamp2d_4blocks most failed
+# stream plans are a collision between two independently sampled poses, which another sample
+# of the later pose usually fixes. A test that rejects one sampled value against a value of
+# the problem (a pose colliding with an obstacle that stays put) is not repaired: the
+# optimistic plan is often wrong then (the obstacle has to move), and on Kitchen3D
+# pour_blocked such repairs only added placements and searches. Expensive (e.g. learned)
+# samplers are never repaired.
+MAX_LOCAL_REPAIRS = 3
 
 
 @dataclass
@@ -65,9 +78,10 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
         before = index.sizes()
         for external in state.externals.values():
             if since is None:
-                candidates = list(state.all_real_bindings(external))
+                candidates = state.open_real_bindings(external)
             else:
-                candidates = list(state.bindings_of(external, index, since))
+                candidates = list(state.bindings_of(
+                    external, index, since, _within_bound(external, evaluation, complexity)))
             for inputs in candidates:
                 key = (external.name, inputs)
                 if key in done:
@@ -88,6 +102,26 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
         if index.sizes() == before:
             return evaluation
         since = before
+
+
+def _within_bound(external: External, evaluation: OptimisticEvaluation, complexity: int
+                  ) -> SeedFilter:
+    """A seed filter for the semi-naive rounds: once some instance has been cut
+    (``evaluation.cut``), a new fact whose input values alone exceed the complexity bound
+    is not joined: every instance it takes part in would be cut too (an instance's level is
+    at least the summed levels of its distinct input values), so only the join work is
+    saved. Before that, everything is joined so that ``cut`` is still found exactly."""
+    inputs = set(external_inputs(external))
+    levels = evaluation.level
+
+    def keep(literal: LiftedLiteral, args: tuple[str, ...]) -> bool:
+        if not evaluation.cut:
+            return True
+        values = {value for term, value in zip(literal.args, args, strict=True)
+                  if term in inputs}
+        return sum([levels.get(value, 0) for value in values]) <= complexity
+
+    return keep
 
 
 def _pending_test(instance: StreamInstance) -> bool:
@@ -170,6 +204,32 @@ def stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
             visit(key)
     effort = {name: state.effort(name) for name in {key[0] for key in found}}
     return order_by_effort(found, dependencies, effort)
+
+
+def sampled_inputs(state: PlannerState, consumed: tuple[str, ...],
+                   made_by: dict[str, tuple[StreamInstance, tuple[str, ...]]]
+                   ) -> set[StreamInstance]:
+    """The generators that sampled ``consumed`` values in this stream plan, when a local
+    repair may apply: at least two of the values come from streams (this stream plan's or
+    earlier ones), not from the problem. Else empty."""
+    sampled = [x for x in consumed if x not in state.problem.objects]
+    if len(sampled) < 2:
+        return set()
+    return {made_by[x][0] for x in sampled if x in made_by}
+
+
+def repairable(state: PlannerState, instance: StreamInstance, used: int) -> bool:
+    """Whether a local repair may ask ``instance`` for another output than its first
+    ``used`` ones: it is a generator without ``:fluents`` that may have more, and its
+    observed calls (this run and persisted history) were cheap (:func:`.observed_cheap`,
+    in CPU time, as for automatic eager evaluation)."""
+    external = instance.external
+    if not isinstance(external, Stream) or external.is_test or external.fluents:
+        return False
+    if used >= len(instance.results) and instance.exhausted:
+        return False
+    return observed_cheap(state.history.get(instance.name),
+                          state.stream_stats.get(instance.name))
 
 
 def report_unusable(state: PlannerState, consumed: tuple[str, ...],

@@ -21,14 +21,17 @@ import heapq
 import itertools
 from dataclasses import dataclass, field
 
-from ltamp_cli.planner.algorithms.common import PlannerState
+from ltamp_cli.planner.algorithms.common import PlannerState, bound_plan
 from ltamp_cli.planner.algorithms.optimistic import (
+    MAX_LOCAL_REPAIRS,
     InstanceKey,
     bind_context,
     evaluate_eager,
     fluent_contexts,
     optimistic_evaluation,
+    repairable,
     report_unusable,
+    sampled_inputs,
     stream_plan,
 )
 from ltamp_cli.planner.algorithms.preimage import plan_preimage
@@ -54,6 +57,11 @@ class Skeleton:
     placeholders: dict[InstanceKey, tuple[str, ...]]
     actions: tuple[str, ...]  # the optimistic plan, for diagnostics
     contexts: dict[InstanceKey, tuple[Fact, ...]] = field(default_factory=dict)
+    # The optimistic plan as (action, arguments): bound, it is the first plan to check.
+    steps: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    # (step, output index, bound placeholders) of every generator output taken so far, so
+    # that a local repair and the ordinary alternative do not extend the same branch twice.
+    tried: set[tuple[object, ...]] = field(default_factory=set, compare=False)
 
 
 @dataclass
@@ -64,6 +72,11 @@ class Binding:
     made_by: dict[str, tuple[StreamInstance, tuple[str, ...]]] = field(default_factory=dict)
     output_index: int = 0
     attempts: int = 0
+    parent: Binding | None = None  # the binding this one extends by one step
+    repairs: int = 0  # local repairs made on the path to this binding
+
+    def branch_key(self) -> tuple[object, ...]:
+        return (self.step, self.output_index, tuple(sorted(self.mapping.items())))
 
     def priority(self) -> tuple[int, int]:
         return (self.attempts, -self.step)
@@ -105,21 +118,26 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
             state.call(instance)
         if isinstance(instance.external, StreamFunction) or instance.value:
             return [Binding(binding.skeleton, binding.step + 1, binding.mapping,
-                            binding.made_by, 0, binding.attempts)]
+                            binding.made_by, 0, binding.attempts, binding, binding.repairs)]
         state.record_failure(instance)
         report_unusable(state, real_inputs, binding.made_by)
-        return []
+        return _local_repair(state, binding, real_inputs)
+    key = binding.branch_key()
+    if key in binding.skeleton.tried:
+        return []  # a local repair or an ordinary alternative took this branch already
     if binding.output_index >= len(instance.results) and not instance.exhausted:
         state.call(instance)
     if binding.output_index < len(instance.results):
+        binding.skeleton.tried.add(key)
         output = instance.results[binding.output_index]
         placeholders = binding.skeleton.placeholders.get((name, inputs), ())
         mapping = {**binding.mapping, **dict(zip(placeholders, output, strict=True))}
         made_by = {**binding.made_by, **{o: (instance, output) for o in output}}
         child = Binding(binding.skeleton, binding.step + 1, mapping, made_by, 0,
-                        binding.attempts)
+                        binding.attempts, binding, binding.repairs)
         alternative = Binding(binding.skeleton, binding.step, binding.mapping,
-                              binding.made_by, binding.output_index + 1, binding.attempts + 1)
+                              binding.made_by, binding.output_index + 1, binding.attempts + 1,
+                              binding.parent, binding.repairs)
         return [child, alternative]
     if instance.exhausted:
         state.record_failure(instance)
@@ -127,6 +145,33 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
         return []
     binding.attempts += 1  # nothing this call: retry later
     return [binding]
+
+
+def _local_repair(state: PlannerState, failed: Binding, consumed: tuple[str, ...]
+                  ) -> list[Binding]:
+    """After a test of ``failed`` rejected ``consumed``: the binding that takes the next
+    output of the generator step that sampled the latest of those values, at the same
+    priority (``[]`` when the repair budget is spent or that generator is not cheap)."""
+    if failed.repairs >= MAX_LOCAL_REPAIRS:
+        return []
+    producers = sampled_inputs(state, consumed, failed.made_by)
+    if not producers:
+        return []
+    plan = failed.skeleton.stream_plan
+    ancestor = failed.parent
+    while ancestor is not None:
+        name, inputs = plan[ancestor.step]
+        real_inputs = tuple(ancestor.mapping.get(x, x) for x in inputs)
+        producer = next((p for p in producers
+                         if p.name == name and p.inputs == real_inputs), None)
+        if producer is not None:
+            if not repairable(state, producer, ancestor.output_index + 1):
+                return []
+            return [Binding(failed.skeleton, ancestor.step, ancestor.mapping,
+                            ancestor.made_by, ancestor.output_index + 1, ancestor.attempts,
+                            ancestor.parent, failed.repairs + 1)]
+        ancestor = ancestor.parent
+    return []
 
 
 def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
@@ -147,11 +192,17 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
             if stalled or (adaptive and learned):
                 facts_at_search = len(state.facts.members)
                 evaluation = optimistic_evaluation(state, complexity, placeholders)
+                # The most advanced binding's plan, with what it bound so far, is checked
+                # first: once sampling made its facts real it is usually still a plan.
+                guess = None if head is None else bound_plan(head.skeleton.steps,
+                                                             head.mapping)
                 discrete = state.search(evaluation.index.members, evaluation.object_types,
                                         evaluation.function_values,
                                         context_blocks=evaluation.context_blocks,
-                                        budgeted=True)
-                last_search_work = discrete.outcome.evaluated if discrete.outcome else 0
+                                        budgeted=True, guess=guess)
+                if discrete.outcome is None or not discrete.outcome.guessed:
+                    # A followed guess did no search work: keep the previous sampling share.
+                    last_search_work = discrete.outcome.evaluated if discrete.outcome else 0
                 state.diagnose(discrete, evaluation.index.members)
                 if discrete.solved:
                     facts, terms = plan_preimage(discrete)
@@ -165,7 +216,8 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                         seen_skeletons.add(signature)
                         queue.push(Binding(Skeleton(
                             plan, dict(evaluation.outputs),
-                            tuple(str(a) for a in discrete.actions or []), contexts)))
+                            tuple(str(a) for a in discrete.actions or []), contexts,
+                            steps=tuple((a.name, a.args) for a in discrete.actions or []))))
                     elif stalled:
                         # Nothing new to try at this bound: allow more retries and
                         # more complex optimistic values.
@@ -203,7 +255,8 @@ def _process(state: PlannerState, queue: BindingQueue, adaptive: bool, steps: in
         children = advance(state, binding)
         if children is None:
             real = state.search(state.facts.members, state.object_types,
-                                state.function_values, REAL_SEARCH_EXPANSIONS)
+                                state.function_values, REAL_SEARCH_EXPANSIONS,
+                                guess=bound_plan(binding.skeleton.steps, binding.mapping))
             if real.solved:
                 facts, terms = plan_preimage(real)
                 return state.result(SOLVED, real, facts | terms)

@@ -5,10 +5,11 @@ from __future__ import annotations
 import heapq
 import itertools
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from ltamp_cli.planner.search.heuristic import INFINITY, FFHeuristic
-from ltamp_cli.planner.search.postprocess import eliminate_redundant_actions
+from ltamp_cli.planner.search.postprocess import eliminate_redundant_actions, is_applicable
 from ltamp_cli.planner.search.task import Task
 
 # "fd"/"fd-wastar": Fast Downward subprocesses (optional extra, search/fast_downward.py).
@@ -26,6 +27,8 @@ class SearchOutcome:
     states: list[frozenset[int]] = field(default_factory=list)
     # No plan because the expansion budget ran out (not because the space was exhausted).
     capped: bool = False
+    # The plan is the caller's guess (:func:`follow_plan`): no search ran.
+    guessed: bool = False
 
 
 class SearchTimeout(Exception):
@@ -248,13 +251,46 @@ def enforced_hill_climbing(task: Task, deadline: float, unit_costs: bool = False
                          path_states)
 
 
+def follow_plan(task: Task, guess: Sequence[tuple[str, tuple[str, ...]]]
+                ) -> SearchOutcome | None:
+    """``guess`` (action names and arguments) as an outcome when it is applicable step by
+    step in ``task`` and reaches the goal; ``None`` otherwise. An action grounded into
+    several operators (e.g. one per disjunct) uses the first applicable one."""
+    start_time = time.perf_counter()
+    by_name: dict[tuple[str, tuple[str, ...]], list[int]] = {}
+    for index, op in enumerate(task.operators):
+        by_name.setdefault((op.action.name, op.action.args), []).append(index)
+    state = task.init
+    states = [state]
+    ops: list[int] = []
+    for step in guess:
+        vector = task.state_vector(state)
+        applicable = [i for i in by_name.get(step, ()) if is_applicable(task, vector, i)]
+        if not applicable:
+            return None
+        ops.append(applicable[0])
+        state = task.successor(state, vector, applicable[0])
+        states.append(state)
+    if not task.is_goal(task.state_vector(state)):
+        return None
+    cost = float(sum(task.operators[i].cost for i in ops))
+    return SearchOutcome(ops, cost, 0, 0, time.perf_counter() - start_time, states,
+                         guessed=True)
+
+
 def run_search(task: Task, algorithm: str, deadline: float, unit_costs: bool = False,
-               max_expansions: int | None = None) -> SearchOutcome:
+               max_expansions: int | None = None,
+               guess: Sequence[tuple[str, tuple[str, ...]]] | None = None) -> SearchOutcome:
     """Search ``task``, then remove detours from the plan found.
 
-    ``max_expansions`` bounds the greedy searches (they are incomplete then).
+    ``max_expansions`` bounds the greedy searches (they are incomplete then). A ``guess``
+    that is a valid plan of ``task`` (:func:`follow_plan`) is used without searching: the
+    binding algorithms pass the optimistic plan with its placeholders bound, which the
+    stream plan just made real (PDDLStream returns that plan directly).
     """
-    outcome = _search(task, algorithm, deadline, unit_costs, max_expansions)
+    outcome = follow_plan(task, guess) if guess is not None else None
+    if outcome is None:
+        outcome = _search(task, algorithm, deadline, unit_costs, max_expansions)
     if outcome.plan is not None and algorithm != "wastar":
         outcome.plan, outcome.states = eliminate_redundant_actions(task, outcome.plan)
         outcome.cost = float(sum(task.operators[i].cost for i in outcome.plan))

@@ -9,7 +9,7 @@ on *static* predicates (never changed by an action), which are decided exactly.
 from __future__ import annotations
 
 from collections import defaultdict
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from ltamp_cli.planner.pddl.syntax import (
@@ -216,10 +216,15 @@ def join_new(literals: Sequence[LiftedLiteral], index: FactIndex, since: Mapping
         yield from _run_join(steps, index, binding)
 
 
+SeedFilter = Callable[[LiftedLiteral, tuple[str, ...]], bool]
+
+
 def _new_fact_seeds(literals: Sequence[LiftedLiteral], index: FactIndex,
-                    since: Mapping[str, int]) -> Iterator[tuple[list[_Step], dict[str, str]]]:
-    """For each fact added after ``since`` that matches one of ``literals``: the join of the
-    other literals and the binding that fact gives (the seeds of a semi-naive round)."""
+                    since: Mapping[str, int], keep: SeedFilter | None = None
+                    ) -> Iterator[tuple[list[_Step], dict[str, str]]]:
+    """For each fact added after ``since`` that matches one of ``literals`` (and that
+    ``keep(literal, args)`` accepts, when given): the join of the other literals and the
+    binding that fact gives (the seeds of a semi-naive round)."""
     for position, literal in enumerate(literals):
         facts = index.by_predicate.get(literal.predicate, ())
         start = since.get(literal.predicate, 0)
@@ -228,6 +233,8 @@ def _new_fact_seeds(literals: Sequence[LiftedLiteral], index: FactIndex,
         others = [lit for i, lit in enumerate(literals) if i != position]
         steps: list[_Step] | None = None
         for args in facts[start:]:
+            if keep is not None and not keep(literal, args):
+                continue
             binding = _match(literal, args)
             if binding is None:
                 continue
@@ -237,15 +244,16 @@ def _new_fact_seeds(literals: Sequence[LiftedLiteral], index: FactIndex,
 
 
 def join_tuples(literals: Sequence[LiftedLiteral], index: FactIndex,
-                variables: tuple[str, ...], since: Mapping[str, int] | None = None
-                ) -> list[tuple[str, ...]]:
+                variables: tuple[str, ...], since: Mapping[str, int] | None = None,
+                keep: SeedFilter | None = None) -> list[tuple[str, ...]]:
     """:func:`join` (or, with ``since``, :func:`join_new`) with each binding given as the
-    tuple of ``variables``' values."""
+    tuple of ``variables``' values. With ``since``, ``keep(literal, args)`` may reject new
+    facts as seeds (bindings that only they would give are then not found)."""
     found: list[tuple[str, ...]] = []
     if since is None:
         _extend(_compile_join(literals, set()), 0, index, {}, found, variables)
         return found
-    for steps, binding in _new_fact_seeds(literals, index, since):
+    for steps, binding in _new_fact_seeds(literals, index, since, keep):
         _extend(steps, 0, index, binding, found, variables)
     return found
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 from ltamp_cli.planner.search.task import Task
 
 
-def _applicable(task: Task, vector, op_index: int) -> bool:  # type: ignore[no-untyped-def]
+def is_applicable(task: Task, vector, op_index: int) -> bool:  # type: ignore[no-untyped-def]
     op = task.operators[op_index]
     return all(vector[f] for f in op.pre_pos) and not any(vector[f] for f in op.pre_neg)
 
@@ -27,7 +27,7 @@ def simulate(task: Task, plan: list[int], skip: set[int]
         if position in skip:
             continue
         vector = task.state_vector(state)
-        if not _applicable(task, vector, op):
+        if not is_applicable(task, vector, op):
             continue
         state = task.successor(state, vector, op)
         states.append(state)

@@ -71,11 +71,15 @@ def plan_discrete(
     cost_bound: float | None = None,
     fluent_requirements: Mapping[Fact, Sequence[Context]] | None = None,
     context_blocks: Mapping[Fact, Sequence[Context]] | None = None,
+    guess: Sequence[tuple[str, tuple[str, ...]]] | None = None,
 ) -> DiscreteResult:
     """Find a plan for the finite task given by ``objects`` (name → type) and ``init``.
 
     ``skeleton`` constrains the plan to a sequence of action patterns (see
     :mod:`.skeleton`); ``cost_bound`` asks for a plan cheaper than it (weighted A* then).
+    ``guess``: a candidate plan (action name, arguments) checked before searching; when
+    it reaches the goal in this task it is the plan (after action elimination), else the
+    search runs as usual (ignored with ``skeleton`` or ``cost_bound``).
     """
     start = time.perf_counter()
     closure = type_closure(domain)
@@ -109,7 +113,8 @@ def plan_discrete(
         outcome = weighted_astar(task, deadline, cost_bound=cost_bound)
     else:
         outcome = run_search(task, algorithm, deadline, unit_costs=unit_costs,
-                             max_expansions=max_expansions)
+                             max_expansions=max_expansions,
+                             guess=None if skeleton else guess)
     search_time = time.perf_counter() - start - ground_time
     if outcome.plan is None:
         return DiscreteResult(None, float("inf"), grounding, task, outcome, ground_time,
