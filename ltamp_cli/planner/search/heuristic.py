@@ -88,6 +88,7 @@ class FFHeuristic:
         self.preconditions = preconditions
         self.pre_flat, self.pre_starts = _flatten(preconditions, TRUE_FACT)
         self.costs = np.asarray(costs, dtype=float)
+        self._cost_list = self.costs.tolist()  # per-element reads are faster from a list
         achievers: dict[int, list[int]] = {}
         for op_index, adds in enumerate(self.effects):
             for fact in adds:
@@ -233,7 +234,8 @@ class FFHeuristic:
                 continue
             chosen.add(supporter)
             stack.extend(self.preconditions[supporter])
-        value = float(sum(self.costs[i] for i in chosen))
+        costs = self._cost_list
+        value = float(sum(costs[i] for i in chosen))
         preferred = sorted({
             self.origin[i] for i in chosen
             if self.origin[i] >= 0 and all(zero[f] for f in self.preconditions[i])

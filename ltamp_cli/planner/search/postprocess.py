@@ -20,7 +20,11 @@ def simulate(task: Task, plan: list[int], skip: set[int]
              ) -> tuple[list[int], list[frozenset[int]], bool]:
     """Run ``plan`` without the ``skip`` positions, also skipping actions that became
     inapplicable. Returns the kept positions, the visited states and whether the goal holds."""
-    state = task.init
+    return _simulate_from(task, task.init, plan, skip)
+
+
+def _simulate_from(task: Task, state: frozenset[int], plan: list[int], skip: set[int]
+                   ) -> tuple[list[int], list[frozenset[int]], bool]:
     states = [state]
     kept: list[int] = []
     for position, op in enumerate(plan):
@@ -39,13 +43,18 @@ def eliminate_redundant_actions(task: Task, plan: list[int]
                                 ) -> tuple[list[int], list[frozenset[int]]]:
     """A valid sub-plan of ``plan`` with detours removed, and its states."""
     current = list(plan)
+    # Every action of ``current`` is applicable in turn (the plan is valid, and a shortened
+    # plan keeps only the actions that applied), so dropping the action at ``position``
+    # leaves the states before it unchanged: each try is simulated from there.
+    _, states, reaches_goal = simulate(task, current, set())
+    assert reaches_goal and len(states) == len(current) + 1, "the plan must be valid"
     position = 0
     while position < len(current):
-        kept, _, reaches_goal = simulate(task, current, {position})
+        kept, tail, reaches_goal = _simulate_from(task, states[position],
+                                                  current[position + 1:], set())
         if reaches_goal:
-            current = [current[i] for i in kept]
+            current = current[:position] + [current[position + 1 + i] for i in kept]
+            states = states[:position + 1] + tail[1:]
         else:
             position += 1
-    _, states, reaches_goal = simulate(task, current, set())
-    assert reaches_goal, "action elimination must keep the plan valid"
     return current, states
