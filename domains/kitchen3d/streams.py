@@ -106,6 +106,17 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
     # from such confs avoid those objects (they would otherwise sweep through the object
     # the arm reaches for, and the planner, seeing it via CFreeTraj, had no other path).
     standing_at: dict[ArmConf, set[tuple[str, tuple[float, float]]]] = {}
+    # Poses of movable objects given by the problem (seen in stream inputs, not sampled
+    # here): an object given one pose most likely stands there for much of the plan, so
+    # motions first try to keep clear of it (a block carried away from beside the cup swept
+    # through the cup, and the planner then chained extra placements to get round it).
+    sampled: set[tuple[str, tuple[float, float]]] = set()
+    given: dict[str, set[tuple[float, float]]] = {}
+
+    def seen(name: str, pose: Any) -> None:
+        xy = _xy(pose)
+        if not scene.object(name).fixed and (name, xy) not in sampled:
+            given.setdefault(name, set()).add(xy)
 
     def arm_of(r: Any) -> int | None:
         arm = int(r)
@@ -129,8 +140,10 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         if area.x[1] - area.x[0] < 2 * half[0] or area.y[1] - area.y[0] < 2 * half[1]:
             return
         while True:
-            yield ((round(float(rng.uniform(area.x[0] + half[0], area.x[1] - half[0])), 4),
-                    round(float(rng.uniform(area.y[0] + half[1], area.y[1] - half[1])), 4)),)
+            xy = (round(float(rng.uniform(area.x[0] + half[0], area.x[1] - half[0])), 4),
+                  round(float(rng.uniform(area.y[0] + half[1], area.y[1] - half[1])), 4))
+            sampled.add((name, xy))
+            yield (xy,)
 
     def sample_grasp(name: str) -> Iterator[tuple[GraspValue]]:
         for value in planning.grasp_values(name):
@@ -139,6 +152,7 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
     def inverse_kinematics(r: Any, name: str, pose: Any, grasp: GraspValue
                            ) -> Iterator[list[tuple[ArmConf, ArmPath]]]:
         arm = arm_of(r)
+        seen(name, pose)
         if arm is None:
             return
         found = list(planning.pick_kinematics(name, _xy(pose), tuple(grasp), rng,  # type: ignore[arg-type]
@@ -157,12 +171,17 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         # An object held, or (ambiguously) at two poses, is not an obstacle of this motion.
         standing = {(name, xy) for name, xy in standing
                     if names.count(name) == 1 and (held is None or held[0] != name)}
+        named = {name for name, _ in standing} | ({held[0]} if held else set())
+        likely = {(name, next(iter(poses))) for name, poses in given.items()
+                  if len(poses) == 1 and name not in named and name not in names}
         # A failed search yields nothing *this* call and may be retried later; a found path
         # may still hit a movable object elsewhere (CFreeTraj), so a later call gives
         # another one (a new RRT-Connect seed).
         found = 0
         for _ in range(MOTION_ATTEMPTS):
-            path = planning.plan_motion(a, b, held, next(motion_seed), sorted(standing),
+            # The first path also keeps clear of the likely obstacles; a later one need not.
+            avoid = standing | likely if found == 0 else standing
+            path = planning.plan_motion(a, b, held, next(motion_seed), sorted(avoid),
                                         straight_first=found == 0)
             yield [] if path is None else [(path,)]
             found += path is not None
@@ -284,6 +303,7 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         return not planning.footprints_overlap(a, _xy(pa), b, _xy(pb))
 
     def test_cfree_traj(path: ArmPath, name: str, pose: Any) -> bool:
+        seen(name, pose)
         return not planning.path_collides(path, name, _xy(pose))
 
     def distance(r: Any, q1: ArmConf, q2: ArmConf) -> float:

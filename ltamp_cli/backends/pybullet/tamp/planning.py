@@ -190,23 +190,23 @@ class PlanningWorld:
         """A collision-free path between two confs of the same arm (carrying ``held``): the
         straight joint-space segment (unless not ``straight_first``), else RRT-Connect.
 
-        ``standing``: movable objects known to stand at these poses whenever the arm is at
-        ``q1`` or ``q2`` (the object a pick conf picks or a place conf has just placed);
-        they are obstacles too, so that the path does not sweep through the very object the
-        arm is about to pick. When an end conf itself touches one of them, they are left
-        out (the planner's ``CFreeTraj`` tests still see them)."""
+        ``standing``: movable objects to keep clear of at these poses, such as the object
+        a pick conf picks or a place conf has just placed (it stands there whenever the
+        arm is at that conf), so that the path does not sweep through the very object the
+        arm reaches for. One that an end conf itself touches is left out (the planner's
+        ``CFreeTraj`` tests still see it)."""
         if q1.arm != q2.arm or q1 == q2:
             return None
         arm = self.scene.arms[q1.arm]
-        names = [name for name, _ in standing]
+        names = []
         for name, xy in standing:
             self.place(name, xy)
-        checker = self.checker(q1.arm, held, extra=names)
-        if names and not (checker(q1.array) and checker(q2.array)):
-            for name in names:
+            alone = self.checker(q1.arm, held, extra=(name,))
+            if alone(q1.array) and alone(q2.array):
+                names.append(name)
+            else:  # an end conf touches it: leave it to the planner's CFreeTraj tests
                 self.park(name)
-            checker = self.checker(q1.arm, held)
-            names = []
+        checker = self.checker(q1.arm, held, extra=names)
         budget, checks = self.settings.rrt_time_s, self.settings.rrt_checks
         if checker.attached is not None and checker.attached.carries_contents:
             budget, checks = self.settings.rrt_carry_time_s, self.settings.rrt_carry_checks
