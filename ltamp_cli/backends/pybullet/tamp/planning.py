@@ -42,6 +42,8 @@ LIFT_M = 0.02
 #: Joint resolution (rad) of dense path collision tests.
 CHECK_RESOLUTION = 0.04
 PARK_DISTANCE_M = 20.0
+#: How far (m) motions keep from the movable objects known to stand in their way.
+MOVABLE_CLEARANCE_M = 0.01
 FOOTPRINT_MARGIN_M = 0.01
 
 
@@ -134,9 +136,13 @@ class PlanningWorld:
 
     def checker(self, arm: int, held: tuple[str, GraspValue] | None = None,
                 extra: Sequence[str] = (), carries_contents: bool = True,
-                exclude: Sequence[str] = ()) -> ArmCollisionChecker:
+                exclude: Sequence[str] = (), clearance: float = 0.0,
+                only_extra: bool = False) -> ArmCollisionChecker:
         """Collision checker of arm ``arm`` (the other arms at home, see
-        :meth:`rest_other_arms`), carrying ``held``, with movable objects ``extra``."""
+        :meth:`rest_other_arms`), carrying ``held``, with movable objects ``extra``.
+        ``clearance`` (m): how far the arm and ``held`` keep from the obstacles;
+        ``only_extra``: the obstacles are ``extra`` alone (no scenery, no self-collision),
+        for a second checker that adds a clearance to some objects only."""
         self.rest_other_arms(arm)
         attached = None
         if held is not None:
@@ -146,8 +152,12 @@ class PlanningWorld:
             carrying = carries_contents and (spec.contents is not None or spec.kind == "spoon")
             attached = AttachedBody(self.bodies[name].body, self.grasp(name, g).tool_in_gripper,
                                     carrying)
+        if only_extra:
+            return ArmCollisionChecker(self.scene.arms[arm],
+                                       tuple(self.bodies[name].body for name in extra),
+                                       attached, clearance=clearance, self_collision=False)
         return ArmCollisionChecker(self.scene.arms[arm], self.obstacles(arm, extra, exclude),
-                                   attached)
+                                   attached, clearance=clearance)
 
     # Stream queries ----------------------------------------------------------------------
 
@@ -193,22 +203,35 @@ class PlanningWorld:
         ``standing``: movable objects to keep clear of at these poses, such as the object
         a pick conf picks or a place conf has just placed (it stands there whenever the
         arm is at that conf), so that the path does not sweep through the very object the
-        arm reaches for. One that an end conf itself touches is left out (the planner's
-        ``CFreeTraj`` tests still see it)."""
+        arm reaches for. The path keeps :data:`MOVABLE_CLEARANCE_M` from them where its end
+        confs do (an executed carry lags behind its path, and a block lifted past a cup
+        with millimetres to spare dragged it over); one that an end conf itself touches is
+        left out (the planner's ``CFreeTraj`` tests still see it)."""
         if q1.arm != q2.arm or q1 == q2:
             return None
         arm = self.scene.arms[q1.arm]
-        names = []
+        near: list[str] = []  # obstacles kept at the clearance
+        touching: list[str] = []  # obstacles only not to be hit
         for name, xy in standing:
             self.place(name, xy)
-            alone = self.checker(q1.arm, held, extra=(name,))
-            if alone(q1.array) and alone(q2.array):
-                names.append(name)
+            for clearance, group in ((MOVABLE_CLEARANCE_M, near), (0.0, touching)):
+                alone = self.checker(q1.arm, held, extra=(name,), clearance=clearance,
+                                     only_extra=True)
+                if alone(q1.array) and alone(q2.array):
+                    group.append(name)
+                    break
             else:  # an end conf touches it: leave it to the planner's CFreeTraj tests
                 self.park(name)
-        checker = self.checker(q1.arm, held, extra=names)
+        names = near + touching
+        base = self.checker(q1.arm, held, extra=touching)
+        clear = self.checker(q1.arm, held, extra=near, clearance=MOVABLE_CLEARANCE_M,
+                             only_extra=True) if near else None
+
+        def checker(q: np.ndarray) -> bool:
+            return base(q) and (clear is None or clear(q))
+
         budget, checks = self.settings.rrt_time_s, self.settings.rrt_checks
-        if checker.attached is not None and checker.attached.carries_contents:
+        if base.attached is not None and base.attached.carries_contents:
             budget, checks = self.settings.rrt_carry_time_s, self.settings.rrt_carry_checks
         try:
             plan = plan_arm_motion(arm, q1.array, q2.array, checker,
