@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from line_domain import LINE_BINDINGS, LINE_DOMAIN, LINE_STREAMS
 
-from ltamp_cli.planner.algorithms import focused, skeletons
+from ltamp_cli.planner.algorithms import focused, incremental, skeletons
 from ltamp_cli.planner.algorithms.common import PlannerConfig, initial_state
 from ltamp_cli.planner.algorithms.effort import observed_cheap
 from ltamp_cli.planner.api import solve
@@ -133,3 +133,35 @@ def test_stream_cpu_time_is_measured_on_a_sample_of_calls(make_problem) -> None:
     # Untimed calls count at the measured mean, so the total stays a per-call estimate.
     assert 0.0 < stats.cpu_s < 40 * 1e-3
     assert observed_cheap(None, stats)
+
+
+# The line domain with its goal test declared eager (StreamInfo.eager).
+EAGER_LINE_BINDINGS = """
+from ltamp_cli.planner.streams import Binding, StreamInfo
+
+
+def make_streams(world, rng):
+    def next_(p):
+        if p + 1 <= world["top"]:
+            yield (p + 1,)
+    return {"next": next_,
+            "test-goal": Binding(lambda p: p == world["goal"], StreamInfo(eager=True))}
+"""
+
+
+def test_incremental_evaluates_eager_streams_before_each_search(
+        make_problem, monkeypatch: pytest.MonkeyPatch) -> None:  # type: ignore[no-untyped-def]
+    text = ("domain: dom\nbindings: bindings.py\nworld: {top: 6, goal: 3}\n"
+            "objects: {p0: 0}\ninit: [\"(Pos p0)\", \"(At p0)\"]\n"
+            "goal: (exists (?p) (and (At ?p) (Goal ?p)))\n")
+    problem = load_problem(make_problem(LINE_DOMAIN, text, LINE_STREAMS,
+                                        EAGER_LINE_BINDINGS))
+    config = PlannerConfig(algorithm="incremental", max_time=20)
+    eager = solve(problem, config)
+    assert eager.solved and [s.values for s in eager.plan] == [(0, 1), (1, 2), (2, 3)]
+    # One level of values per iteration: position 3 is sampled in the third round, and its
+    # eager goal test runs before the fourth search instead of one round later.
+    monkeypatch.setattr(incremental, "evaluate_eager", lambda state: None)
+    lagging = solve(problem, config)
+    assert lagging.solved and [s.values for s in lagging.plan] == [(0, 1), (1, 2), (2, 3)]
+    assert eager.stats["searches"] == lagging.stats["searches"] - 1
