@@ -4,8 +4,11 @@ A solved optimistic search yields a *skeleton*: the plan with placeholders and t
 plan that would make it real. Skeletons are kept in a priority queue of partial bindings;
 processing a binding calls the next stream instance of its stream plan with the placeholders
 bound so far and branches on its outputs (the first output extends the binding, the next one
-is tried later as an alternative). A fully bound skeleton is checked by a bounded search over
-real facts.
+is tried later as an alternative). A fully bound skeleton's plan, with its placeholders
+replaced by the bound values, is checked in the task over real facts (a bounded search runs
+only if it is no plan there). A test that rejects two values sampled by streams asks the
+cheap generator of the later one for its next value at once (local repair, see
+:data:`.optimistic.MAX_LOCAL_REPAIRS`).
 
 * ``binding`` searches again only when no binding in the queue can progress without more
   retries (alternative outputs, instances that produced nothing) than the current bound;
