@@ -94,12 +94,16 @@ POUR_SPEC = SkillSpec(
 
 @dataclass(frozen=True)
 class PourSettings:
-    """Simulation timing: settle/hold in seconds, tilt speed in rad/s."""
+    """Simulation timing: settle/hold in seconds, tilt speed in rad/s; beads per trial: a
+    normal of mean ``bead_count_mean`` (sd 10) truncated to ``[bead_count_low,
+    bead_count_high]`` (a quick check can simulate fewer)."""
 
     settle_s: float = 0.3
     hold_s: float = 0.8
     angular_speed: float = 2.0
     bead_count_mean: float = 100.0
+    bead_count_low: float = 70.0
+    bead_count_high: float = 130.0
 
 
 @dataclass(frozen=True)
@@ -242,7 +246,8 @@ class PourLatents:
 
 
 def sample_pour_latents(rng: np.random.Generator, settings: PourSettings) -> PourLatents:
-    beads = sample_beads(rng, settings.bead_count_mean, 10.0, 70.0, 130.0)
+    beads = sample_beads(rng, settings.bead_count_mean, 10.0, settings.bead_count_low,
+                         settings.bead_count_high)
     bowl = sample_material(rng, BOWL_RGBA)
     cup = sample_material(rng, (0.9, 0.5, 0.2, 1.0), mass=(0.15, 0.03, 0.08, 0.25))
     return PourLatents(beads, bowl, cup)
