@@ -71,11 +71,9 @@ def test_sapien_backend_provides_the_executor() -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=False, reason=(
-    "issue 8: the seed-0 plan of this session's planner draws a marginal GoodPour control "
-    "(adaptive sampler): PyBullet pours 53/60 beads, SAPIEN 43/60 (< the goal's 80 %); "
-    "the executor itself runs every step (success=True). diverse (theta* first) timed out"))
 def test_pour_blocked_is_solved_and_executed_on_sapien() -> None:
+    """pour_blocked's GoodPour controls pass a 30-bead physics pre-check (>= 95 % poured in
+    PyBullet), so the pour keeps a margin on SAPIEN too (seeds 0-2: 60/60 beads)."""
     from ltamp_cli.backends.execution import execute_plan
     from ltamp_cli.planner.algorithms.common import PlannerConfig
     from ltamp_cli.planner.api import solve
