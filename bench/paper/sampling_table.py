@@ -114,9 +114,10 @@ def _push_strip(source: str) -> dict[str, Any] | None:
     return contexts
 
 
-#: Estimated CPU seconds of one run of a row (quick runs, 2 cores; orders the parts only).
-RUN_CPU_S = {("box2d", "pour"): 70.0, ("box2d", "scoop"): 260.0, ("box2d", "push"): 3.0,
-             ("pybullet", "pour"): 300.0, ("pybullet", "scoop"): 400.0}
+#: Estimated CPU seconds of one run of a row (measured in a quick run; PyBullet scoop, not
+#: in quick, guessed from its ~2x dearer trials). They only order the parts.
+RUN_CPU_S = {("box2d", "pour"): 33.0, ("box2d", "scoop"): 153.0, ("box2d", "push"): 1.2,
+             ("pybullet", "pour"): 417.0, ("pybullet", "scoop"): 600.0}
 
 
 def _part_name(row: tuple[str, str, str, int]) -> str:
