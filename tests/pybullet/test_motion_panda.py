@@ -18,8 +18,10 @@ from ltamp_cli.backends.pybullet.robot import (
     plan_arm_motion,
     solve_ik,
 )
+from ltamp_cli.backends.pybullet.robot.arm import PANDA_HAND_LINKS
 from ltamp_cli.backends.pybullet.robot.collision import (
     PANDA_SELF_COLLISION_PAIRS,
+    AttachedBody,
     sample_self_collision_pairs,
 )
 from ltamp_cli.motion import RRTConnectConfig, densify_path, is_path_valid
@@ -139,3 +141,56 @@ def test_a_check_budget_makes_the_search_reproducible_and_bounded(
     assert blocked.status == "timeout"
     assert 500 <= blocked.n_validity_checks <= 600
     assert blocked.planning_time < 30.0
+
+
+def test_bounding_box_prefilter_gives_the_brute_force_answers(
+    scene_with_wall: tuple[KitchenScene, int],
+) -> None:
+    """The checker skips ``getClosestPoints`` when bounding boxes are apart; over random
+    configurations, with and without a held box, it answers as querying every body does."""
+    scene, wall = scene_with_wall
+    arm = scene.arms[0]
+    client, robot = arm.client_id, arm.body_id
+    held = add_box(client, (0.02, 0.02, 0.05), Pose(np.array([5.0, 5.0, 0.0])))
+    grasp = Pose(np.array([0.0, 0.0, 0.06]))
+    obstacles = scene.obstacles_for(0, [wall])
+    rng = np.random.default_rng(8)
+    for attached in (None, AttachedBody(held, grasp)):
+        checker = ArmCollisionChecker(arm, obstacles, attached)
+        answers = []
+        for _ in range(300):
+            q = arm.sample_configuration(rng)
+            valid = checker(q)
+            # Brute force: every obstacle queried, whatever the boxes say.
+            hit = any(p[3] != -1 and p[8] < -1e-3 for body in obstacles
+                      for p in pybullet.getClosestPoints(robot, body, 0.0,
+                                                         physicsClientId=client))
+            if attached is not None:
+                hit = hit or any(p[8] < -1e-3 for body in obstacles for p in
+                                 pybullet.getClosestPoints(held, body, 0.0,
+                                                           physicsClientId=client))
+                hit = hit or any(p[4] not in PANDA_HAND_LINKS and p[8] < -1e-3 for p in
+                                 pybullet.getClosestPoints(held, robot, 0.0,
+                                                           physicsClientId=client))
+            reference = not hit and ArmCollisionChecker(arm, ())(q)
+            answers.append(valid)
+            assert valid == reference
+        assert 0.1 < np.mean(answers) < 0.95  # both verdicts occur
+
+
+def test_a_free_straight_segment_is_the_motion(
+    scene_with_wall: tuple[KitchenScene, int],
+) -> None:
+    scene, _ = scene_with_wall
+    arm = scene.arms[0]
+    checker = ArmCollisionChecker(arm, scene.obstacles_for(0))
+    start = np.array([0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785])
+    goal = start + np.array([0.4, 0.1, 0.0, 0.1, 0.0, 0.0, 0.3])
+    plan = plan_arm_motion(arm, start, goal, checker, RRTConnectConfig(seed=0, max_checks=500))
+    assert plan.path is not None and plan.path.shape == (2, 7)
+    assert all(checker(q) for q in densify_path(plan.path, 0.01))
+    # Without the straight segment first, RRT-Connect finds some other valid path.
+    searched = plan_arm_motion(arm, start, goal, checker, RRTConnectConfig(seed=0),
+                               straight_first=False)
+    assert searched.path is not None
+    assert all(checker(q) for q in densify_path(searched.path, 0.01))
