@@ -15,7 +15,7 @@ from ltamp_cli.planner.algorithms.incremental import solve_incremental
 from ltamp_cli.planner.algorithms.skeletons import solve_with_skeletons
 from ltamp_cli.planner.problem import PlanningProblem, load_problem
 from ltamp_cli.planner.result import PlanResult
-from ltamp_cli.planner.search.ground import FactIndex, join, join_new
+from ltamp_cli.planner.search.ground import CostBound, FactIndex, join, join_new, join_tuples
 from ltamp_cli.planner.search.normalize import LiftedLiteral
 from ltamp_cli.planner.search.solve import DiscreteResult, plan_discrete
 from ltamp_cli.planner.validate import validate_plan
@@ -177,3 +177,27 @@ def test_greedy_search_skips_the_heuristic_in_dead_ends(
     assert {"s", "a", "b"} <= set().union(*at)  # the search did evaluate the corridor...
     assert not any(room.startswith("pit") for rooms_at in at for room in rooms_at)  # ...no pit
     assert result.outcome.evaluated >= 6  # the pits still count as visited states
+
+
+def test_cost_bounded_join_keeps_exactly_the_bindings_within_the_bound() -> None:
+    index = FactIndex()
+    for fact in [("Conf", "a"), ("Conf", "b")]:
+        index.add(fact)
+    since = index.sizes()
+    for fact in [("Conf", "#q1"), ("Conf", "#q2"), ("Conf", "#q3")]:
+        index.add(fact)
+    literals = [LiftedLiteral("Conf", ("?x",)), LiftedLiteral("Conf", ("?y",))]
+    variables = ("?x", "?y")
+    levels = {"#q1": 1, "#q2": 1, "#q3": 2}
+    everything = join_tuples(literals, index, variables, since)
+    for budget in range(5):
+        bound = CostBound(levels, budget)
+        kept = join_tuples(literals, index, variables, since, bound)
+        within = [t for t in everything if sum(levels.get(v, 0) for v in t) <= budget]
+        assert kept == within  # the same bindings in the same order
+        assert bound.exceeded == (len(within) < len(everything))
+    # Over the budget but with no complete binding: nothing is reported exceeded.
+    lonely = CostBound(levels, 0)
+    edge = [LiftedLiteral("Conf", ("?x",)), LiftedLiteral("Edge", ("?x", "?y"))]
+    assert join_tuples(edge, index, variables, since, lonely) == []
+    assert not lonely.exceeded

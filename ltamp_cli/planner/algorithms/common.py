@@ -31,9 +31,9 @@ from ltamp_cli.planner.result import (
 )
 from ltamp_cli.planner.search.ground import (
     Context,
+    CostBound,
     Fact,
     FactIndex,
-    SeedFilter,
     join_tuples,
 )
 from ltamp_cli.planner.search.normalize import LiftedLiteral
@@ -316,10 +316,10 @@ class PlannerState:
 
     def bindings_of(self, external: External, index: FactIndex,
                     since: Mapping[str, int] | None = None,
-                    keep: SeedFilter | None = None) -> Iterator[tuple[str, ...]]:
+                    bound: CostBound | None = None) -> Iterator[tuple[str, ...]]:
         """Input tuples whose domain facts all hold in ``index``; with ``since`` (a
         :meth:`FactIndex.sizes` snapshot), only those using a fact added after it (possibly
-        repeated) that ``keep`` accepts (see :func:`.join_tuples`)."""
+        repeated) and within ``bound`` (see :func:`.join_tuples`)."""
         inputs = external_inputs(external)
         literals = [LiftedLiteral(a.predicate, a.args) for a in external_domain(external)]
         if not literals:
@@ -329,7 +329,7 @@ class PlannerState:
             if since is None:
                 yield ()
             return
-        yield from join_tuples(literals, index, tuple(inputs), since, keep)
+        yield from join_tuples(literals, index, tuple(inputs), since, bound)
 
     def result(self, status: str, discrete: DiscreteResult | None,
                preimage: Iterable[Fact] = ()) -> PlanResult:

@@ -23,10 +23,9 @@ from ltamp_cli.planner.pddl.syntax import (
     Stream,
     StreamFunction,
 )
-from ltamp_cli.planner.search.ground import Context, Fact, FactIndex, SeedFilter
-from ltamp_cli.planner.search.normalize import LiftedLiteral
+from ltamp_cli.planner.search.ground import Context, CostBound, Fact, FactIndex
 from ltamp_cli.planner.search.solve import DiscreteResult
-from ltamp_cli.planner.streams import External, StreamInstance
+from ltamp_cli.planner.streams import StreamInstance
 
 InstanceKey = tuple[str, tuple[str, ...]]
 
@@ -80,8 +79,13 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
             if since is None:
                 candidates = state.open_real_bindings(external)
             else:
-                candidates = list(state.bindings_of(
-                    external, index, since, _within_bound(external, evaluation, complexity)))
+                # Bindings whose inputs alone exceed the bound are not even enumerated: an
+                # instance's level is at least its inputs' summed levels, so they would be
+                # cut (the join still tells whether one exists, for ``cut``).
+                bound = CostBound(levels, complexity)
+                candidates = list(state.bindings_of(external, index, since, bound))
+                if bound.exceeded:
+                    evaluation.cut = True
             for inputs in candidates:
                 key = (external.name, inputs)
                 if key in done:
@@ -102,26 +106,6 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
         if index.sizes() == before:
             return evaluation
         since = before
-
-
-def _within_bound(external: External, evaluation: OptimisticEvaluation, complexity: int
-                  ) -> SeedFilter:
-    """A seed filter for the semi-naive rounds: once some instance has been cut
-    (``evaluation.cut``), a new fact whose input values alone exceed the complexity bound
-    is not joined: every instance it takes part in would be cut too (an instance's level is
-    at least the summed levels of its distinct input values), so only the join work is
-    saved. Before that, everything is joined so that ``cut`` is still found exactly."""
-    inputs = set(external_inputs(external))
-    levels = evaluation.level
-
-    def keep(literal: LiftedLiteral, args: tuple[str, ...]) -> bool:
-        if not evaluation.cut:
-            return True
-        values = {value for term, value in zip(literal.args, args, strict=True)
-                  if term in inputs}
-        return sum([levels.get(value, 0) for value in values]) <= complexity
-
-    return keep
 
 
 def _pending_test(instance: StreamInstance) -> bool:

@@ -9,7 +9,7 @@ on *static* predicates (never changed by an action), which are decided exactly.
 from __future__ import annotations
 
 from collections import defaultdict
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from ltamp_cli.planner.pddl.syntax import (
@@ -216,15 +216,10 @@ def join_new(literals: Sequence[LiftedLiteral], index: FactIndex, since: Mapping
         yield from _run_join(steps, index, binding)
 
 
-SeedFilter = Callable[[LiftedLiteral, tuple[str, ...]], bool]
-
-
 def _new_fact_seeds(literals: Sequence[LiftedLiteral], index: FactIndex,
-                    since: Mapping[str, int], keep: SeedFilter | None = None
-                    ) -> Iterator[tuple[list[_Step], dict[str, str]]]:
-    """For each fact added after ``since`` that matches one of ``literals`` (and that
-    ``keep(literal, args)`` accepts, when given): the join of the other literals and the
-    binding that fact gives (the seeds of a semi-naive round)."""
+                    since: Mapping[str, int]) -> Iterator[tuple[list[_Step], dict[str, str]]]:
+    """For each fact added after ``since`` that matches one of ``literals``: the join of the
+    other literals and the binding that fact gives (the seeds of a semi-naive round)."""
     for position, literal in enumerate(literals):
         facts = index.by_predicate.get(literal.predicate, ())
         start = since.get(literal.predicate, 0)
@@ -233,8 +228,6 @@ def _new_fact_seeds(literals: Sequence[LiftedLiteral], index: FactIndex,
         others = [lit for i, lit in enumerate(literals) if i != position]
         steps: list[_Step] | None = None
         for args in facts[start:]:
-            if keep is not None and not keep(literal, args):
-                continue
             binding = _match(literal, args)
             if binding is None:
                 continue
@@ -243,19 +236,83 @@ def _new_fact_seeds(literals: Sequence[LiftedLiteral], index: FactIndex,
             yield steps, binding
 
 
+@dataclass
+class CostBound:
+    """Keep only the bindings whose projected variables' values cost at most ``budget`` in
+    total (``cost`` per value, 0 when absent, never negative); a partial binding over it is
+    not extended. ``exceeded`` is set once a complete binding over the budget is known to
+    exist (checked for the first pruned partial binding that has one)."""
+
+    cost: Mapping[str, int]
+    budget: int
+    exceeded: bool = False
+
+
 def join_tuples(literals: Sequence[LiftedLiteral], index: FactIndex,
                 variables: tuple[str, ...], since: Mapping[str, int] | None = None,
-                keep: SeedFilter | None = None) -> list[tuple[str, ...]]:
+                bound: CostBound | None = None) -> list[tuple[str, ...]]:
     """:func:`join` (or, with ``since``, :func:`join_new`) with each binding given as the
-    tuple of ``variables``' values. With ``since``, ``keep(literal, args)`` may reject new
-    facts as seeds (bindings that only they would give are then not found)."""
+    tuple of ``variables``' values; with ``since`` and ``bound``, only those within the
+    bound (the others, in the same order, are left out)."""
     found: list[tuple[str, ...]] = []
     if since is None:
         _extend(_compile_join(literals, set()), 0, index, {}, found, variables)
         return found
-    for steps, binding in _new_fact_seeds(literals, index, since, keep):
-        _extend(steps, 0, index, binding, found, variables)
+    weighted = frozenset(variables)
+    for steps, binding in _new_fact_seeds(literals, index, since):
+        if bound is None:
+            _extend(steps, 0, index, binding, found, variables)
+            continue
+        spent = sum([bound.cost.get(value, 0) for variable, value in binding.items()
+                     if variable in weighted])
+        if spent <= bound.budget:
+            _extend_bounded(steps, 0, index, binding, found, variables, bound, weighted, spent)
+        elif not bound.exceeded:
+            complete: list[tuple[str, ...]] = []
+            _extend(steps, 0, index, binding, complete, variables)
+            bound.exceeded = bool(complete)
     return found
+
+
+def _extend_bounded(steps: Sequence[_Step], depth: int, index: FactIndex,
+                    binding: dict[str, str], found: list[tuple[str, ...]],
+                    project: tuple[str, ...], bound: CostBound, weighted: frozenset[str],
+                    spent: int) -> None:
+    """:func:`_extend` (projecting) that prunes bindings whose values of ``weighted``
+    variables cost more than the bound; costs are non-negative, so a pruned partial binding
+    has no extension within it."""
+    if depth == len(steps):
+        found.append(tuple([binding[v] for v in project]))
+        return
+    step = steps[depth]
+    key = tuple([binding.get(term, term) for term in step.key_terms])
+    checks, binds = step.checks, step.binds
+    costed = [position for position, variable in binds if variable in weighted]
+    cost, budget = bound.cost, bound.budget
+    last = depth + 1 == len(steps)
+    for args in index.lookup(step.predicate, step.positions, key):
+        if checks and any(args[a] != args[b] for a, b in checks):
+            continue
+        total = spent
+        for position in costed:
+            total += cost.get(args[position], 0)
+        if total > budget and bound.exceeded:
+            continue
+        extended = binding.copy()
+        for position, variable in binds:
+            extended[variable] = args[position]
+        if total > budget:
+            # The first pruned partial bindings are completed once, unbounded, until one
+            # shows that a binding over the budget exists.
+            complete: list[tuple[str, ...]] = []
+            _extend(steps, depth + 1, index, extended, complete, project)
+            bound.exceeded = bool(complete)
+            continue
+        if last:
+            found.append(tuple([extended[v] for v in project]))
+        else:
+            _extend_bounded(steps, depth + 1, index, extended, found, project, bound,
+                            weighted, total)
 
 
 def _ground(args: Iterable[str], binding: Mapping[str, str]) -> tuple[str, ...]:
