@@ -95,6 +95,10 @@ def test_pour_blocked_is_planned_and_executed_with_beads_in_the_bowl(problem) ->
     # The block must be moved before the cup can be picked, and the plan ends pouring.
     assert names.index("place") < max(i for i, n in enumerate(names) if n == "pick")
     assert names[-1] == "pour"
+    # Moved once, directly: no place-pick-place detour through an intermediate placement.
+    assert names == ["move-free", "pick", "move-holding", "place",
+                     "move-free", "pick", "move-holding", "pour"]
+    assert [step.args[0] for step in result.plan if step.name == "pick"] == ["block", "cup"]
     report = execute_plan("pybullet", problem, result, seed=0)
     assert report.success, report.details["steps"]
     assert report.goal_holds, report.details["goal"]
