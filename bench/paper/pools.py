@@ -81,16 +81,3 @@ def spec_of(backend_name: str, skill: str) -> SkillSpec:
         return backend.skills()[skill]
     finally:
         backend.close()
-
-
-def prepare_pools(ctx: Context, sizes: list[dict[str, object]]) -> None:
-    """Collect every pool the given experiment sizes need, once, before experiments run in
-    parallel (two processes must never append to the same pool file)."""
-    wanted: dict[tuple[str, str], int] = {}
-    for entry in sizes:
-        for skill in entry["skills"]:  # type: ignore[attr-defined]
-            key = (str(entry["backend"]), str(skill))
-            wanted[key] = max(wanted.get(key, 0),
-                              int(entry["n_train"]) + int(entry["n_test"]))  # type: ignore[call-overload]
-    for (backend, skill), n in wanted.items():
-        get_pool(ctx, backend, skill, n, 0)
