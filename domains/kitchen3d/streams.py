@@ -74,6 +74,10 @@ YAW_OFFSETS = tuple(k * math.pi / 4 for k in (0, 1, -1, 2, -2, 3, -3, 4))
 DUMP_YAW_OFFSETS = tuple(k * math.pi / 4 for k in (3, -2, 2, 1, 4, -3, -1, 0))
 
 
+#: Placements keep this far (m, footprint to footprint) from other movable objects where
+#: they stand, if one of this many uniform draws does.
+PLACEMENT_ROOM_M = 0.08
+PLACEMENT_DRAWS = 25
 #: Skills that have a physics pre-check, its default trials per stream call and least score.
 PRECHECK_SKILLS = ("pour",)
 PRECHECK_LIMIT = 3
@@ -247,9 +251,32 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         half = scene.object(name).footprint()
         if area.x[1] - area.x[0] < 2 * half[0] or area.y[1] - area.y[0] < 2 * half[1]:
             return
+
+        def draw() -> tuple[float, float]:
+            return (round(float(rng.uniform(area.x[0] + half[0], area.x[1] - half[0])), 4),
+                    round(float(rng.uniform(area.y[0] + half[1], area.y[1] - half[1])), 4))
+
+        def roomy(xy: tuple[float, float]) -> bool:
+            """A hand's room from every other movable object at its one given pose."""
+            for other, poses in given.items():
+                if other == name or len(poses) != 1:
+                    continue
+                (ox, oy), other_half = next(iter(poses)), scene.object(other).footprint()
+                gap = max(abs(xy[0] - ox) - half[0] - other_half[0],
+                          abs(xy[1] - oy) - half[1] - other_half[1])
+                if gap < PLACEMENT_ROOM_M:
+                    return False
+            return True
+
         while True:
-            xy = (round(float(rng.uniform(area.x[0] + half[0], area.x[1] - half[0])), 4),
-                  round(float(rng.uniform(area.y[0] + half[1], area.y[1] - half[1])), 4))
+            # Placements that leave a hand's room round the other objects first: one next
+            # to the cup blocks its grasps or the arm's way to it again, and the planner
+            # would test and discard many of them (with a pour sampled for each skeleton).
+            xy = draw()
+            for _ in range(PLACEMENT_DRAWS - 1):
+                if roomy(xy):
+                    break
+                xy = draw()
             sampled.add((name, xy))
             yield (xy,)
 
