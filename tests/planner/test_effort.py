@@ -112,3 +112,32 @@ def test_cheap_decision_uses_cpu_time_persisted_in_the_history(tmp_path) -> None
     loaded_machine = {"calls": 6, "successes": 6, "time_s": 0.03, "cpu_s": 1.2e-4}
     assert observed_cheap(loaded_machine, None)
     assert not observed_cheap({"calls": 6, "time_s": 0.03}, None)
+
+
+def test_cold_run_probes_unmeasured_streams_before_the_first_search() -> None:
+    """Without any history, ``eager_cheap_streams`` calls each unmeasured stream once before
+    the first search, so its cheap samplers are eager from the start: kitchen_symbolic then
+    plans with one search (as a warm run does) instead of the optimistic searches a cold run
+    made before; without the option nothing is probed."""
+    from pathlib import Path
+
+    from ltamp_cli.planner.algorithms.common import PlannerConfig, initial_state
+    from ltamp_cli.planner.algorithms.optimistic import probe_unmeasured
+    from ltamp_cli.planner.api import solve
+    from ltamp_cli.planner.problem import load_problem
+
+    repo = Path(__file__).resolve().parents[2]
+    problem = load_problem(repo / "problems" / "examples" / "kitchen_symbolic.yaml")
+    state = initial_state(problem, PlannerConfig(seed=0, eager_cheap_streams=True))
+    probe_unmeasured(state)
+    probed = {name for name, stats in state.stream_stats.items() if stats.calls}
+    # Every non-eager stream without :fluents whose inputs are real initially, once each.
+    assert probed and all(state.stream_stats[name].calls == 1 for name in probed)
+    assert not any(state.bindings[name].info.eager for name in probed)
+    probe_unmeasured(state)  # measured now: not called again
+    assert all(state.stream_stats[name].calls == 1 for name in probed)
+
+    eager = solve(problem, PlannerConfig(seed=0, max_time=60, eager_cheap_streams=True))
+    plain = solve(problem, PlannerConfig(seed=0, max_time=60))
+    assert eager.solved and plain.solved
+    assert eager.stats["searches"] == 1 < plain.stats["searches"]
