@@ -277,13 +277,14 @@ class PlannerState:
                function_values: Mapping[Fact, float], max_expansions: int | None = None,
                context_blocks: Mapping[Fact, list[Context]] | None = None,
                budgeted: bool = False,
-               guess: Sequence[tuple[str, tuple[str, ...]]] | None = None) -> DiscreteResult:
+               guess: Sequence[tuple[str, tuple[str, ...]]] | None = None,
+               skip_if_grounded_as: frozenset[object] | None = None) -> DiscreteResult:
         """One discrete search. ``budgeted``: bound it by :attr:`search_budget` expansions,
         doubled whenever a search runs out of it (``DiscreteResult.capped``): a search that
         fails is usually exhaustive, and the algorithms learn as much from a bounded failure
         (sample more, raise the complexity) at a fraction of the cost, while the growing
         budget keeps them complete. ``guess``: a candidate plan checked before searching
-        (see :func:`.plan_discrete`)."""
+        (see :func:`.plan_discrete`, also for ``skip_if_grounded_as``)."""
         start = time.perf_counter()
         self.searches += 1
         if budgeted:
@@ -293,10 +294,10 @@ class PlannerState:
                 self.problem.domain, objects, init, function_values, self.problem.goal,
                 self.deadline, self.config.search, self.config.unit_costs, max_expansions,
                 self.config.skeleton, self.cost_bound, self.fluent_requirements,
-                context_blocks, guess)
+                context_blocks, guess, skip_if_grounded_as)
         finally:
             self.search_time += time.perf_counter() - start
-        if budgeted and result.capped:
+        if budgeted and result.capped and not result.skipped:
             self.search_budget *= 2
         return result
 

@@ -42,6 +42,7 @@ from ltamp_cli.planner.pddl.syntax import StreamFunction
 from ltamp_cli.planner.result import INFEASIBLE, SOLVED, TIMEOUT, PlanResult
 from ltamp_cli.planner.search.engine import SearchTimeout
 from ltamp_cli.planner.search.ground import Fact
+from ltamp_cli.planner.search.solve import grounding_signature
 from ltamp_cli.planner.streams import StreamInstance
 
 REAL_SEARCH_EXPANSIONS = 500
@@ -185,6 +186,7 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
     last_search_work = 0
     retry_threshold = 0
     facts_at_search = -1
+    capped_task: frozenset[object] | None = None
     try:
         while not state.timed_out():
             state.iterations += 1
@@ -199,11 +201,21 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                 # first: once sampling made its facts real it is usually still a plan.
                 guess = None if head is None else bound_plan(head.skeleton.steps,
                                                              head.mapping)
+                # A task that grounds as the last one whose search ran out of budget is
+                # not searched again (kitchen_symbolic seed 6: three searches of the same
+                # real task with 600, 1,200 and 2,400 expansions while the complexity
+                # grew): the complexity grows until it changes, up to the bound.
+                skip = capped_task if complexity < state.config.max_complexity else None
                 discrete = state.search(evaluation.index.members, evaluation.object_types,
                                         evaluation.function_values,
                                         context_blocks=evaluation.context_blocks,
-                                        budgeted=True, guess=guess)
-                if discrete.outcome is None or not discrete.outcome.guessed:
+                                        budgeted=True, guess=guess, skip_if_grounded_as=skip)
+                if discrete.capped and not discrete.skipped:
+                    capped_task = grounding_signature(discrete.grounding)
+                elif not discrete.capped:
+                    capped_task = None
+                if not discrete.skipped and (discrete.outcome is None
+                                             or not discrete.outcome.guessed):
                     # A followed guess did no search work: keep the previous sampling share.
                     last_search_work = discrete.outcome.evaluated if discrete.outcome else 0
                 state.diagnose(discrete, evaluation.index.members)

@@ -31,6 +31,8 @@ class DiscreteResult:
     outcome: SearchOutcome | None
     ground_time_s: float
     search_time_s: float
+    # No search ran: the grounded task equalled ``skip_if_grounded_as`` (see plan_discrete).
+    skipped: bool = False
 
     @property
     def solved(self) -> bool:
@@ -40,6 +42,35 @@ class DiscreteResult:
     def capped(self) -> bool:
         """Not solved only because the search's expansion budget ran out."""
         return self.outcome is not None and self.outcome.capped
+
+
+def grounding_signature(grounding: Grounding) -> frozenset[object]:
+    """What a search of a grounded task depends on besides the initial state's fluents:
+    the ground actions (with their static preconditions) and the axioms of the derived
+    facts that actions or the goal use, directly or through other axioms (axioms about
+    values no action uses, e.g. new optimistic poses, do not change the search)."""
+    by_head: dict[Fact, list[object]] = {}
+    for axiom in grounding.axioms:
+        by_head.setdefault(axiom.head, []).append(axiom)
+    needed: list[Fact] = [("%goal",)]
+    for action in grounding.actions:
+        needed.extend(action.pre_pos)
+        needed.extend(action.pre_neg)
+        for effect in action.effects:
+            needed.extend(effect.condition_pos)
+            needed.extend(effect.condition_neg)
+    used: set[object] = set()
+    seen: set[Fact] = set()
+    while needed:
+        fact = needed.pop()
+        if fact in seen:
+            continue
+        seen.add(fact)
+        for axiom in by_head.get(fact, ()):
+            used.add(axiom)
+            needed.extend(axiom.body_pos)  # type: ignore[attr-defined]
+            needed.extend(axiom.body_neg)  # type: ignore[attr-defined]
+    return frozenset((*grounding.actions, *used))
 
 
 def type_closure(domain: Domain) -> dict[str, list[str]]:
@@ -72,6 +103,7 @@ def plan_discrete(
     fluent_requirements: Mapping[Fact, Sequence[Context]] | None = None,
     context_blocks: Mapping[Fact, Sequence[Context]] | None = None,
     guess: Sequence[tuple[str, tuple[str, ...]]] | None = None,
+    skip_if_grounded_as: frozenset[object] | None = None,
 ) -> DiscreteResult:
     """Find a plan for the finite task given by ``objects`` (name → type) and ``init``.
 
@@ -80,6 +112,9 @@ def plan_discrete(
     ``guess``: a candidate plan (action name, arguments) checked before searching; when
     it reaches the goal in this task it is the plan (after action elimination), else the
     search runs as usual (ignored with ``skeleton`` or ``cost_bound``).
+    ``skip_if_grounded_as``: a :func:`grounding_signature` of a task whose search ran out of
+    budget; when this task grounds to the same, no search runs (``skipped``, reported as
+    capped): it would repeat that search.
     """
     start = time.perf_counter()
     closure = type_closure(domain)
@@ -105,6 +140,11 @@ def plan_discrete(
     ground_time = time.perf_counter() - start
     if ("%goal",) not in grounding.reachable:
         return DiscreteResult(None, float("inf"), grounding, None, None, ground_time, 0.0)
+    if (skip_if_grounded_as is not None and not skeleton
+            and grounding_signature(grounding) == skip_if_grounded_as):
+        outcome = SearchOutcome(None, float("inf"), 0, 0, 0.0, capped=True)
+        return DiscreteResult(None, float("inf"), grounding, None, outcome, ground_time, 0.0,
+                              skipped=True)
     if skeleton:
         grounding, first_step = constrain(grounding, skeleton)
         facts.add(first_step)
