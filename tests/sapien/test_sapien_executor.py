@@ -100,7 +100,10 @@ def test_pour_blocked_is_solved_and_executed_on_sapien() -> None:
 
 # Known, open in issue 7: planning these two within the problems' 120 s wall limit is not
 # reliable on a loaded machine (seed 0, load 3-9: push_to_reach 52-134 s CPU, 175-614 s
-# wall; coffee 20-102 s CPU, timed out twice at 120 s wall in this test). Their PyBullet
+# wall; coffee 20-102 s CPU, timed out twice at 120 s wall in this test). After the
+# Kitchen3D motion/collision speed-ups (load ~4): coffee seeds 0-2 plan in 7/20/8 s CPU and
+# this test xpassed (165 s with both executions); push_to_reach seed 0 88 s CPU, seed 1
+# timed out at 240 s wall. Their PyBullet
 # executions are no longer a gap: both seed-0 plans hold the goal on PyBullet (push_to_reach:
 # push 1.4 cm from its target, 60/60 beads in the bowl; coffee: cream 36-38/40, the whole
 # spoonful of sugar, stirred), as on SAPIEN.
