@@ -13,7 +13,7 @@
   ; Verified IK of arm ?r's pre-grasp and the Cartesian approach path into the grasp.
   (:stream inverse-kinematics
     :inputs (?r ?o ?p ?g)
-    :domain (and (Arm ?r) (Pose ?o ?p) (Grasp ?o ?g))
+    :domain (and (Arm ?r) (Pose ?o ?p) (Grasp ?o ?g) (InReach ?r ?o ?p))
     :outputs (?q ?a)
     :certified (and (Conf ?r ?q) (HoldConf ?r ?o ?g ?q) (Traj ?a) (Kin ?r ?o ?p ?g ?q ?a)))
   ; Fluent-free motions: RRT-Connect around the fixed scenery (movable objects: CFreeTraj).
@@ -31,7 +31,8 @@
   ; (follow-obj-path): the pour start conf and the arm path of the whole pour.
   (:stream sample-pour
     :inputs (?r ?k ?g ?c ?p)
-    :domain (and (Arm ?r) (Pourable ?k) (Grasp ?k ?g) (Receptacle ?c) (Pose ?c ?p))
+    :domain (and (Arm ?r) (Pourable ?k) (Grasp ?k ?g) (Receptacle ?c) (Pose ?c ?p)
+                 (InReach ?r ?c ?p))
     :outputs (?q ?a ?u)
     :certified (and (Conf ?r ?q) (HoldConf ?r ?k ?g ?q) (Traj ?a)
                     (PourKin ?r ?k ?g ?c ?p ?q ?a ?u)))
@@ -57,9 +58,18 @@
   ; Engineered: a straight-line push of ?o from ?p1 to ?p2 by arm ?r's empty hand.
   (:stream sample-push
     :inputs (?r ?o ?p1 ?p2)
-    :domain (and (Arm ?r) (Pushable ?o) (Pose ?o ?p1) (Pose ?o ?p2))
+    :domain (and (Arm ?r) (Pushable ?o) (Pose ?o ?p1) (Pose ?o ?p2) (InReach ?r ?o ?p1)
+                 (InReach ?r ?o ?p2))
     :outputs (?q1 ?q2 ?a)
     :certified (and (Conf ?r ?q1) (Conf ?r ?q2) (Traj ?a) (PushKin ?r ?o ?p1 ?p2 ?q1 ?q2 ?a)))
+  ; Eager, cheap: is ?o at ?p within arm ?r's reach (horizontal distance from its base)? A
+  ; given pose out of an arm's reach then rules out that arm's picks, pushes and pours there
+  ; before any search (in push_to_reach the planner otherwise kept trying arm r0's pushes of
+  ; the far bowl and arm r1's picks of the far cup, and ground all their optimistic facts).
+  (:stream test-reach
+    :inputs (?r ?o ?p)
+    :domain (and (Arm ?r) (Pose ?o ?p))
+    :certified (InReach ?r ?o ?p))
   (:stream test-cfree
     :inputs (?o1 ?p1 ?o2 ?p2)
     :domain (and (Pose ?o1 ?p1) (Pose ?o2 ?p2))
