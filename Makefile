@@ -36,10 +36,10 @@ bench: setup
 	$(BIN)/python bench/planner.py
 
 # The seed paper's experiments at reduced repetitions (<= 30 min on 2 cores): JSON + PNG in
-# bench/results/paper, report in docs/RESULTS.md. `python -m bench.paper --full` for all.
+# docs/results/quick, report in docs/RESULTS.md. `python -m bench.paper --full` for all.
 .PHONY: paper-quick
 paper-quick: setup
-	$(BIN)/python -m bench.paper --quick --out bench/results/paper
+	$(BIN)/python -m bench.paper --quick
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache

@@ -232,7 +232,10 @@ def main(argv: list[str] | None = None) -> int:
     mode.add_argument("--quick", action="store_const", dest="mode", const="quick")
     mode.add_argument("--full", action="store_const", dest="mode", const="full")
     mode.add_argument("--smoke", action="store_const", dest="mode", const="smoke")
-    parser.add_argument("--out", type=Path, default=REPO / "bench" / "results" / "paper")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="results folder (default: docs/results/<mode>, committed with "
+                             "docs/RESULTS.md so its figures show; smoke: "
+                             "bench/results/paper-smoke)")
     parser.add_argument("--only", default="", help="comma-separated experiment names")
     parser.add_argument("--jobs", type=int, default=2, help="units of work (processes) run at once")
     parser.add_argument("--workers", type=int, default=2,
@@ -248,6 +251,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"--only: unknown experiment {unknown[0]!r}: expected one of "
               f"{', '.join(EXPERIMENTS)}", file=sys.stderr)
         return 2
+    if args.out is None:
+        args.out = (REPO / "bench" / "results" / "paper-smoke" if args.mode == "smoke"
+                    else REPO / "docs" / "results" / args.mode)
     args.out.mkdir(parents=True, exist_ok=True)
     ctx = Context(args.mode, args.out.resolve(), sys.stderr.isatty(), args.workers)
     started = time.perf_counter()

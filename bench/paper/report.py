@@ -521,7 +521,8 @@ def write_report(out: Path, report: Path) -> Path:
         "(`bench/paper/`; do not edit by hand). Each section puts our numbers next to the "
         "paper's (`ltamp-paper.tex`, table or figure named in the heading) and checks the "
         "paper's claims against ours. Figures link to the PNGs in the output folder "
-        f"(`{os.path.relpath(out, report.parent)}`, regenerated, not committed).",
+        f"(`{os.path.relpath(out, report.parent)}`: its JSON and PNG files; trial pools and "
+        "models under its `cache/` are regenerated from seeds).",
         "",
         f"- Mode: **{run.get('mode', '?')}** (quick = reduced repetitions: a check that "
         "everything runs and a first look, not a statistically meaningful replication; "
