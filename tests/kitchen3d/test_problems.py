@@ -108,23 +108,16 @@ def test_push_to_reach_moves_the_bowl_or_the_cup_between_the_arms(push_to_reach)
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not HAS_SAPIEN, reason="sapien is not installed")
-def test_push_to_reach_executed_on_sapien(push_to_reach) -> None:  # type: ignore[no-untyped-def]
+@pytest.mark.parametrize("backend", [
+    "pybullet",
+    pytest.param("sapien", marks=pytest.mark.skipif(not HAS_SAPIEN,
+                                                    reason="sapien is not installed")),
+])
+def test_push_to_reach_executed(push_to_reach, backend: str) -> None:  # type: ignore[no-untyped-def]
     from ltamp_cli.backends.execution import execute_plan
 
     problem, result = push_to_reach
-    report = execute_plan("sapien", problem, result, seed=0)
-    assert report.success, report.details["steps"]
-    assert report.goal_holds, report.details["goal"]
-    assert report.details["goal"][0]["counts"]["total"] == 60
-
-
-@pytest.mark.slow
-def test_push_to_reach_executed_on_pybullet(push_to_reach) -> None:  # type: ignore[no-untyped-def]
-    from ltamp_cli.backends.execution import execute_plan
-
-    problem, result = push_to_reach
-    report = execute_plan("pybullet", problem, result, seed=0)
+    report = execute_plan(backend, problem, result, seed=0)
     assert report.success, report.details["steps"]
     assert report.goal_holds, report.details["goal"]
     assert report.details["goal"][0]["counts"]["total"] == 60
