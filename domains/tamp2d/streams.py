@@ -15,6 +15,8 @@ import numpy as np
 from ltamp_cli.planner.streams import Binding, StreamInfo
 
 EAGER = StreamInfo(eager=True)
+# Uniform candidates per placement sample (best-candidate sampling, see sample_pose).
+BEST_CANDIDATES = 8
 
 Conf = tuple[float, float]
 
@@ -37,8 +39,20 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         half = width(block) / 2.0
         if high - low < 2 * half:
             return
+        # Mitchell's best-candidate sampling: each placement is the one of a few uniform
+        # candidates farthest from this generator's earlier placements, so the first
+        # samples spread over the region (two blocks fit side by side after two samples,
+        # not after four or five) while the sequence stays random and dense.
+        placed: list[float] = []
         while True:
-            yield (round(float(rng.uniform(low + half, high - half)), 4),)
+            candidates = rng.uniform(low + half, high - half, size=BEST_CANDIDATES)
+            if placed:
+                gaps = np.abs(candidates[:, None] - np.asarray(placed)[None, :]).min(axis=1)
+                choice = float(candidates[int(np.argmax(gaps))])
+            else:
+                choice = float(candidates[0])
+            placed.append(choice)
+            yield (round(choice, 4),)
 
     def sample_grasp(block: str) -> tuple[tuple[float, float]]:
         # The gripper closes on the block from above, centred: one grasp per block keeps the

@@ -377,32 +377,33 @@ class PlannerState:
         ordered: list[StreamResult] = []
         seen: set[StreamResult] = set()
         visiting: set[Fact] = set()
-
-        def domain_facts(name: str, inputs: tuple[str, ...]) -> list[Fact]:
-            external = self.externals[name]
-            mapping = dict(zip(external_inputs(external), inputs, strict=True))
-            return instantiate_atoms(external_domain(external), mapping)
-
-        def visit(fact: Fact) -> None:
-            if fact in visiting:
-                return
-            visiting.add(fact)
-            if fact[0] in self.externals and isinstance(self.externals[fact[0]],
-                                                        StreamFunction):
-                for domain_fact in domain_facts(fact[0], fact[1:]):
-                    visit(domain_fact)
-                return
-            producer = self.producers.get(fact)
-            if producer is None or producer in seen:
-                return
-            for domain_fact in domain_facts(producer.stream, producer.inputs):
-                visit(domain_fact)
-            seen.add(producer)
-            ordered.append(producer)
-
         for fact in needed:
-            visit(fact)
+            self._visit_support(fact, ordered, seen, visiting)
         return ordered
+
+    def _domain_facts(self, name: str, inputs: tuple[str, ...]) -> list[Fact]:
+        external = self.externals[name]
+        mapping = dict(zip(external_inputs(external), inputs, strict=True))
+        return instantiate_atoms(external_domain(external), mapping)
+
+    def _visit_support(self, fact: Fact, ordered: list[StreamResult], seen: set[StreamResult],
+                       visiting: set[Fact]) -> None:
+        """Append the results behind ``fact`` to ``ordered``, dependencies first (a method,
+        not a nested recursive function, which would form a reference cycle)."""
+        if fact in visiting:
+            return
+        visiting.add(fact)
+        if fact[0] in self.externals and isinstance(self.externals[fact[0]], StreamFunction):
+            for domain_fact in self._domain_facts(fact[0], fact[1:]):
+                self._visit_support(domain_fact, ordered, seen, visiting)
+            return
+        producer = self.producers.get(fact)
+        if producer is None or producer in seen:
+            return
+        for domain_fact in self._domain_facts(producer.stream, producer.inputs):
+            self._visit_support(domain_fact, ordered, seen, visiting)
+        seen.add(producer)
+        ordered.append(producer)
 
 
 def bound_plan(actions: Iterable[tuple[str, tuple[str, ...]]], mapping: Mapping[str, str]

@@ -159,35 +159,40 @@ def stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
     among independent instances the cheapest-to-fail first (:mod:`.effort`)."""
     found: list[InstanceKey] = []
     dependencies: dict[InstanceKey, set[InstanceKey]] = {}
-
-    def visit(key: InstanceKey) -> None:
-        if key in dependencies:
-            return
-        before: set[InstanceKey] = set()
-        dependencies[key] = before
-        name, inputs = key
-        for value in inputs:
-            producer = evaluation.object_producer.get(value)
-            if producer is not None:
-                visit(producer)
-                before.add(producer)
-        external = state.externals[name]
-        mapping = dict(zip(external_inputs(external), inputs, strict=True))
-        for fact in instantiate_atoms(external.domain, mapping):
-            if fact not in state.facts.members and fact in evaluation.fact_producer:
-                producer = evaluation.fact_producer[fact]
-                visit(producer)
-                before.add(producer)
-        found.append(key)
-
     for fact in sorted(needed):
         if fact in state.facts.members:
             continue
         key = evaluation.fact_producer.get(fact) or evaluation.fact_producer.get(("=", *fact))
         if key is not None:
-            visit(key)
+            _visit_producers(state, evaluation, key, dependencies, found)
     effort = {name: state.effort(name) for name in {key[0] for key in found}}
     return order_by_effort(found, dependencies, effort)
+
+
+def _visit_producers(state: PlannerState, evaluation: OptimisticEvaluation, key: InstanceKey,
+                     dependencies: dict[InstanceKey, set[InstanceKey]],
+                     found: list[InstanceKey]) -> None:
+    """Append ``key`` to ``found`` after the instances producing its inputs and domain facts
+    (depth first), recording each instance's direct dependencies. A module-level function:
+    a nested recursive one would keep the evaluation alive in a reference cycle."""
+    if key in dependencies:
+        return
+    before: set[InstanceKey] = set()
+    dependencies[key] = before
+    name, inputs = key
+    for value in inputs:
+        producer = evaluation.object_producer.get(value)
+        if producer is not None:
+            _visit_producers(state, evaluation, producer, dependencies, found)
+            before.add(producer)
+    external = state.externals[name]
+    mapping = dict(zip(external_inputs(external), inputs, strict=True))
+    for fact in instantiate_atoms(external.domain, mapping):
+        if fact not in state.facts.members and fact in evaluation.fact_producer:
+            producer = evaluation.fact_producer[fact]
+            _visit_producers(state, evaluation, producer, dependencies, found)
+            before.add(producer)
+    found.append(key)
 
 
 def sampled_inputs(state: PlannerState, consumed: tuple[str, ...],

@@ -4,10 +4,11 @@ negated derived preconditions such as ``(not (Unsafe ...))``."""
 from __future__ import annotations
 
 from collections import defaultdict
+from collections.abc import Mapping
 
 import numpy as np
 
-from ltamp_cli.planner.search.ground import Fact
+from ltamp_cli.planner.search.ground import Fact, GroundAxiom
 from ltamp_cli.planner.search.solve import DiscreteResult
 from ltamp_cli.planner.search.task import GOAL_FACT
 
@@ -27,48 +28,68 @@ def plan_preimage(result: DiscreteResult) -> tuple[set[Fact], set[Fact]]:
     blocked_by_head = defaultdict(list)
     for head, dynamic, blocking in grounding.blocked_axioms:
         blocked_by_head[head].append((dynamic, blocking))
-    needed: set[Fact] = set()
+    preimage = _Preimage(task.fact_ids, task.derived_predicates, axioms_by_head,
+                         blocked_by_head)
     cost_terms: set[Fact] = set()
-
-    def holds(fact: Fact, vector: np.ndarray) -> bool:
-        index = task.fact_ids.get(fact)
-        return index is not None and bool(vector[index])
-
-    def support(fact: Fact, vector: np.ndarray, seen: set[Fact]) -> None:
-        if fact in seen:
-            return
-        seen.add(fact)
-        if fact[0] not in task.derived_predicates:
-            needed.add(fact)
-            return
-        for axiom in axioms_by_head[fact]:
-            if all(holds(f, vector) for f in axiom.body_pos) and not any(
-                    holds(f, vector) for f in axiom.body_neg):
-                needed.update(axiom.static_pos)
-                for positive in axiom.body_pos:
-                    support(positive, vector, seen)
-                for negative in axiom.body_neg:
-                    refute(negative, vector, seen)
-                return
-
-    def refute(fact: Fact, vector: np.ndarray, seen: set[Fact]) -> None:
-        if fact[0] not in task.derived_predicates or ("not", *fact) in seen:
-            return
-        seen.add(("not", *fact))
-        for dynamic, blocking in blocked_by_head[fact]:
-            if all(holds(f, vector) for f in dynamic):
-                needed.add(blocking)
-
     for step, action in enumerate(result.actions):
         vector = task.state_vector(result.outcome.states[step])
         seen: set[Fact] = set()
-        needed.update(action.static_pre)
+        preimage.needed.update(action.static_pre)
         for fact in action.pre_pos:
-            support(fact, vector, seen)
+            preimage.support(fact, vector, seen)
         for fact in action.pre_neg:
-            refute(fact, vector, seen)
+            preimage.refute(fact, vector, seen)
         if action.cost_term is not None:
             cost_terms.add(action.cost_term)
     final = task.state_vector(result.outcome.states[-1])
-    support(GOAL_FACT, final, set())
-    return needed, cost_terms
+    preimage.support(GOAL_FACT, final, set())
+    return preimage.needed, cost_terms
+
+
+class _Preimage:
+    """The facts found so far (``needed``) and how to explain one more.
+
+    A class rather than nested recursive functions: those form reference cycles (function,
+    closure cell, function) that keep the whole task alive until the garbage collector
+    traverses it, ~25 ms after every tamp2d_4blocks solve.
+    """
+
+    def __init__(self, fact_ids: Mapping[Fact, int], derived_predicates: frozenset[str],
+                 axioms_by_head: Mapping[Fact, list[GroundAxiom]],
+                 blocked_by_head: Mapping[Fact, list[tuple[tuple[Fact, ...], Fact]]]) -> None:
+        self.fact_ids = fact_ids
+        self.derived_predicates = derived_predicates
+        self.axioms_by_head = axioms_by_head
+        self.blocked_by_head = blocked_by_head
+        self.needed: set[Fact] = set()
+
+    def holds(self, fact: Fact, vector: np.ndarray) -> bool:
+        index = self.fact_ids.get(fact)
+        return index is not None and bool(vector[index])
+
+    def support(self, fact: Fact, vector: np.ndarray, seen: set[Fact]) -> None:
+        """Add what makes ``fact`` true in the state ``vector``."""
+        if fact in seen:
+            return
+        seen.add(fact)
+        if fact[0] not in self.derived_predicates:
+            self.needed.add(fact)
+            return
+        for axiom in self.axioms_by_head.get(fact, ()):
+            if all(self.holds(f, vector) for f in axiom.body_pos) and not any(
+                    self.holds(f, vector) for f in axiom.body_neg):
+                self.needed.update(axiom.static_pos)
+                for positive in axiom.body_pos:
+                    self.support(positive, vector, seen)
+                for negative in axiom.body_neg:
+                    self.refute(negative, vector, seen)
+                return
+
+    def refute(self, fact: Fact, vector: np.ndarray, seen: set[Fact]) -> None:
+        """Add the static facts that keep the derived ``fact`` false in ``vector``."""
+        if fact[0] not in self.derived_predicates or ("not", *fact) in seen:
+            return
+        seen.add(("not", *fact))
+        for dynamic, blocking in self.blocked_by_head.get(fact, ()):
+            if all(self.holds(f, vector) for f in dynamic):
+                self.needed.add(blocking)
