@@ -9,7 +9,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from ltamp_cli.planner.search.heuristic import INFINITY, FFHeuristic
-from ltamp_cli.planner.search.postprocess import eliminate_redundant_actions, is_applicable
+from ltamp_cli.planner.search.postprocess import (
+    bridge_detours,
+    eliminate_redundant_actions,
+    is_applicable,
+)
 from ltamp_cli.planner.search.task import Task
 
 # "fd"/"fd-wastar": Fast Downward subprocesses (optional extra, search/fast_downward.py).
@@ -174,14 +178,12 @@ def weighted_astar(task: Task, deadline: float, weight: float = 2.0,
 
 def enforced_hill_climbing(task: Task, deadline: float, unit_costs: bool = False,
                            heuristic: FFHeuristic | None = None,
-                           max_expansions: int | None = None) -> SearchOutcome:
-    """FF's enforced hill-climbing over helpful actions (plan ``None`` when it gets stuck).
+                           max_expansions: int | None = None) -> SearchOutcome | None:
+    """FF's enforced hill-climbing over helpful actions; ``None`` when it gets stuck.
 
     From the current state, breadth-first search (helpful actions only) for a state with a
-    strictly better heuristic value, commit to it, repeat until the goal holds; a greedy
-    search escapes a plateau that helpful actions cannot leave. ``max_expansions`` bounds
-    all of it together (``capped`` when it ran out), so that a caller falling back to
-    another search can give it what is left.
+    strictly better heuristic value, commit to it, repeat until the goal holds. The greedy
+    search that escapes a plateau expands at most ``max_expansions`` states when that is set.
     """
     from collections import deque
 
@@ -193,7 +195,7 @@ def enforced_hill_climbing(task: Task, deadline: float, unit_costs: bool = False
     result = heuristic(vector)
     evaluated += 1
     if result.value == INFINITY:
-        return SearchOutcome(None, INFINITY, 0, evaluated, time.perf_counter() - start_time)
+        return None
     path_ops: list[int] = []
     path_states = [state]
     seen = {state}
@@ -204,9 +206,6 @@ def enforced_hill_climbing(task: Task, deadline: float, unit_costs: bool = False
         while queue and found is None:
             if time.perf_counter() > deadline:
                 raise SearchTimeout
-            if max_expansions is not None and expanded >= max_expansions:
-                return SearchOutcome(None, INFINITY, expanded, evaluated,
-                                     time.perf_counter() - start_time, capped=True)
             parent, parent_vector, helpful, ops = queue.popleft()
             expanded += 1
             # Relaxed plans ignore negative preconditions: keep only really applicable ones.
@@ -233,16 +232,15 @@ def enforced_hill_climbing(task: Task, deadline: float, unit_costs: bool = False
             # search from here usually escapes it; else report failure.
             budget = LOCAL_EXPANSIONS
             if max_expansions is not None:
-                budget = min(budget, max_expansions - expanded)
+                budget = min(budget, max_expansions)
             local = lazy_greedy(task, deadline, initial=state, heuristic=heuristic,
                                 max_expansions=budget)
-            expanded += local.expanded
-            evaluated += local.evaluated
             if local.plan is None:
-                return SearchOutcome(None, INFINITY, expanded, evaluated,
-                                     time.perf_counter() - start_time, capped=local.capped)
+                return None
             path_ops.extend(local.plan)
             path_states.extend(local.states[1:])
+            expanded += local.expanded
+            evaluated += local.evaluated
             break
         state, vector, next_result, ops = found
         for op in ops:
@@ -299,6 +297,7 @@ def run_search(task: Task, algorithm: str, deadline: float, unit_costs: bool = F
         outcome = _search(task, algorithm, deadline, unit_costs, max_expansions)
     if outcome.plan is not None and algorithm != "wastar":
         outcome.plan, outcome.states = eliminate_redundant_actions(task, outcome.plan)
+        outcome.plan, outcome.states = bridge_detours(task, outcome.plan, outcome.states)
         outcome.cost = float(sum(task.operators[i].cost for i in outcome.plan))
     return outcome
 
@@ -310,18 +309,10 @@ def _search(task: Task, algorithm: str, deadline: float, unit_costs: bool,
         heuristic = FFHeuristic(task, unit_costs=unit_costs)
         outcome = enforced_hill_climbing(task, deadline, unit_costs=unit_costs,
                                          heuristic=heuristic, max_expansions=max_expansions)
-        if outcome.plan is not None:
+        if outcome is not None:
             return outcome
-        # The greedy search gets what hill-climbing left of the budget: a failing search
-        # (the usual kind in TAMP: too few samples yet) then costs one budget, not two.
-        remaining = None if max_expansions is None else max_expansions - outcome.expanded
-        if remaining is not None and remaining <= 0:
-            return outcome
-        fallback = lazy_greedy(task, deadline, unit_costs=unit_costs, heuristic=heuristic,
-                               max_expansions=remaining)
-        fallback.expanded += outcome.expanded
-        fallback.evaluated += outcome.evaluated
-        return fallback
+        return lazy_greedy(task, deadline, unit_costs=unit_costs, heuristic=heuristic,
+                           max_expansions=max_expansions)
     if algorithm == "lazy-greedy":
         return lazy_greedy(task, deadline, unit_costs=unit_costs, max_expansions=max_expansions)
     if algorithm == "wastar":
