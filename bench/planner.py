@@ -30,6 +30,7 @@ from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 from tqdm import tqdm
 
 from ltamp_cli.planner.algorithms.common import ALGORITHMS, PlannerConfig
@@ -44,6 +45,8 @@ TARGETS_S = {"kitchen_symbolic": 0.2, "tamp2d_4blocks": 0.1}  # median wall seco
 
 
 HISTORIES = ("cold", "warm")
+# Iterations of the machine reference workload (see machine_reference_s).
+REFERENCE_ROUNDS = 2000
 WARM_UP_SEED = 1000
 
 
@@ -57,6 +60,27 @@ def config_for(problem: Any, algorithm: str, seed: int, max_time: float,
     options.update(algorithm=algorithm, seed=seed, max_time=max_time,
                    statistics_dir=statistics_dir)
     return PlannerConfig(**options)
+
+
+def machine_reference_s(repeats: int = 3) -> float:
+    """CPU seconds (best of ``repeats``) of a fixed workload shaped like the planner's (small
+    numpy reductions, dict and tuple churn), independent of ltamp's code. Shared cloud
+    machines run the same code 1.5-2x slower at times; timing this before and after the
+    runs tells whether two benchmark runs saw the same machine speed."""
+    rng = np.random.default_rng(0)
+    values = rng.random(1500)
+    starts = np.arange(0, 1500, 3)
+    best = float("inf")
+    for _ in range(repeats):
+        start = time.process_time()
+        table: dict[tuple[int, int], float] = {}
+        for i in range(REFERENCE_ROUNDS):
+            sums = np.add.reduceat(values, starts)
+            key = (i % 97, i % 13)
+            table[key] = table.get(key, 0.0) + float(sums[i % len(sums)])
+            _ = sorted((j * 7919) % 101 for j in range(40))
+        best = min(best, time.process_time() - start)
+    return best
 
 
 def run_one(problem: Any, algorithm: str, seed: int, max_time: float,
@@ -151,6 +175,7 @@ def main(argv: list[str] | None = None) -> int:
     names = ([n for n in args.examples.split(",") if n] if args.examples
              else sorted(p.stem for p in EXAMPLES.glob("*.yaml")))
     algorithms = [a for a in args.algorithms.split(",") if a]
+    reference_before = machine_reference_s()
     runs: list[dict[str, Any]] = []
     summary: list[dict[str, Any]] = []
     progress = tqdm(total=len(names) * len(algorithms) * len(histories) * args.seeds,
@@ -173,8 +198,11 @@ def main(argv: list[str] | None = None) -> int:
                         progress.update()
                     summary.append(summarise(name, algorithm, history, rows))
     progress.close()
+    reference = {"before_s": reference_before, "after_s": machine_reference_s()}
 
     print_table(summary)
+    print(f"\nmachine reference workload: {reference['before_s'] * 1000:.1f} ms before the runs, "
+          f"{reference['after_s'] * 1000:.1f} ms after (compare runs only at similar values)")
     checks = check_targets(summary)
     print()
     for check in checks:
@@ -193,7 +221,7 @@ def main(argv: list[str] | None = None) -> int:
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps({
         "benchmark": "planner", "seeds": args.seeds, "max_time_s": args.max_time,
-        "summary": summary, "targets": checks, "runs": runs,
+        "machine_reference": reference, "summary": summary, "targets": checks, "runs": runs,
     }, indent=2) + "\n")
     print(f"\nwrote {args.out}")
     return 0
