@@ -1,5 +1,5 @@
-"""bench/planner.py on one small case: validated plans and the machine reference land in
-the JSON it writes."""
+"""bench/planner.py on small cases: validated plans, repeats that agree (also warm, whose
+persisted statistics each repeat starts from), and the machine reference in its JSON."""
 
 from __future__ import annotations
 
@@ -11,17 +11,38 @@ import pytest
 from bench import planner
 
 
-def test_planner_bench_writes_validated_runs_and_the_machine_reference(
+def test_planner_bench_writes_validated_repeated_runs_and_the_machine_reference(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "planner.json"
     planner.main(["--examples", "blocksworld,tamp2d_blocked", "--seeds", "2",
-                  "--algorithms", "incremental,focused", "--histories", "cold",
-                  "--out", str(out)])
+                  "--algorithms", "incremental,focused", "--histories", "cold,warm",
+                  "--repeats", "2", "--out", str(out)])
     report = json.loads(out.read_text())
-    assert {(row["example"], row["algorithm"]) for row in report["summary"]} == {
-        (e, a) for e in ("blocksworld", "tamp2d_blocked") for a in ("incremental", "focused")}
+    assert {(r["example"], r["algorithm"], r["history"]) for r in report["summary"]} == {
+        (e, a, h) for e in ("blocksworld", "tamp2d_blocked") for a in ("incremental", "focused")
+        for h in ("cold", "warm")}
+    # Every repeat of a seed found the same plan (else the run is marked invalid).
     assert all(row["solved"] == row["valid"] == 2 for row in report["summary"])
-    assert len(report["runs"]) == 8 and not report["targets"]  # no target for these two
+    assert len(report["runs"]) == 16 and not report["targets"]  # no target for these two
+    for run in report["runs"]:
+        assert run["cpu_s"] == min(run["cpu_s_repeats"]) and len(run["cpu_s_repeats"]) == 2
     reference = report["machine_reference"]
     assert 0 < reference["before_s"] < 5 and 0 < reference["after_s"] < 5
     assert "machine reference workload" in capsys.readouterr().out
+
+
+def test_repeats_that_find_different_plans_are_reported(monkeypatch: pytest.MonkeyPatch
+                                                        ) -> None:
+    from dataclasses import replace
+
+    from ltamp_cli.planner.problem import load_problem
+
+    problem = load_problem(planner.EXAMPLES / "tamp2d_blocked.yaml")
+    seeds = iter(range(100))
+    solve = planner.solve
+    # A planner that is not deterministic: each repeat samples with another seed.
+    monkeypatch.setattr(planner, "solve",
+                        lambda problem, config: solve(problem, replace(config, seed=next(seeds))))
+    row = planner.run_one(problem, "incremental", 0, 10.0, repeats=3)
+    assert row["valid"] is False
+    assert any("different plans" in error for error in row["errors"])
