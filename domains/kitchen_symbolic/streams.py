@@ -23,15 +23,29 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
     tool_skills: dict[str, list[str]] = {str(k): list(v) for k, v in
                                          world.get("tool_targets", {}).items()}
 
+    # Slots seen as stream inputs before this sampler made them are where the problem put
+    # an object: most stay taken for much of the plan, so they are offered last.
+    sampled: set[str] = set()
+    given: set[str] = set()
+
+    def seen(pose: str) -> None:
+        if pose not in sampled:
+            given.add(pose)
+
     def sample_pose(obj: str, region: str) -> Iterator[tuple[str]]:
         # Slots in a seeded random order, so different seeds try different placements.
-        for index in rng.permutation(slots.get(region, 0)):
-            yield (f"{region}/{int(index)}",)
+        left = [f"{region}/{int(index)}" for index in rng.permutation(slots.get(region, 0))]
+        while left:
+            pose = next((p for p in left if p not in given), left[0])
+            left.remove(pose)
+            sampled.add(pose)
+            yield (pose,)
 
     def sample_grasp(obj: str) -> tuple[str]:
         return (f"grasp:{obj}",)
 
     def inverse_kinematics(obj: str, pose: str, grasp: str) -> tuple[str]:
+        seen(pose)
         return (f"above:{pose}",)
 
     def fill_conf(faucet: str, cup: str, grasp: str) -> tuple[str]:
@@ -47,6 +61,8 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         return None if q1 == q2 else (f"{q1}->{q2}",)
 
     def test_cfree(o1: str, p1: str, o2: str, p2: str) -> bool:
+        seen(p1)
+        seen(p2)
         return p1 != p2
 
     # Cheap closed-form streams are evaluated eagerly (for real) rather than optimistically.

@@ -40,29 +40,39 @@ def test_same_grounded_task_is_skipped_and_a_changed_one_is_searched() -> None:
 @pytest.mark.parametrize("algorithm", ["focused", "binding", "adaptive"])
 def test_algorithms_do_not_search_a_task_again_after_it_ran_out_of_budget(
         algorithm: str, monkeypatch: pytest.MonkeyPatch) -> None:
-    # kitchen_symbolic seed 6: the first optimistic task runs out of budget, and raising
-    # the complexity bound leaves it unchanged twice before it grows.
+    # Blocksworld has no streams: raising the complexity bound after a search that ran out
+    # of its (here tiny) budget leaves the task as it was, up to the bound.
+    from ltamp_cli.planner import api
     from ltamp_cli.planner.algorithms import common
     from ltamp_cli.planner.algorithms.common import PlannerConfig
-    from ltamp_cli.planner.api import solve
 
     searched: list[frozenset[object]] = []
     skipped = 0
-    original = common.plan_discrete
+    original_search = common.plan_discrete
+    original_state = api.initial_state
 
     def spy(*args, **kwargs):  # type: ignore[no-untyped-def]
         nonlocal skipped
-        result = original(*args, **kwargs)
+        result = original_search(*args, **kwargs)
         if result.skipped:
             skipped += 1
         elif result.capped:
             searched.append(grounding_signature(result.grounding))
         return result
 
+    def small_budget(*args, **kwargs):  # type: ignore[no-untyped-def]
+        state = original_state(*args, **kwargs)
+        state.search_budget = 4
+        return state
+
     monkeypatch.setattr(common, "plan_discrete", spy)
-    problem = load_problem(EXAMPLES / "kitchen_symbolic.yaml")
-    options = {k: v for k, v in problem.planner_options.items() if k != "max_time"}
-    result = solve(problem, PlannerConfig(algorithm=algorithm, seed=6, max_time=60, **options))
+    monkeypatch.setattr(api, "initial_state", small_budget)
+    problem = load_problem(EXAMPLES / "blocksworld.yaml")
+    # lazy-greedy: the budget bounds the whole search (hill-climbing's own steps are not).
+    result = api.solve(problem, PlannerConfig(algorithm=algorithm, seed=0, max_time=60,
+                                              max_complexity=3, search="lazy-greedy"))
     assert result.solved
-    assert searched and skipped  # the case arises, and a repeat was skipped
-    assert len(set(searched)) == len(searched)
+    # Out of budget at complexity 0; the same task at 1 and 2 is skipped; at the bound (3)
+    # it is searched again with a doubled budget, and again until solved.
+    assert skipped == 2
+    assert len(searched) == 3 and len(set(searched)) == 1

@@ -262,8 +262,15 @@ def evaluate_eager(state: PlannerState) -> None:
     for real than assumed optimistically: it keeps optimistic placeholders few. Streams
     observed to be cheap (:func:`.effort.observed_cheap`) count as eager too.
     """
+    _eager_fixpoint(state)
     if state.config.eager_cheap_streams:
+        # After the fixpoint: the probe call then sees what the eager streams derived (a
+        # sampler may use it, e.g. to offer last the places where objects already stand).
         probe_unmeasured(state)
+        _eager_fixpoint(state)
+
+
+def _eager_fixpoint(state: PlannerState) -> None:
     changed = True
     while changed and not state.timed_out():
         changed = False
