@@ -4,32 +4,30 @@ on seeds that used to need 7-13."""
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
-from types import ModuleType
+from typing import Any
 
 import numpy as np
 import pytest
 
+from ltamp_cli.errors import SourceLocation
 from ltamp_cli.planner.algorithms.common import PlannerConfig
 from ltamp_cli.planner.api import solve
-from ltamp_cli.planner.problem import load_problem
+from ltamp_cli.planner.problem import load_problem, load_streams_factory
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def load_bindings() -> ModuleType:
-    spec = importlib.util.spec_from_file_location(
-        "kitchen_symbolic_streams", ROOT / "domains" / "kitchen_symbolic" / "streams.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def make_streams(world: dict[str, Any], seed: int) -> dict[str, Any]:
+    """The domain's bindings, loaded as a problem file naming them would load them."""
+    folder = ROOT / "domains" / "kitchen_symbolic"
+    factory = load_streams_factory("streams.py", folder, SourceLocation(str(folder)))
+    return dict(factory(world, np.random.default_rng(seed)))
 
 
 @pytest.mark.parametrize("seed", range(5))
 def test_slots_where_objects_were_seen_come_last(seed: int) -> None:
-    streams = load_bindings().make_streams({"slots": {"table": 5}}, np.random.default_rng(seed))
+    streams = make_streams({"slots": {"table": 5}}, seed)
     # The problem put two objects on table/0 and table/3 (seen as a collision test's inputs).
     streams["test-cfree"].function("cup", "table/0", "bowl", "table/3")
     offered = [pose for (pose,) in streams["sample-pose"]("cup", "table")]

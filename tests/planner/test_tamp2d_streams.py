@@ -2,26 +2,27 @@
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
-from types import ModuleType
+from typing import Any
 
 import numpy as np
 
-STREAMS = Path(__file__).resolve().parents[2] / "domains" / "tamp2d" / "streams.py"
+from ltamp_cli.errors import SourceLocation
+from ltamp_cli.planner.problem import load_streams_factory
+
+ROOT = Path(__file__).resolve().parents[2]
 WORLD = {"regions": {"goal": [4.0, 10.0]}, "blocks": {"a": {"width": 2.0}}}
 
 
-def load_bindings() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("tamp2d_streams", STREAMS)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def make_streams(world: dict[str, Any], seed: int) -> dict[str, Any]:
+    """The domain's bindings, loaded as a problem file naming them would load them."""
+    folder = ROOT / "domains" / "tamp2d"
+    factory = load_streams_factory("streams.py", folder, SourceLocation(str(folder)))
+    return dict(factory(world, np.random.default_rng(seed)))
 
 
 def placements(seed: int, count: int) -> np.ndarray:
-    streams = load_bindings().make_streams(WORLD, np.random.default_rng(seed))
+    streams = make_streams(WORLD, seed)
     generator = streams["sample-pose"]("a", "goal")
     return np.array([next(generator)[0] for _ in range(count)])
 
