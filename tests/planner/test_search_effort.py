@@ -201,4 +201,3 @@ def test_cost_bounded_join_keeps_exactly_the_bindings_within_the_bound() -> None
     edge = [LiftedLiteral("Conf", ("?x",)), LiftedLiteral("Edge", ("?x", "?y"))]
     assert join_tuples(edge, index, variables, since, lonely) == []
     assert not lonely.exceeded
-
