@@ -105,7 +105,9 @@ def run_one(problem: Any, algorithm: str, seed: int, max_time: float,
         result = solve(problem, config)
         walls.append(time.perf_counter() - start)
         cpus.append(time.process_time() - cpu)
-        plans.add((result.status, tuple((s.name, s.args) for s in result.plan or ())))
+        # Values too: same object names can stand for different samples.
+        plans.add((result.status,
+                   tuple((s.name, s.args, repr(s.values)) for s in result.plan or ())))
     row: dict[str, Any] = {"algorithm": algorithm, "seed": seed, "status": result.status,
                            "wall_s": min(walls), "cpu_s": min(cpus),
                            "wall_s_repeats": walls, "cpu_s_repeats": cpus,

@@ -17,6 +17,9 @@ from ltamp_cli.planner.streams import Binding, StreamInfo
 EAGER = StreamInfo(eager=True)
 # Uniform candidates per placement sample (best-candidate sampling, see sample_pose).
 BEST_CANDIDATES = 8
+# Placements per generator that prefer spots clear of other blocks' known poses; later ones
+# spread by best-candidate alone, which then fills the avoided spots first (denseness).
+CLEAR_PLACEMENTS = 3
 
 Conf = tuple[float, float]
 
@@ -34,6 +37,25 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
     def height(block: str) -> float:
         return float(blocks[block].get("height", 1.0))
 
+    # Every pose the streams have seen per block: given ones (seen as inputs) and sampled
+    # ones. A placement prefers spots clear of other blocks' known poses, as TAMP placement
+    # samplers keep clear of known obstacles; a preference, not a rule, so it stays dense.
+    known: dict[str, set[float]] = {}
+
+    def note(block: str, pose: float) -> None:
+        known.setdefault(block, set()).add(pose)
+
+    def overlaps(block: str, candidates: np.ndarray) -> np.ndarray:
+        """Known poses of other blocks each candidate pose would collide with, ``(n,)``."""
+        counts = np.zeros(len(candidates), dtype=np.int64)
+        for other, poses in known.items():
+            if other == block or not poses:
+                continue
+            clearance = (width(block) + width(other)) / 2.0
+            others = np.fromiter(poses, dtype=float, count=len(poses))
+            counts += (np.abs(candidates[:, None] - others[None, :]) < clearance).sum(axis=1)
+        return counts
+
     def sample_pose(block: str, region: str) -> Iterator[tuple[float]]:
         low, high = regions[region]
         half = width(block) / 2.0
@@ -42,17 +64,25 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         # Mitchell's best-candidate sampling: each placement is the one of a few uniform
         # candidates farthest from this generator's earlier placements, so the first
         # samples spread over the region (two blocks fit side by side after two samples,
-        # not after four or five) while the sequence stays random and dense.
+        # not after four or five) while the sequence stays random and dense. Candidates
+        # clear of other blocks' known poses come first.
         placed: list[float] = []
         while True:
             candidates = rng.uniform(low + half, high - half, size=BEST_CANDIDATES)
             if placed:
                 gaps = np.abs(candidates[:, None] - np.asarray(placed)[None, :]).min(axis=1)
-                choice = float(candidates[int(np.argmax(gaps))])
             else:
-                choice = float(candidates[0])
+                gaps = np.zeros(len(candidates))
+            # lexsort: last key is primary (fewest collisions), then the widest gap.
+            if len(placed) < CLEAR_PLACEMENTS:
+                collisions = overlaps(block, candidates)
+            else:
+                collisions = np.zeros(len(candidates), dtype=np.int64)
+            choice = float(candidates[np.lexsort((-gaps, collisions))[0]])
+            choice = round(choice, 4)
             placed.append(choice)
-            yield (round(choice, 4),)
+            note(block, choice)
+            yield (choice,)
 
     def sample_grasp(block: str) -> tuple[tuple[float, float]]:
         # The gripper closes on the block from above, centred: one grasp per block keeps the
@@ -61,6 +91,7 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
 
     def inverse_kinematics(block: str, pose: float, grasp: tuple[float, float]
                            ) -> tuple[Conf] | None:
+        note(block, pose)
         conf = (round(pose + grasp[0], 4), round(grasp[1], 4))
         if abs(conf[0]) > reach:
             return None  # out of the gripper's reach
@@ -74,6 +105,8 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         return ((start, above_start, above_goal, goal),)
 
     def test_cfree(block1: str, pose1: float, block2: str, pose2: float) -> bool:
+        note(block1, pose1)
+        note(block2, pose2)
         return abs(pose1 - pose2) >= (width(block1) + width(block2)) / 2.0
 
     def distance(q1: Conf, q2: Conf) -> float:
