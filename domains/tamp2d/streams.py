@@ -45,16 +45,21 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
     def note(block: str, pose: float) -> None:
         known.setdefault(block, set()).add(pose)
 
-    def overlaps(block: str, candidates: np.ndarray) -> np.ndarray:
-        """Known poses of other blocks each candidate pose would collide with, ``(n,)``."""
-        counts = np.zeros(len(candidates), dtype=np.int64)
+    def overlaps(block: str, candidates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """How many known poses of other blocks each candidate pose collides with, and the
+        total overlap (m), both ``(n,)``. Where every spot collides with something (a goal
+        region holding another block), the least-overlapping one leaves the most room."""
+        count = np.zeros(len(candidates), dtype=np.int64)
+        length = np.zeros(len(candidates))
         for other, poses in known.items():
             if other == block or not poses:
                 continue
             clearance = (width(block) + width(other)) / 2.0
             others = np.fromiter(poses, dtype=float, count=len(poses))
-            counts += (np.abs(candidates[:, None] - others[None, :]) < clearance).sum(axis=1)
-        return counts
+            depth = np.clip(clearance - np.abs(candidates[:, None] - others[None, :]), 0.0, None)
+            count += (depth > 0).sum(axis=1)
+            length += depth.sum(axis=1)
+        return count, length
 
     def sample_pose(block: str, region: str) -> Iterator[tuple[float]]:
         low, high = regions[region]
@@ -73,12 +78,13 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
                 gaps = np.abs(candidates[:, None] - np.asarray(placed)[None, :]).min(axis=1)
             else:
                 gaps = np.zeros(len(candidates))
-            # lexsort: last key is primary (fewest collisions), then the widest gap.
             if len(placed) < CLEAR_PLACEMENTS:
-                collisions = overlaps(block, candidates)
+                count, length = overlaps(block, candidates)
+                # Fewest collisions, then least overlap, then the widest gap.
+                order = np.lexsort((-gaps, length, count))
             else:
-                collisions = np.zeros(len(candidates), dtype=np.int64)
-            choice = float(candidates[np.lexsort((-gaps, collisions))[0]])
+                order = np.argsort(-gaps, kind="stable")
+            choice = float(candidates[order[0]])
             choice = round(choice, 4)
             placed.append(choice)
             note(block, choice)

@@ -68,3 +68,16 @@ def test_avoided_spots_are_still_sampled_later() -> None:
     inside = np.sort(samples[np.abs(samples - C_POSE) < CLEARANCE])
     gaps = np.diff(np.concatenate([[C_POSE - CLEARANCE], inside, [C_POSE + CLEARANCE]]))
     assert gaps.max() < 1.0
+
+
+def test_where_every_spot_collides_the_least_overlapping_one_comes_first() -> None:
+    # The goal region (centres 5-9) holds c at 7: a's placement should hug an edge so that
+    # another block fits beside it once c leaves. Uniform draws are 1.0 from 7 on average.
+    world = {"regions": {"goal": [4.0, 10.0]},
+             "blocks": {"a": {"width": 2.0}, "c": {"width": 2.5}}}
+    distances = []
+    for seed in range(100):
+        streams = make_streams(world, seed)
+        streams["test-cfree"].function("c", 7.0, "a", 5.0)
+        distances.append(abs(next(streams["sample-pose"]("a", "goal"))[0] - 7.0))
+    assert np.mean(distances) > 1.5
