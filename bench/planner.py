@@ -221,6 +221,10 @@ def main(argv: list[str] | None = None) -> int:
                     file=sys.stderr, desc="planner", disable=not sys.stderr.isatty())
     for name in names:
         problem = load_problem(EXAMPLES / f"{name}.yaml")
+        if "torch" in sys.modules:
+            import torch
+
+            torch.set_num_threads(1)  # as `ltamp solve` does for learned streams
         for history in histories:
             with tempfile.TemporaryDirectory() as cache:
                 statistics_dir = None

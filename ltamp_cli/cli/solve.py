@@ -51,6 +51,12 @@ def solve_command(
     from ltamp_cli.planner.problem import load_problem
 
     loaded = load_problem(problem, domain)
+    if "torch" in sys.modules:
+        # The bindings use torch (learned streams): their GPs are small, and 2 threads make
+        # them several times slower (OpenMP oversubscription; field facts).
+        import torch
+
+        torch.set_num_threads(1)
     options = dict(loaded.planner_options)
     known = {"algorithm", "max_time", "seed", "search", "unit_costs", "initial_complexity",
              "max_complexity", "success_cost", "skeleton", "eager_cheap_streams"}

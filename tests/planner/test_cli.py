@@ -1,4 +1,5 @@
-"""``ltamp solve`` through a subprocess: exit codes, ``--json`` output, one-line errors."""
+"""``ltamp solve``: exit codes, ``--json`` output, one-line errors (through a subprocess,
+but for one in-process case)."""
 
 from __future__ import annotations
 
@@ -187,3 +188,22 @@ def test_stream_that_raises_exits_2(make_problem: MakeProblem) -> None:
     """)
     path = make_problem(LINE_DOMAIN, GOOD_YAML, LINE_STREAMS, bindings)
     assert_bad_input(ltamp(path), "stream 'next' raised ValueError: sampler exploded")
+
+
+def test_solve_with_learned_streams_runs_torch_on_one_thread(tmp_path: Path) -> None:
+    # Small GPs run several times slower on 2 threads (field facts); CI's OMP_NUM_THREADS=1
+    # hides that, so start from 2 threads in-process.
+    torch = pytest.importorskip("torch")
+    from typer.testing import CliRunner
+
+    from ltamp_cli.cli.app import build_app
+
+    before = torch.get_num_threads()
+    torch.set_num_threads(2)
+    try:
+        run = CliRunner().invoke(build_app(), ["solve", str(EXAMPLES / "synthetic_goodregion.yaml"),
+                                       "--seed", "0", "--no-stats"])
+        assert run.exit_code == 0, run.output
+        assert torch.get_num_threads() == 1
+    finally:
+        torch.set_num_threads(before)
