@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
+from ltamp_cli.cli.threads import use_one_thread
 from ltamp_cli.planner.algorithms.common import ALGORITHMS, PlannerConfig
 from ltamp_cli.planner.api import solve
 from ltamp_cli.planner.problem import load_problem
@@ -221,10 +222,7 @@ def main(argv: list[str] | None = None) -> int:
                     file=sys.stderr, desc="planner", disable=not sys.stderr.isatty())
     for name in names:
         problem = load_problem(EXAMPLES / f"{name}.yaml")
-        if "torch" in sys.modules:
-            import torch
-
-            torch.set_num_threads(1)  # as `ltamp solve` does for learned streams
+        use_one_thread()  # as `ltamp solve` does, once the bindings are loaded
         for history in histories:
             with tempfile.TemporaryDirectory() as cache:
                 statistics_dir = None

@@ -41,14 +41,13 @@ def evaluate_command(
     On the synthetic backend both use the true score function; on a physical backend F1 needs
     --data and the success rate runs one live trial of θ* per sampled context.
     """
-    import torch
-
     from ltamp_cli.backends import load_backend
+    from ltamp_cli.cli.threads import use_one_thread
     from ltamp_cli.cli.train import heldout_from_records, read_records
     from ltamp_cli.learning.metrics import SkillEvaluator
     from ltamp_cli.learning.model_dir import load_model
 
-    torch.set_num_threads(1)
+    use_one_thread()
     if trials < 0 or n_test < 1:
         raise InputError(f"--trials must be >= 0 and --n-test >= 1, got {trials} and {n_test}")
     loaded = load_model(model_dir)

@@ -67,17 +67,17 @@ def level_set_command(
     Controls not drawn are held at the most confident control θ* of the context.
     """
     import numpy as np
-    import torch
 
     from ltamp_cli.cli.options import check_confidence_options
     from ltamp_cli.cli.sample import parse_context
+    from ltamp_cli.cli.threads import use_one_thread
     from ltamp_cli.learning.model import LevelSetModel
     from ltamp_cli.learning.model_dir import load_model
     from ltamp_cli.sampling.factory import make_sampler
     from ltamp_cli.sampling.level_set_plot import plot_level_set
     from ltamp_cli.sampling.superlevel import build_superlevel_set
 
-    torch.set_num_threads(1)
+    use_one_thread()
     if out.suffix.lower() != ".png":
         raise InputError(f"--out: expected a .png file name, got {str(out)!r}")
     if samples < 0:
@@ -161,9 +161,8 @@ def curves_command(
                 raise InputError(f"{run}: {error}") from None
         title = f"{', '.join(sorted(skills))}: {len(runs)} run(s)"
     else:
-        import torch
-
         from ltamp_cli.backends import load_backend
+        from ltamp_cli.cli.threads import use_one_thread
         from ltamp_cli.learning.active import STRATEGIES
 
         names = [name.strip() for name in (strategies or "").split(",") if name.strip()]
@@ -175,7 +174,7 @@ def curves_command(
                                    ("--eval-every", eval_every, 1), ("--init", init, 1)):
             if value < low:
                 raise InputError(f"{option}: expected a number >= {low}, got {value}")
-        torch.set_num_threads(1)
+        use_one_thread()
         backend = load_backend("synthetic")
         try:
             if skill not in backend.skills():

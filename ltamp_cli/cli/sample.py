@@ -70,15 +70,15 @@ def sample_command(
 ) -> None:
     """Draw N controls with μ/σ > β for one context from MODEL_DIR's GP."""
     import numpy as np
-    import torch
 
     from ltamp_cli.cli.options import check_confidence_options
+    from ltamp_cli.cli.threads import use_one_thread
     from ltamp_cli.learning.model import LevelSetModel
     from ltamp_cli.learning.model_dir import load_model
     from ltamp_cli.sampling.factory import SAMPLER_NAMES, make_sampler
     from ltamp_cli.sampling.kernel_learning import load_kernel
 
-    torch.set_num_threads(1)
+    use_one_thread()
     if sampler not in SAMPLER_NAMES:
         raise InputError(f"--sampler: unknown sampler {sampler!r} (expected "
                          f"{', '.join(SAMPLER_NAMES)})")

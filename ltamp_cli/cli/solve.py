@@ -46,17 +46,13 @@ def solve_command(
         "--render", help="With --backend: write the execution as a GIF.")] = None,
 ) -> None:
     """Solve PROBLEM; exit 0 when solved, 1 when infeasible or out of time, 2 on bad input."""
+    from ltamp_cli.cli.threads import use_one_thread
     from ltamp_cli.planner.algorithms.common import PlannerConfig, StreamError
     from ltamp_cli.planner.api import solve
     from ltamp_cli.planner.problem import load_problem
 
     loaded = load_problem(problem, domain)
-    if "torch" in sys.modules:
-        # The bindings use torch (learned streams): their GPs are small, and 2 threads make
-        # them several times slower (OpenMP oversubscription; field facts).
-        import torch
-
-        torch.set_num_threads(1)
+    use_one_thread()  # after loading the bindings: learned streams bring torch and scipy
     options = dict(loaded.planner_options)
     known = {"algorithm", "max_time", "seed", "search", "unit_costs", "initial_complexity",
              "max_complexity", "success_cost", "skeleton", "eager_cheap_streams"}

@@ -21,10 +21,9 @@ def tell_command(
     ] = True,
 ) -> None:
     """Record the pending trial's score in DIR/trials.jsonl, refit and save the model."""
-    import torch
-
+    from ltamp_cli.cli.threads import use_one_thread
     from ltamp_cli.learning.ask_tell import tell
 
-    torch.set_num_threads(1)
+    use_one_thread()
     record = tell(directory, score, valid)
     typer.echo(json.dumps({"model": str(directory), "index": record.index, "score": score}))

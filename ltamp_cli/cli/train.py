@@ -74,16 +74,15 @@ def train_command(
     Live mode runs trials on --backend and appends them to OUT/trials.jsonl (a rerun resumes);
     pool mode (--data) picks trials from recorded ones instead.
     """
-    import torch
-
     from ltamp_cli.backends import load_backend
+    from ltamp_cli.cli.threads import use_one_thread
     from ltamp_cli.learning.active import LearningConfig, learn_from_pool, learn_online
     from ltamp_cli.learning.confidence import beta_star
     from ltamp_cli.learning.curves import plot_curves
     from ltamp_cli.learning.metrics import SkillEvaluator
     from ltamp_cli.trials.record import TrialDataset
 
-    torch.set_num_threads(1)
+    use_one_thread()
     try:
         config = LearningConfig(
             strategy=strategy, kernel=kernel, budget=budget, init=init, seed=seed

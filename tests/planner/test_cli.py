@@ -190,20 +190,29 @@ def test_stream_that_raises_exits_2(make_problem: MakeProblem) -> None:
     assert_bad_input(ltamp(path), "stream 'next' raised ValueError: sampler exploded")
 
 
-def test_solve_with_learned_streams_runs_torch_on_one_thread(tmp_path: Path) -> None:
+def test_solve_with_learned_streams_runs_numerics_on_one_thread() -> None:
     # Small GPs run several times slower on 2 threads (field facts); CI's OMP_NUM_THREADS=1
     # hides that, so start from 2 threads in-process.
-    torch = pytest.importorskip("torch")
+    import torch
+    from threadpoolctl import threadpool_info, threadpool_limits
     from typer.testing import CliRunner
 
     from ltamp_cli.cli.app import build_app
 
-    before = torch.get_num_threads()
-    torch.set_num_threads(2)
-    try:
-        run = CliRunner().invoke(build_app(), ["solve", str(EXAMPLES / "synthetic_goodregion.yaml"),
-                                       "--seed", "0", "--no-stats"])
-        assert run.exit_code == 0, run.output
-        assert torch.get_num_threads() == 1
-    finally:
-        torch.set_num_threads(before)
+    def blas_threads() -> set[int]:
+        return {pool["num_threads"] for pool in threadpool_info()
+                if pool["user_api"] == "blas"}
+
+    torch_before = torch.get_num_threads()
+    with threadpool_limits(limits=2, user_api="blas"):
+        torch.set_num_threads(2)
+        try:
+            assert blas_threads() == {2}
+            run = CliRunner().invoke(build_app(), [
+                "solve", str(EXAMPLES / "synthetic_goodregion.yaml"), "--seed", "0",
+                "--no-stats"])
+            assert run.exit_code == 0, run.output
+            assert torch.get_num_threads() == 1
+            assert blas_threads() == {1}
+        finally:
+            torch.set_num_threads(torch_before)
