@@ -84,8 +84,7 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
                 order = np.lexsort((-gaps, length, count))
             else:
                 order = np.argsort(-gaps, kind="stable")
-            choice = float(candidates[order[0]])
-            choice = round(choice, 4)
+            choice = round(float(candidates[order[0]]), 4)
             placed.append(choice)
             note(block, choice)
             yield (choice,)
