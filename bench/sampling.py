@@ -108,7 +108,8 @@ def bench_skill(backend, skill: str, model: LevelSetModel, runs: int, lam: float
         table[name] = {}
         for key, _label, factor in METRICS:
             values = np.array([getattr(r, key) for r in results], dtype=float) * factor
-            table[name][key] = {"mean": float(values.mean()), "std": float(values.std())}
+            table[name][key] = {"mean": float(values.mean()), "std": float(values.std()),
+                                "runs": values.tolist()}  # per run: paired in the report
         table[name]["incomplete_runs"] = sum(r.n_drawn < 50 for r in results)
     # Paired by run (same context, same β): is adaptive's FP lower than rejection's beyond
     # sampling noise? 50 samples per run make FP a coarse binomial estimate.

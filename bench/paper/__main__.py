@@ -1,9 +1,12 @@
-"""``python -m bench.paper --quick|--full|--smoke [--out DIR] [--only NAME,...]``.
+"""``python -m bench.paper --quick|--standard|--full|--smoke [--out DIR] [--only NAME,...]``.
 
 Regenerates the seed paper's experiments (one module each, listed in :data:`EXPERIMENTS`) into
 ``--out`` (JSON + PNG; regenerable trial pools under ``--out/cache``), then writes the report
-(``docs/RESULTS.md`` for quick/full, ``<out>/RESULTS.md`` for smoke unless ``--report`` says
-otherwise). ``--jobs 2`` keeps two processes busy: the work is cut into units (trial-pool
+(``docs/RESULTS.md`` for quick/standard/full, ``<out>/RESULTS.md`` for smoke unless
+``--report`` says otherwise). Every experiment logs each finished job (learner × seed, say) under
+``<out>/cache/runs/``, so rerunning the same command after an interruption continues where it
+stopped, and the full run can be done in several pieces. ``--jobs 2`` keeps two processes
+busy: the work is cut into units (trial-pool
 collections, experiments, and the independent parts of a split experiment such as the
 sampling table's rows) started critical-path first (``bench.paper.schedule``), one per
 process. An experiment that fails is recorded as failed in its JSON (with the error line) and
@@ -47,7 +50,7 @@ POOLED = ("confident", "supervised3d", "active3d")
 #: Estimated CPU seconds per experiment (quick runs, 2 cores shared with other jobs; coffee
 #: measured 12 and 121 s in two runs): they only order the work (``bench.paper.schedule``).
 #: Split experiments estimate their parts.
-ESTIMATED_CPU_S = {"al2d": 250.0, "supervised3d": 140.0, "active3d": 150.0,
+ESTIMATED_CPU_S = {"supervised3d": 140.0, "active3d": 150.0,
                    "kernel_learning": 60.0, "confident": 100.0, "coffee": 60.0}
 #: Estimated CPU seconds per collected pool trial (valid-only: redrawn until the pre-check
 #: passes; a quick run's 100 + 100 trials cost ~650 s CPU, ~30 % of it pour).
@@ -230,6 +233,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m bench.paper", description=__doc__)
     mode = parser.add_mutually_exclusive_group(required=True)
     mode.add_argument("--quick", action="store_const", dest="mode", const="quick")
+    mode.add_argument("--standard", action="store_const", dest="mode", const="standard",
+                      help="statistically meaningful Kitchen2D sizes in <= 2 h on 2 cores")
     mode.add_argument("--full", action="store_const", dest="mode", const="full")
     mode.add_argument("--smoke", action="store_const", dest="mode", const="smoke")
     parser.add_argument("--out", type=Path, default=None,

@@ -18,6 +18,7 @@ from tqdm import tqdm
 
 from bench.paper.common import (
     Context,
+    JobLog,
     curve_series,
     first_valid_lazy,
     live_score,
@@ -57,6 +58,7 @@ def run(ctx: Context) -> dict[str, Any]:
     started = time.perf_counter()
     sizes = ctx.sizes(SIZES)
     backend = load_backend(sizes["backend"])
+    log = JobLog(ctx, NAME, sizes)  # finished jobs: a rerun continues after the last one
     skills: dict[str, Any] = {}
     try:
         for skill in sizes["skills"]:
@@ -73,20 +75,34 @@ def run(ctx: Context) -> dict[str, Any]:
             rep_rows: list[dict[str, Any]] = []
             for learner in tqdm(LEARNERS, desc=f"active3d {skill}", disable=not ctx.progress):
                 for seed in range(sizes["seeds"]):
-                    evaluator = CheckpointEvaluator(
-                        spec, pool.heldout(), live_score(backend, skill, 700 + seed), contexts,
-                        is_valid, set(sizes["success_at"]), seed, sizes["candidates"])
-                    config = LearningConfig(strategy=learner, kernel="mlp",
-                                            budget=sizes["budget"], seed=seed)
-                    curve, _ = pool_curve(pool, spec, config, sizes["eval_every"], evaluator)
+
+                    def job(learner: str = learner, seed: int = seed, skill: str = skill,
+                            pool: Any = pool, spec: Any = spec, contexts: Any = contexts,
+                            is_valid: Any = is_valid) -> list[dict[str, Any]]:
+                        evaluator = CheckpointEvaluator(
+                            spec, pool.heldout(), live_score(backend, skill, 700 + seed),
+                            contexts, is_valid, set(sizes["success_at"]), seed,
+                            sizes["candidates"])
+                        config = LearningConfig(strategy=learner, kernel="mlp",
+                                                budget=sizes["budget"], seed=seed)
+                        return pool_curve(pool, spec, config, sizes["eval_every"],
+                                          evaluator)[0]
+
+                    curve = log.run(f"{skill}/{learner}/{seed}", job)
                     rows += [{"learner": learner, **row} for row in curve]
                 for rep in range(sizes["reps"]):
-                    evaluator = CheckpointEvaluator(spec, pool.heldout(), None, None, None,
-                                                    set(), rep, sizes["candidates"])
-                    config = LearningConfig(strategy=learner, kernel="mlp",
-                                            budget=sizes["rep_budget"],
-                                            init=sizes["rep_init"], seed=100 + rep)
-                    curve, _ = pool_curve(pool, spec, config, sizes["rep_every"], evaluator)
+
+                    def rep_job(learner: str = learner, rep: int = rep, pool: Any = pool,
+                                spec: Any = spec) -> list[dict[str, Any]]:
+                        evaluator = CheckpointEvaluator(spec, pool.heldout(), None, None, None,
+                                                        set(), rep, sizes["candidates"])
+                        config = LearningConfig(strategy=learner, kernel="mlp",
+                                                budget=sizes["rep_budget"],
+                                                init=sizes["rep_init"], seed=100 + rep)
+                        return pool_curve(pool, spec, config, sizes["rep_every"],
+                                          evaluator)[0]
+
+                    curve = log.run(f"{skill}/{learner}/rep{rep}", rep_job)
                     rep_rows += [{"learner": learner, **row} for row in curve
                                  if row["n_trials"] >= sizes["rep_init"]]
             skills[skill] = {"pool": pool.stats(), "summary": summarize(rows),

@@ -21,7 +21,14 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from bench.paper.common import Context, curve_series, live_score, plot_panels, write_json
+from bench.paper.common import (
+    Context,
+    JobLog,
+    curve_series,
+    live_score,
+    plot_panels,
+    write_json,
+)
 from ltamp_cli.backends import load_backend
 from ltamp_cli.backends.protocol import SkillBackend
 from ltamp_cli.backends.sanity import run_trial_safely
@@ -45,56 +52,110 @@ SIZES: dict[str, dict[str, Any]] = {
     "quick": {"skills": ["pour", "scoop", "push"], "budget": 30, "init": 10, "eval_every": 10,
               "contexts": 5, "seeds": 1, "candidates": 5000,
               "per_skill": {"push": {"contexts": 20, "seeds": 3}}},
+    # standard (<= 2 h on 2 cores with the other experiments' standard rows): enough units
+    # for the paired tests of the report: 5 seeds x 50 held-out contexts, 100 trials.
+    # Checkpoints every 25 trials (each costs 50 simulated θ* per job): ~6,000 s CPU.
+    "standard": {"skills": ["pour", "scoop", "push"], "budget": 100, "init": 10,
+                 "eval_every": 25, "contexts": 50, "seeds": 5, "candidates": 5000},
     # The paper does not state its repetitions for this figure; 5 seeds x 50 contexts.
     "full": {"skills": ["pour", "scoop", "push"], "budget": 100, "init": 10, "eval_every": 10,
              "contexts": 50, "seeds": 5, "candidates": 10_000},
 }
 
 
-def run(ctx: Context) -> dict[str, Any]:
-    """Run the experiment; writes ``al2d.json`` and ``al2d.png`` into ``ctx.out``."""
-    started = time.perf_counter()
+#: Estimated CPU seconds of one simulated Box2D trial (training trials and θ* checks alike).
+TRIAL_CPU_S = {"pour": 0.5, "scoop": 0.5, "push": 0.01}
+
+
+def _skill_sizes(sizes: dict[str, Any], skill: str) -> dict[str, Any]:
+    return {**sizes, **sizes.get("per_skill", {}).get(skill, {})}
+
+
+def parts(ctx: Context) -> list[tuple[str, float]]:
+    """One part per skill, with its estimated CPU seconds: every learner × seed's training
+    trials plus the simulated θ* of each held-out context at each checkpoint."""
     sizes = ctx.sizes(SIZES)
-    backend = load_backend("box2d")
+    estimates = []
+    for skill in sizes["skills"]:
+        own = _skill_sizes(sizes, skill)
+        checkpoints = max(1, (own["budget"] - own["init"]) // own["eval_every"] + 1)
+        trials = own["budget"] + own["contexts"] * checkpoints
+        estimates.append((skill, len(LEARNERS) * own["seeds"] * trials
+                          * TRIAL_CPU_S.get(skill, 0.4)))
+    return estimates
+
+
+def _skill_rows(ctx: Context, skill: str, backend: SkillBackend | None) -> list[dict[str, Any]]:
+    """Every learner × seed job of ``skill``: run now (``backend`` given) or read back from
+    the job log (``backend=None``: a missing job is an error). Each job is logged when it
+    finishes, so an interrupted run continues with the next job."""
+    sizes = ctx.sizes(SIZES)
+    own = _skill_sizes(sizes, skill)
+    log = JobLog(ctx, f"{NAME}-{skill}", own)
+    jobs = [(learner, seed) for learner in LEARNERS for seed in range(own["seeds"])]
+    if backend is None:
+        missing = [f"{learner}/{seed}" for learner, seed in jobs
+                   if log.get(f"{learner}/{seed}") is None]
+        if missing:
+            raise FileNotFoundError(f"al2d {skill}: job {missing[0]} has not run "
+                                    f"({len(missing)} missing in {log.path})")
+        return [row for learner, seed in jobs for row in log.get(f"{learner}/{seed}") or []]
+    spec = backend.skills()[skill]
+    context_rng = np.random.default_rng([2024, len(skill)])
+    contexts = np.array([backend.sample_context(skill, context_rng)
+                         for _ in range(own["contexts"])]).reshape(-1, spec.context.dim)
+
+    def is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
+        return backend.is_valid(skill, context, controls)
+
+    def job(learner: str, seed: int) -> list[dict[str, Any]]:
+        evaluator = SkillEvaluator(spec, None, live_score(backend, skill, seed=1000 + seed),
+                                   contexts, is_valid, seed=seed,
+                                   n_candidates=own["candidates"])
+        config = LearningConfig(strategy=learner, budget=own["budget"], init=own["init"],
+                                seed=seed)
+        t0 = time.perf_counter()
+        if learner in ARGMAX_LEARNERS:
+            curve = learn_nn_argmax(backend, skill, config, evaluator, own["eval_every"],
+                                    own["candidates"]).curve
+        else:
+            curve = learn_online(backend, skill, config, evaluator=evaluator,
+                                 eval_every=own["eval_every"]).curve
+        seconds = time.perf_counter() - t0
+        return [{"skill": skill, "learner": learner, "seed": seed, "n_trials": point.n_trials,
+                 "success_rate": point.success_rate, "successes": point.successes,
+                 "run_s": round(seconds, 2)} for point in curve]
+
     rows: list[dict[str, Any]] = []
-    skills: dict[str, Any] = {}
+    for learner, seed in tqdm(jobs, desc=f"al2d {skill}", disable=not ctx.progress):
+        rows += log.run(f"{learner}/{seed}", lambda learner=learner, seed=seed: job(learner,
+                                                                                      seed))
+    return rows
+
+
+def run_part(ctx: Context, part: str) -> None:
+    """Run (or finish) the jobs of skill ``part``; their rows go to the job log."""
+    if part not in ctx.sizes(SIZES)["skills"]:
+        raise KeyError(f"al2d has no part {part!r} in {ctx.mode} mode")
+    backend = load_backend("box2d")
     try:
-        for skill in sizes["skills"]:
-            own = {**sizes, **sizes.get("per_skill", {}).get(skill, {})}
-            spec = backend.skills()[skill]
-            context_rng = np.random.default_rng([2024, len(skill)])
-            contexts = np.array([backend.sample_context(skill, context_rng)
-                                 for _ in range(own["contexts"])]).reshape(-1, spec.context.dim)
-
-            def is_valid(context: np.ndarray, controls: np.ndarray, skill: str = skill
-                         ) -> np.ndarray:
-                return backend.is_valid(skill, context, controls)
-
-            jobs = [(learner, seed) for learner in LEARNERS for seed in range(own["seeds"])]
-            for learner, seed in tqdm(jobs, desc=f"al2d {skill}", disable=not ctx.progress):
-                evaluator = SkillEvaluator(
-                    spec, None, live_score(backend, skill, seed=1000 + seed), contexts,
-                    is_valid, seed=seed, n_candidates=sizes["candidates"])
-                config = LearningConfig(strategy=learner, budget=sizes["budget"],
-                                        init=sizes["init"], seed=seed)
-                t0 = time.perf_counter()
-                if learner in ARGMAX_LEARNERS:
-                    curve = learn_nn_argmax(backend, skill, config, evaluator,
-                                            sizes["eval_every"], sizes["candidates"]).curve
-                else:
-                    curve = learn_online(backend, skill, config, evaluator=evaluator,
-                                         eval_every=sizes["eval_every"]).curve
-                seconds = time.perf_counter() - t0
-                for point in curve:
-                    rows.append({"skill": skill, "learner": learner, "seed": seed,
-                                 "n_trials": point.n_trials, "success_rate": point.success_rate,
-                                 "run_s": round(seconds, 2)})
-            skill_rows = [r for r in rows if r["skill"] == skill]
-            skills[skill] = {"summary": summarize(skill_rows),
-                             "n_contexts": len(contexts), "seeds": own["seeds"]}
+        _skill_rows(ctx, part, backend)
     finally:
         backend.close()
-    panels = [{"title": f"Kitchen2D {skill}", "ylabel": "success rate of θ*",
+
+
+def merge(ctx: Context) -> dict[str, Any]:
+    """Join the logged jobs of every skill into ``al2d.json`` and ``al2d.png``."""
+    sizes = ctx.sizes(SIZES)
+    rows: list[dict[str, Any]] = []
+    skills: dict[str, Any] = {}
+    for skill in sizes["skills"]:
+        own = _skill_sizes(sizes, skill)
+        skill_rows = _skill_rows(ctx, skill, None)
+        rows += skill_rows
+        skills[skill] = {"summary": summarize(skill_rows), "n_contexts": own["contexts"],
+                         "seeds": own["seeds"]}
+    panels = [{"title": f"Kitchen2D {skill}", "ylabel": "success rate of θ* (mean ± SE)",
                "series": curve_series(skills[skill]["summary"], "success_rate", LEARNERS,
                                       LABELS)}
               for skill in sizes["skills"]]
@@ -103,8 +164,18 @@ def run(ctx: Context) -> dict[str, Any]:
                     f"{k} {v['seeds']}" for k, v in skills.items()) + ")")
     payload = {"sizes": sizes, "learners": LEARNERS, "skills": skills, "runs": rows,
                "pngs": [f"{NAME}.png"]}
-    write_json(ctx, NAME, payload, started)
+    run_seconds = sum({(r["skill"], r["learner"], r["seed"]): r["run_s"]
+                       for r in rows}.values())
+    write_json(ctx, NAME, payload, time.perf_counter() - run_seconds)
     return payload
+
+
+def run(ctx: Context) -> dict[str, Any]:
+    """Run the experiment (every part, then :func:`merge`); writes ``al2d.json`` and
+    ``al2d.png`` into ``ctx.out``."""
+    for part, _cost in parts(ctx):
+        run_part(ctx, part)
+    return merge(ctx)
 
 
 def learn_nn_argmax(backend: SkillBackend, skill: str, config: LearningConfig,

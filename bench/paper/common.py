@@ -5,6 +5,7 @@ Nothing here holds state between experiments: each ``run(ctx)`` gets a :class:`C
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import platform
@@ -20,12 +21,17 @@ import numpy as np
 from ltamp_cli.backends.protocol import SkillBackend
 
 REPO = Path(__file__).resolve().parents[2]
-MODES = ("smoke", "quick", "full")
+MODES = ("smoke", "quick", "standard", "full")
 
 
 @dataclass(frozen=True)
 class Context:
-    """One experiment run: ``mode`` (smoke/quick/full), output folder, progress bars."""
+    """One experiment run: ``mode`` (smoke/quick/standard/full), output folder, progress bars.
+
+    ``standard`` (≤ 2 h on 2 cores) sizes the Kitchen2D experiments for the report's paired
+    tests; an experiment without a ``standard`` row (the Kitchen3D ones, which need trial
+    pools of hours) runs its ``quick`` row.
+    """
 
     mode: str
     out: Path
@@ -34,6 +40,8 @@ class Context:
 
     def sizes(self, table: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
         """The row of a module's ``SIZES`` table for this mode."""
+        if self.mode == "standard" and "standard" not in table:
+            return dict(table["quick"])
         return dict(table[self.mode])
 
     @property
@@ -42,6 +50,59 @@ class Context:
         path = self.out / "cache"
         path.mkdir(parents=True, exist_ok=True)
         return path
+
+
+class JobLog:
+    """The finished jobs of one experiment, so that a rerun continues where a run stopped.
+
+    A job (one learner × seed × skill, say) is recorded as one JSON line ``{"key", "sizes",
+    "rows"}`` appended to ``<out>/cache/runs/<experiment>-<mode>.jsonl`` once it has finished
+    (one ``write`` of a whole line, flushed and fsynced: an interrupted run loses at most the
+    job it was running, and a torn last line is ignored). Lines recorded under other sizes
+    (``sizes`` is the experiment's row of its ``SIZES`` table) are ignored, so changing a
+    mode's sizes reruns its jobs.
+    """
+
+    def __init__(self, ctx: Context, experiment: str, sizes: Mapping[str, Any]) -> None:
+        folder = ctx.cache / "runs"
+        folder.mkdir(parents=True, exist_ok=True)
+        self.path = folder / f"{experiment}-{ctx.mode}.jsonl"
+        self.sizes = hashlib.sha256(json.dumps(sizes, sort_keys=True, default=str)
+                                    .encode()).hexdigest()[:16]
+        self._done: dict[str, list[dict[str, Any]]] = {}
+        if self.path.is_file():
+            for line in self.path.read_text().splitlines():
+                try:
+                    entry = json.loads(line)
+                except json.JSONDecodeError:
+                    continue  # a line torn by an interruption
+                if isinstance(entry, dict) and entry.get("sizes") == self.sizes:
+                    self._done[str(entry["key"])] = list(entry["rows"])
+
+    def get(self, key: str) -> list[dict[str, Any]] | None:
+        """The rows of job ``key`` if it finished in an earlier (or this) run."""
+        return self._done.get(key)
+
+    def put(self, key: str, rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+        """Record finished job ``key`` with its result ``rows``; returns them as a rerun will
+        read them back (JSON values: lists for tuples, floats for numpy scalars)."""
+        line = json.dumps({"key": key, "sizes": self.sizes, "rows": rows},
+                          default=_jsonable) + "\n"
+        with self.path.open("a+b") as handle:
+            if handle.tell() > 0:
+                handle.seek(-1, os.SEEK_END)
+                if handle.read(1) != b"\n":
+                    line = "\n" + line  # end a line torn by an interruption first
+            handle.write(line.encode("utf-8"))
+            handle.flush()
+            os.fsync(handle.fileno())
+        self._done[key] = json.loads(line.strip())["rows"]
+        return self._done[key]
+
+    def run(self, key: str, job: Callable[[], list[dict[str, Any]]]) -> list[dict[str, Any]]:
+        """``job()``'s rows, computed now or read back from an earlier run."""
+        rows = self.get(key)
+        return self.put(key, job()) if rows is None else rows
 
 
 def machine() -> dict[str, Any]:

@@ -68,6 +68,10 @@ def run(ctx: Context) -> dict[str, Any]:
                 score = live_score(backend, skill, 900, key=FILLED_KEY.get(skill))
                 rng = np.random.default_rng(0)
                 valid, success, filled = [], [], []
+                # Per held-out context (paired across learners in the report): an invalid θ*
+                # counts as a failure, ``filled`` is None where not measured.
+                outcomes: list[float] = []
+                fills: list[float | None] = []
                 for context in contexts:
                     # The lazy test picks the same θ* with far fewer pre-checks.
                     lazy = first_valid_lazy(lambda c, u, s=skill: backend.is_valid(s, c, u))
@@ -75,16 +79,22 @@ def run(ctx: Context) -> dict[str, Any]:
                                                               sizes["candidates"])
                     ok = bool(backend.is_valid(skill, context, control[None, :])[0])
                     valid.append(ok)
+                    outcomes.append(0.0)
+                    fills.append(None)
                     if ok:
                         success.append(float(score(context[None, :], control[None, :])[0] > 0))
+                        outcomes[-1] = success[-1]
                         value = score.infos[-1].get(FILLED_KEY.get(skill, ""), None)
                         if value is not None:
                             filled.append(float(value))
+                            fills[-1] = float(value)
                 table[skill]["learners"][name] = {
                     "valid": float(np.mean(valid)),
                     "success": float(np.mean(success)) if success else None,
                     "filled": float(np.mean(filled)) if filled else None,
                     "n_contexts": len(contexts), "n_valid": int(sum(valid)),
+                    "per_context": {"valid": [float(v) for v in valid], "success": outcomes,
+                                    "filled": fills},
                 }
     finally:
         backend.close()

@@ -43,5 +43,5 @@ def pool_curve(pool: Pool, spec: SkillSpec, config: LearningConfig, eval_every: 
     result = learn_from_pool(spec, pool.train, config, evaluator=evaluator,
                              eval_every=eval_every)
     rows = [{"n_trials": p.n_trials, "f1": p.f1, "success_rate": p.success_rate,
-             "seed": config.seed} for p in result.curve]
+             "successes": p.successes, "seed": config.seed} for p in result.curve]
     return rows, result

@@ -13,6 +13,10 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from bench.paper.stats import Claim, best_of, paired_comparison
+
 # ---- the paper's numbers (mean ± std as printed) --------------------------------------------
 # Table tb:app-sampling (Kitchen2D, appendix) and tb:sampling (Kitchen3D, section 6.3).
 PAPER_SAMPLING: dict[str, dict[str, dict[str, str]]] = {
@@ -88,6 +92,93 @@ PAPER_CLAIMS = {
 }
 
 
+# ---- paired claims ----------------------------------------------------------------------------
+#: For success rates and F1: an improvement smaller than this does not make a claim hold, and
+#: enough units with the whole interval below it make the claim fail (``bench.paper.stats``).
+RATE_MARGIN = 0.05
+
+def _last_common(runs: list[dict[str, Any]], learners: list[str], metric: str) -> int | None:
+    """The last checkpoint at which every learner in ``learners`` measured ``metric``."""
+    common: set[int] | None = None
+    for learner in learners:
+        points = {int(r["n_trials"]) for r in runs
+                  if r["learner"] == learner and r.get(metric) is not None}
+        common = points if common is None else common & points
+    return max(common) if common else None
+
+
+def _paired_units(runs: list[dict[str, Any]], learners: list[str], metric: str,
+                  n_trials: int | None = None) -> dict[str, np.ndarray]:
+    """Per learner, its scores on units shared by all ``learners`` at checkpoint ``n_trials``
+    (default: the last common one): one unit per (seed, evaluation context) when every row
+    has per-context ``successes`` and ``metric`` is the success rate, else one per seed.
+    Empty when there is nothing to pair."""
+    n_trials = _last_common(runs, learners, metric) if n_trials is None else n_trials
+    if n_trials is None:
+        return {}
+    by_learner = {learner: {int(r["seed"]): r for r in runs if r["learner"] == learner
+                            and int(r["n_trials"]) == n_trials and r.get(metric) is not None}
+                  for learner in learners}
+    seeds = sorted(set.intersection(*(set(rows) for rows in by_learner.values())))
+    if not seeds:
+        return {}
+    per_context = metric == "success_rate" and all(
+        rows[seed].get("successes") is not None for rows in by_learner.values()
+        for seed in seeds)
+    units = {}
+    for learner, rows in by_learner.items():
+        if per_context:
+            units[learner] = np.concatenate([np.asarray(rows[seed]["successes"], dtype=float)
+                                             for seed in seeds])
+        else:
+            units[learner] = np.array([float(rows[seed][metric]) for seed in seeds])
+    return units
+
+
+def _unit_label(runs: list[dict[str, Any]], metric: str) -> str:
+    per_context = metric == "success_rate" and runs and all(
+        r.get("successes") is not None for r in runs if r.get(metric) is not None)
+    return "units: seed × held-out context" if per_context else "units: seeds"
+
+
+def _claim_lines(claims: list[Claim]) -> list[str]:
+    return [f"- {claim.describe()}" for claim in claims]
+
+
+def _best_claim(text: str, best: str, runs: list[dict[str, Any]], learners: list[str],
+                metric: str, labels: dict[str, str] | None = None,
+                n_trials: int | None = None) -> Claim:
+    """``best`` scores higher than each other learner on paired units (Bonferroni)."""
+    labels = labels or {}
+    units = _paired_units(runs, learners, metric, n_trials)
+    return best_of(text, labels.get(best, best),
+                   {labels.get(k, k): v for k, v in units.items()}, margin=RATE_MARGIN)
+
+
+def _group_claim(text: str, better: list[str], worse: list[str], runs: list[dict[str, Any]],
+                 metric: str) -> Claim:
+    """The per-unit mean of the ``better`` learners exceeds that of the ``worse`` ones."""
+    units = _paired_units(runs, better + worse, metric)
+    if not units:
+        return Claim(text, ())
+    high = np.mean([units[k] for k in better], axis=0)
+    low = np.mean([units[k] for k in worse], axis=0)
+    return Claim(text, (paired_comparison("/".join(better), high, "/".join(worse), low,
+                                          margin=RATE_MARGIN),))
+
+
+def _each_beats_claim(text: str, winners: list[str], loser: str, runs: list[dict[str, Any]],
+                      metric: str, labels: dict[str, str]) -> Claim:
+    """Each of ``winners`` scores higher than ``loser`` (Bonferroni over the winners)."""
+    units = _paired_units(runs, [*winners, loser], metric)
+    if not units:
+        return Claim(text, ())
+    level = 1.0 - 0.05 / len(winners)
+    return Claim(text, tuple(
+        paired_comparison(labels.get(w, w), units[w], labels.get(loser, loser), units[loser],
+                          confidence=level, margin=RATE_MARGIN) for w in winners))
+
+
 def _load(out: Path, name: str) -> dict[str, Any] | None:
     path = out / f"{name}.json"
     return json.loads(path.read_text()) if path.is_file() else None
@@ -101,36 +192,6 @@ def _pm(entry: dict[str, Any] | None, scale: float = 1.0, digits: int = 2) -> st
 
 def _num(value: float | None, digits: int = 2) -> str:
     return "–" if value is None else f"{value:.{digits}f}"
-
-
-def _final(summary: list[dict[str, Any]], metric: str) -> dict[str, tuple[int, float]]:
-    """Per learner: the last checkpoint where ``metric`` was measured and its mean."""
-    last: dict[str, tuple[int, float]] = {}
-    for entry in summary:
-        value = entry.get(f"{metric}_mean")
-        if value is not None and entry["n_trials"] >= last.get(entry["learner"], (-1, 0))[0]:
-            last[entry["learner"]] = (entry["n_trials"], value)
-    return last
-
-
-def _verdict(ok: bool | None) -> str:
-    return {True: "holds", False: "**does not hold**", None: "not decidable (missing or tied)"}[ok]
-
-
-def _at_least(value: float | None, others: list[float | None]) -> bool | None:
-    """``value ≥ every other`` (``None`` if anything is missing or all are equal)."""
-    values = [value, *others]
-    if any(v is None for v in values) or max(values) == min(values):  # type: ignore[type-var]
-        return None
-    return value >= max(others)  # type: ignore[type-var, operator]
-
-
-def _best(table: dict[str, tuple[int, float]], learner: str) -> bool | None:
-    """Is ``learner`` best in ``table`` (``None`` when missing or when everyone ties)?"""
-    values = [v for _, v in table.values()]
-    if learner not in table or len(values) < 2 or max(values) == min(values):
-        return None
-    return table[learner][1] >= max(values)
 
 
 def _mean_std(entry: dict[str, Any] | None, metric: str) -> str:
@@ -220,9 +281,11 @@ def section_al2d(out: Path, report: Path) -> list[str]:
         lines += [f"**{skill}** ({seeds} seed(s) × {entry['n_contexts']} held-out contexts)",
                   ""]
         lines += _curve_table(entry["summary"], LEARNERS, LABELS, "success_rate")
-        final = _final(entry["summary"], "success_rate")
-        lines += ["", f"Claim \"GP-LSE best\" at the last checkpoint: "
-                  f"{_verdict(_best(final, 'lse'))}.", ""]
+        runs = [r for r in data["runs"] if r["skill"] == skill]
+        claim = _best_claim("GP-LSE best at the last checkpoint (success rate)", "lse", runs,
+                            LEARNERS, "success_rate", LABELS)
+        lines += ["", f"Paired test ({_unit_label(runs, 'success_rate')}):", ""]
+        lines += [*_claim_lines([claim]), ""]
     lines += [_png(out, report, "al2d.png"), "",
               "Protocol as the paper's: after the same random initial trials, NN_c and NN_r "
               "execute their own argmax θ* for a random context and are retrained after every "
@@ -260,19 +323,19 @@ def section_supervised(out: Path, report: Path) -> list[str]:
         lines += ["", "Kernel comparison, held-out F1:", ""]
         lines += _curve_table(entry["kernel_summary"], [f"gp-{k}" for k in KERNELS], LABELS,
                               "f1")
-        sr, f1 = _final(entry["summary"], "success_rate"), _final(entry["summary"], "f1")
-        kf1 = _final(entry["kernel_summary"], "f1")
-        nn = [sr[k][1] for k in ("nn-c", "nn-r") if k in sr]
-        rest = [sr[k][1] for k in ("rf-c", "rf-r", "gp") if k in sr]
+        runs, kernel_runs = entry.get("runs", []), entry.get("kernel_runs", [])
         claims = [
-            ("RF and GP above the NNs (success, mean)", None if not nn or not rest
-             else sum(rest) / len(rest) > sum(nn) / len(nn)),
-            ("GP best success", _best(sr, "gp")),
-            ("regressors above classifiers (F1, mean)", None if len(f1) < 4 else
-             (f1["nn-r"][1] + f1["rf-r"][1]) > (f1["nn-c"][1] + f1["rf-c"][1])),
-            ("MLP kernel best F1", _best(kf1, "gp-mlp")),
+            _group_claim("RF and GP above the NNs (success)", ["rf-c", "rf-r", "gp"],
+                         ["nn-c", "nn-r"], runs, "success_rate"),
+            _best_claim("GP best success", "gp", runs, learners, "success_rate", LABELS),
+            _group_claim("regressors above classifiers (F1)", ["nn-r", "rf-r"],
+                         ["nn-c", "rf-c"], runs, "f1"),
+            _best_claim("MLP kernel best F1", "gp-mlp", kernel_runs,
+                        [f"gp-{k}" for k in KERNELS], "f1", LABELS),
         ]
-        lines += [""] + [f"- Claim \"{c}\": {_verdict(ok)}." for c, ok in claims] + [""]
+        lines += ["", f"Paired tests at the last common checkpoint "
+                  f"(success: {_unit_label(runs, 'success_rate')}; F1: units: seeds):", ""]
+        lines += [*_claim_lines(claims), ""]
     lines += [_png(out, report, "supervised3d.png"), "",
               _png(out, report, "supervised3d_kernels.png"), ""]
     return lines
@@ -305,20 +368,21 @@ def section_active(out: Path, report: Path) -> list[str]:
         lines += ["", f"Repeated {sizes['rep_init']}→{sizes['rep_budget']} protocol, mean F1:",
                   ""]
         lines += _curve_table(entry["repeated_summary"], LEARNERS, LABELS, "f1")
-        sr, f1 = _final(entry["summary"], "success_rate"), _final(entry["summary"], "f1")
-        rep = _final(entry["repeated_summary"], "f1")
-
-        def active_beats(table: dict[str, tuple[int, float]]) -> bool | None:
-            if len(table) < 3:
-                return None
-            return min(table["lse"][1], table["lse2"][1]) >= table["gp"][1]
-
-        claims = [("GP-LSE and GP-LSE2 ≥ GP (success)", active_beats(sr)),
-                  ("GP-LSE2 best success", _best(sr, "lse2")),
-                  ("GP-LSE and GP-LSE2 ≥ GP (F1)", active_beats(f1)),
-                  (f"GP-LSE2 best F1 at {sizes['rep_budget']} trials (repeated)",
-                   _best(rep, "lse2"))]
-        lines += [""] + [f"- Claim \"{c}\": {_verdict(ok)}." for c, ok in claims] + [""]
+        runs, repeated = entry.get("runs", []), entry.get("repeated_runs", [])
+        claims = [
+            _each_beats_claim("GP-LSE and GP-LSE2 above GP (success)", ["lse", "lse2"], "gp",
+                              runs, "success_rate", LABELS),
+            _best_claim("GP-LSE2 best success", "lse2", runs, LEARNERS, "success_rate", LABELS),
+            _each_beats_claim("GP-LSE and GP-LSE2 above GP (F1)", ["lse", "lse2"], "gp", runs,
+                              "f1", LABELS),
+            _best_claim(f"GP-LSE2 best F1 at {sizes['rep_budget']} trials (repeated)", "lse2",
+                        [{**r, "seed": r["seed"]} for r in repeated], LEARNERS, "f1", LABELS,
+                        n_trials=int(sizes["rep_budget"])),
+        ]
+        lines += ["", f"Paired tests at the last common checkpoint "
+                  f"(success: {_unit_label(runs, 'success_rate')}; F1: units: seeds / "
+                  "repetitions):", ""]
+        lines += [*_claim_lines(claims), ""]
     lines += [_png(out, report, "active3d.png"), "", _png(out, report, "active3d_100.png"), ""]
     return lines
 
@@ -352,18 +416,11 @@ def section_sampling(out: Path, report: Path) -> list[str]:
                 theirs = paper.get(sampler, {}).get(paper_key[key], "–")
                 cells.append(f"{ours} / {theirs}")
             lines.append(f"| {name} | " + " | ".join(cells) + " |")
-        m = table["metrics"]
-        # FP: lower is better, so compare negated values.
-        checks.append((label, _at_least(-m["adaptive"]["fp"]["mean"],
-                                        [-m["rejection"]["fp"]["mean"]]),
-                       _at_least(m["diverse"]["diversity"]["mean"],
-                                 [m["adaptive"]["diversity"]["mean"]])))
+        checks += _sampling_claims(label, table["metrics"])
         lines.append("")
     lines += ["Paper's claims: adaptive has the lowest FP (2D) and diverse the highest "
-              "diversity."]
-    for label, fp_ok, div_ok in checks:
-        lines.append(f"- {label}: adaptive FP ≤ rejection FP {_verdict(fp_ok)}; diverse "
-                     f"Diversity ≥ adaptive {_verdict(div_ok)}.")
+              "diversity. Paired over runs (same context and β for every sampler):", ""]
+    lines += _claim_lines(checks)
     for table in data["tables"]:
         if all(table["metrics"][s]["fp"]["mean"] >= 100.0 for s in ("rejection", "adaptive",
                                                                       "diverse")):
@@ -373,6 +430,25 @@ def section_sampling(out: Path, report: Path) -> list[str]:
                          "one), so N5 and Diversity carry no information here.")
     lines += ["", _png(out, report, "sampling.png"), ""]
     return lines
+
+
+def _sampling_claims(label: str, metrics: dict[str, Any]) -> list[Claim]:
+    """Adaptive's FP below rejection's and diverse's Diversity above adaptive's, paired over
+    the row's runs (``runs`` per metric; older JSON without them: no paired data)."""
+
+    def runs(sampler: str, key: str) -> list[float] | None:
+        return metrics.get(sampler, {}).get(key, {}).get("runs")
+
+    claims = []
+    fp_rej, fp_ada = runs("rejection", "fp"), runs("adaptive", "fp")
+    claims.append(Claim(f"{label}: adaptive FP below rejection FP", () if not (
+        fp_rej and fp_ada) else (paired_comparison("rejection FP", fp_rej, "adaptive FP",
+                                                   fp_ada),)))
+    div_div, div_ada = runs("diverse", "diversity"), runs("adaptive", "diversity")
+    claims.append(Claim(f"{label}: diverse Diversity above adaptive", () if not (
+        div_div and div_ada) else (paired_comparison("diverse", div_div, "adaptive",
+                                                     div_ada),)))
+    return claims
 
 
 def section_kernel(out: Path, report: Path) -> list[str]:
@@ -431,14 +507,33 @@ def section_kernel(out: Path, report: Path) -> list[str]:
     lines += [f"- {n}" for n in notes]
     lines += ["", "Paper's claim: Diverse-LK finds solutions at least as often as the others "
               "(best short-limit SR in every task)."]
+    lines += ["Paired over task instances (planner seeds): solved within the short limit "
+              "(CPU).", ""]
     for row in data["rows"]:
         samplers = row.get("samplers", {})
         if "diverse-lk" in samplers:
-            others = [samplers[k]["sr_short_cpu"] for k in ("adaptive", "diverse")]
-            verdict = _verdict(_at_least(samplers["diverse-lk"]["sr_short_cpu"], others))
-            lines.append(f"- {row['task']}: {verdict}.")
+            lines += _claim_lines([_short_limit_claim(row)])
     lines += ["", _png(out, report, "kernel_learning.png"), ""]
     return lines
+
+
+def _short_limit_claim(row: dict[str, Any]) -> Claim:
+    """Diverse-LK solves at least as many instances within the short limit as adaptive and
+    diverse, paired by planner seed (1 = solved within ``short_s`` CPU seconds)."""
+
+    def solved(sampler: str) -> dict[int, float]:
+        return {int(run["seed"]): float(run.get("status") == "solved"
+                                        and run.get("cpu_s", float("inf")) <= row["short_s"])
+                for run in row["samplers"][sampler].get("detail", [])}
+
+    samplers = [k for k in ("diverse-lk", "adaptive", "diverse") if k in row["samplers"]]
+    outcomes = {k: solved(k) for k in samplers}
+    seeds = sorted(set.intersection(*(set(v) for v in outcomes.values())))
+    text = f"{row['task']}: Diverse-LK best short-limit success"
+    if not seeds:
+        return Claim(text, ())
+    return best_of(text, "diverse-lk", {k: [v[s] for s in seeds] for k, v in outcomes.items()},
+                   margin=RATE_MARGIN)
 
 
 def section_confident(out: Path, report: Path) -> list[str]:
@@ -468,12 +563,18 @@ def section_confident(out: Path, report: Path) -> list[str]:
                 theirs = f"{paper[paper_key][index]:.3f}" if paper else "–"
                 cells.append(f"{ours} / {theirs}")
             lines.append(f"| {skill} | {metric.capitalize()} | " + " | ".join(cells) + " |")
-        active = entry["learners"][names[2]]
-        for metric in ("valid", "success", "filled"):
-            others = [entry["learners"][n][metric] for n in names[:2]]
-            claims.append((skill, metric, _at_least(active[metric], others)))
-    lines += ["", "Paper's claim: the active learner is best in every metric."]
-    lines += [f"- {skill} {metric}: {_verdict(ok)}." for skill, metric, ok in claims]
+        for metric in ("valid", "success"):
+            # Per held-out context, shared by the learners (an invalid θ* is a failure).
+            units = {n: e.get("per_context", {}).get(metric)
+                     for n, e in entry["learners"].items()}
+            text = f"{skill}: {names[2]} best {metric}"
+            claims.append(best_of(text, names[2], units, margin=RATE_MARGIN)
+                          if all(units.values())
+                          else Claim(text, ()))
+    lines += ["", "Paper's claim: the active learner is best in every metric. Paired over "
+              "held-out contexts (Filled is measured only where θ* is valid, so it is not "
+              "paired):", ""]
+    lines += _claim_lines(claims)
     lines += ["", _png(out, report, "confident.png"), ""]
     return lines
 
@@ -526,7 +627,16 @@ def write_report(out: Path, report: Path) -> Path:
         "",
         f"- Mode: **{run.get('mode', '?')}** (quick = reduced repetitions: a check that "
         "everything runs and a first look, not a statistically meaningful replication; "
-        "`--full` uses the paper's repetitions).",
+        "standard = Kitchen2D experiments at 5 seeds × 50 held-out contexts and 100 trials, "
+        "Kitchen3D ones at quick size, ≤ 2 h on 2 cores; `--full` uses the paper's "
+        "repetitions).",
+        "- Claims are tested on paired units (seeds, held-out contexts, task instances): the "
+        "mean paired difference with a 95 % percentile-bootstrap interval (Bonferroni-"
+        "corrected when a method must beat several) and an exact sign test. A claim *holds* "
+        "when the interval lies above 0 and the sign test is significant, *does not hold* "
+        "when the other method is significantly better or ≥ 10 units put the interval below "
+        f"a margin ({RATE_MARGIN} for rates and F1), and is *inconclusive* otherwise. Curves "
+        "show mean ± standard error.",
         f"- Total wall time: {run.get('total_wall_s', '?')} s with {run.get('jobs', '?')} "
         f"jobs (processes) at a time; total CPU time {run.get('total_cpu_s', '?')} s (all "
         "processes: what the run costs on otherwise idle cores)"

@@ -23,12 +23,11 @@ from __future__ import annotations
 
 import json
 import time
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from bench.paper.common import REPO, Context, live_score, write_json
+from bench.paper.common import REPO, Context, JobLog, live_score, write_json
 from bench.sampling import METRICS, SAMPLERS, bench_skill
 from ltamp_cli.backends import SkillBackend, load_backend
 from ltamp_cli.learning.active import LearningConfig, learn_online
@@ -48,6 +47,10 @@ SIZES: dict[str, dict[str, Any]] = {
     "quick": {"rows": [("2D", "box2d", "pour", 1), ("2D", "box2d", "scoop", 1),
                        ("2D", "box2d", "push", 2), ("3D", "pybullet", "pour", 1)],
               "train_budget": 40},
+    # standard: 2D rows with enough runs for paired tests over runs (~1,900 s CPU).
+    "standard": {"rows": [("2D", "box2d", "pour", 10), ("2D", "box2d", "scoop", 10),
+                          ("2D", "box2d", "push", 20), ("3D", "pybullet", "pour", 1)],
+                 "train_budget": 100},
     "full": {"rows": [("2D", "box2d", "pour", 50), ("2D", "box2d", "scoop", 50),
                       ("2D", "box2d", "push", 50), ("3D", "pybullet", "pour", 50),
                       ("3D", "pybullet", "scoop", 50)],
@@ -134,39 +137,41 @@ def parts(ctx: Context) -> list[tuple[str, float]]:
             for row in ctx.sizes(SIZES)["rows"]]
 
 
-def _part_path(ctx: Context, part: str) -> Path:
-    return ctx.cache / "parts" / NAME / f"{part}.json"
+def _part_log(ctx: Context, part: str) -> JobLog:
+    """Where part ``part`` is recorded once measured (one log per part: parts run in
+    separate processes); a rerun with the same sizes reads it back instead of measuring."""
+    return JobLog(ctx, f"{NAME}-{part}", ctx.sizes(SIZES))
 
 
 def run_part(ctx: Context, part: str) -> dict[str, Any]:
-    """Measure one row (``part`` from :func:`parts`) into ``<out>/cache/parts/sampling/``."""
+    """Measure one row (``part`` from :func:`parts`), or read it back if an earlier run of
+    the same sizes measured it."""
     sizes = ctx.sizes(SIZES)
     rows = {_part_name(r): r for r in sizes["rows"]}
     if part not in rows:
         raise KeyError(f"sampling has no part {part!r} in {ctx.mode} mode "
                        f"(known: {', '.join(rows)})")
-    path = _part_path(ctx, part)
-    path.unlink(missing_ok=True)  # a stale row from an earlier run must never be merged
-    table_name, name, skill, runs = rows[part]
-    backend = load_backend(name)
-    try:
-        model, source = model_for(ctx, backend, name, skill, sizes["train_budget"])
-        strip = _push_strip(source) if (name, skill) == ("box2d", "push") else None
-        if strip is not None:
-            source += (f" (goals |x| in {strip['goal_x_abs']}, |y| <= "
-                       f"{strip['goal_y_abs_max']}, in-line pushes: where it was trained)")
-        t0, cpu0 = time.perf_counter(), time.process_time()
-        table = bench_skill(LiveScores(backend, skill, strip), skill, model, runs, LAMBDA,
-                            validate=True)
-        row = {"table": table_name, "backend": name, "skill": skill, "runs": runs,
-               "model": source, "metrics": table,
-               "wall_s": round(time.perf_counter() - t0, 1),
-               "cpu_s": round(time.process_time() - cpu0, 1)}
-    finally:
-        backend.close()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(row, indent=2) + "\n")
-    return row
+
+    def measure() -> list[dict[str, Any]]:
+        table_name, name, skill, runs = rows[part]
+        backend = load_backend(name)
+        try:
+            model, source = model_for(ctx, backend, name, skill, sizes["train_budget"])
+            strip = _push_strip(source) if (name, skill) == ("box2d", "push") else None
+            if strip is not None:
+                source += (f" (goals |x| in {strip['goal_x_abs']}, |y| <= "
+                           f"{strip['goal_y_abs_max']}, in-line pushes: where it was trained)")
+            t0, cpu0 = time.perf_counter(), time.process_time()
+            table = bench_skill(LiveScores(backend, skill, strip), skill, model, runs, LAMBDA,
+                                validate=True)
+            return [{"table": table_name, "backend": name, "skill": skill, "runs": runs,
+                     "model": source, "metrics": table,
+                     "wall_s": round(time.perf_counter() - t0, 1),
+                     "cpu_s": round(time.process_time() - cpu0, 1)}]
+        finally:
+            backend.close()
+
+    return _part_log(ctx, part).run(part, measure)[0]
 
 
 def merge(ctx: Context) -> dict[str, Any]:
@@ -175,10 +180,10 @@ def merge(ctx: Context) -> dict[str, Any]:
     sizes = ctx.sizes(SIZES)
     tables: list[dict[str, Any]] = []
     for part, _cost in parts(ctx):
-        path = _part_path(ctx, part)
-        if not path.is_file():
-            raise FileNotFoundError(f"sampling part {part!r} did not finish (no {path})")
-        tables.append(json.loads(path.read_text()))
+        logged = _part_log(ctx, part).get(part)
+        if logged is None:
+            raise FileNotFoundError(f"sampling part {part!r} did not finish in {ctx.mode} mode")
+        tables.append(logged[0])
     _plot(tables, ctx)
     payload = {"sizes": {"rows": [list(r) for r in sizes["rows"]],
                          "train_budget": sizes["train_budget"]},

@@ -21,6 +21,7 @@ from tqdm import tqdm
 
 from bench.paper.common import (
     Context,
+    JobLog,
     curve_series,
     first_valid_lazy,
     live_score,
@@ -62,6 +63,7 @@ def run(ctx: Context) -> dict[str, Any]:
     started = time.perf_counter()
     sizes = ctx.sizes(SIZES)
     backend = load_backend(sizes["backend"])
+    log = JobLog(ctx, NAME, sizes)  # finished jobs: a rerun continues after the last one
     skills: dict[str, Any] = {}
     try:
         for skill in sizes["skills"]:
@@ -81,14 +83,22 @@ def run(ctx: Context) -> dict[str, Any]:
             for strategy, kernel, kind in tqdm(jobs, desc=f"supervised3d {skill}",
                                                disable=not ctx.progress):
                 for seed in range(sizes["seeds"]):
-                    evaluator = CheckpointEvaluator(
-                        spec, pool.heldout(),
-                        live_score(backend, skill, 500 + seed) if kind == "learner" else None,
-                        contexts, is_valid, set(sizes["success_at"]), seed,
-                        sizes["candidates"])
-                    config = LearningConfig(strategy=strategy, kernel=kernel,
-                                            budget=sizes["budget"], seed=seed)
-                    curve, _ = pool_curve(pool, spec, config, sizes["eval_every"], evaluator)
+
+                    def job(strategy: str = strategy, kernel: str = kernel, kind: str = kind,
+                            seed: int = seed, skill: str = skill, pool: Any = pool,
+                            spec: Any = spec, contexts: Any = contexts,
+                            is_valid: Any = is_valid) -> list[dict[str, Any]]:
+                        evaluator = CheckpointEvaluator(
+                            spec, pool.heldout(),
+                            live_score(backend, skill, 500 + seed) if kind == "learner"
+                            else None, contexts, is_valid, set(sizes["success_at"]), seed,
+                            sizes["candidates"])
+                        config = LearningConfig(strategy=strategy, kernel=kernel,
+                                                budget=sizes["budget"], seed=seed)
+                        return pool_curve(pool, spec, config, sizes["eval_every"],
+                                          evaluator)[0]
+
+                    curve = log.run(f"{skill}/{strategy}/{kernel}/{kind}/{seed}", job)
                     for row in curve:
                         if kind == "learner":
                             rows.append({"learner": strategy, **row})

@@ -48,9 +48,13 @@ class HeldOutSet:
 
 @dataclass(frozen=True)
 class Evaluation:
+    """One checkpoint: held-out F1, success rate, and which evaluation contexts succeeded
+    (``successes[i]`` for ``contexts[i]``; paired comparisons between learners use them)."""
+
     n_trials: int
     f1: float | None
     success_rate: float | None
+    successes: tuple[bool, ...] | None = None
 
 
 class SkillEvaluator:
@@ -107,6 +111,11 @@ class SkillEvaluator:
 
     def success_rate(self, model: SkillModel) -> float | None:
         """Fraction of contexts whose most confident valid control truly succeeds."""
+        successes = self.successes(model)
+        return None if successes is None else float(np.mean(successes))
+
+    def successes(self, model: SkillModel) -> tuple[bool, ...] | None:
+        """Per evaluation context: does the most confident valid control truly succeed?"""
         if self.true_score is None or self.contexts is None or len(self.contexts) == 0:
             return None
         rng = np.random.default_rng(self.seed)
@@ -116,8 +125,10 @@ class SkillEvaluator:
                 for context in self.contexts
             ]
         ).reshape(len(self.contexts), self.spec.control.dim)
-        return float(np.mean(self.true_score(self.contexts, controls) > 0.0))
+        return tuple(bool(s) for s in self.true_score(self.contexts, controls) > 0.0)
 
     def evaluate(self, model: SkillModel, n_trials: int, success: bool = True) -> Evaluation:
         f1 = None if self.heldout is None else self.heldout.f1(model)
-        return Evaluation(n_trials, f1, self.success_rate(model) if success else None)
+        successes = self.successes(model) if success else None
+        rate = None if successes is None else float(np.mean(successes))
+        return Evaluation(n_trials, f1, rate, successes)

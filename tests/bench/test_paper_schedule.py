@@ -10,7 +10,7 @@ import pytest
 
 from bench.paper import sampling_table
 from bench.paper.__main__ import plan, run_units
-from bench.paper.common import Context
+from bench.paper.common import Context, JobLog
 from bench.paper.schedule import Unit, ranks, simulate
 
 
@@ -51,7 +51,9 @@ def test_quick_plan_splits_sampling_by_row_and_gates_pool_experiments(tmp_path: 
     assert all(units[k].experiment == "sampling" and units[k].cost > 0 for k in parts)
     pools = sorted(k for k in units if k.startswith("pool:"))
     assert pools == ["pool:pybullet_pour", "pool:pybullet_scoop"]
-    assert sorted(units["confident"].after) == pools and units["al2d"].after == ()
+    assert sorted(units["confident"].after) == pools
+    assert [k for k in units if k.startswith("al2d:")] == ["al2d:pour", "al2d:scoop", "al2d:push"]
+    assert all(units[f"al2d:{skill}"].after == () for skill in ("pour", "scoop", "push"))
     assert units["pool:pybullet_scoop"].part == "pybullet:scoop:100"  # 70 train + 30 test
     # With its estimates, the plan keeps both lanes busy to the end: within 3 % of the
     # bound total / 2 (cheapest first, the 3D pour row starts last: 965 s for a bound of
@@ -78,18 +80,17 @@ def test_sampling_parts_merge_in_row_order_and_never_from_stale_files(tmp_path: 
     ctx = Context("smoke", tmp_path, False, 1)
     names = [name for name, _ in sampling_table.parts(ctx)]
     assert len(names) == 2
-    stale = ctx.cache / "parts" / "sampling" / f"{names[0]}.json"
-    stale.parent.mkdir(parents=True)
-    stale.write_text(json.dumps({"table": "stale"}))
+    # An earlier run with other sizes logged the first row: it must never be merged.
+    JobLog(ctx, f"sampling-{names[0]}", {"rows": "other sizes"}).put(names[0],
+                                                                     [{"table": "stale"}])
     # The first row's unit fails (it names no row of this mode): although an earlier run's
-    # file for that row exists, the experiment is failed, not merged from it.
+    # log for that row exists, the experiment is failed, not merged from it.
     units = [Unit(f"sampling:{names[1]}", "sampling", names[1], 2.0),
              Unit(f"sampling:{names[0]}", "sampling", "no-such-row", 1.0)]
     results = {r[0]: r for r in run_units(units, ctx, 1, 1, lambda r: None)}
     assert results[f"sampling:{names[0]}"][3].startswith("KeyError")
     assert results["sampling:merge"][3].startswith(f"part sampling:{names[0]} failed")
     assert json.loads((tmp_path / "sampling.json").read_text())["failed"]
-    stale.unlink()
     with pytest.raises(FileNotFoundError, match=names[0]):
         sampling_table.merge(ctx)
     # Parts run in any order; the merged table keeps the report's row order.
@@ -100,3 +101,6 @@ def test_sampling_parts_merge_in_row_order_and_never_from_stale_files(tmp_path: 
     assert not written.get("failed") and written["tables"] == merged["tables"]
     assert all(1 <= t["metrics"][s]["n5"]["mean"] <= 100 for t in merged["tables"]
                for s in merged["samplers"])
+    # A rerun of a measured part reads it back (resuming an interrupted run) instead of
+    # measuring again.
+    assert sampling_table.run_part(ctx, names[0]) == merged["tables"][0]
