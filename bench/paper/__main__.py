@@ -3,10 +3,11 @@
 Regenerates the seed paper's experiments (one module each, listed in :data:`EXPERIMENTS`) into
 ``--out`` (JSON + PNG; regenerable trial pools under ``--out/cache``), then writes the report
 (``docs/RESULTS.md`` for quick/standard/full, ``<out>/RESULTS.md`` for smoke unless
-``--report`` says otherwise). Every experiment logs each finished job (learner × seed, say) under
-``<out>/cache/runs/``, so rerunning the same command after an interruption continues where it
-stopped, and the full run can be done in several pieces. ``--jobs 2`` keeps two processes
-busy: the work is cut into units (trial-pool
+``--report`` says otherwise). Every experiment logs each finished job (learner × seed, say)
+under ``<out>/runs/`` (committed, like the trial-pool archives in ``<out>/pools/``), so
+rerunning the same command after an interruption continues where it stopped, and the full run
+can be done in several pieces. ``--jobs 2`` keeps two processes busy: the work is cut into
+units (trial-pool
 collections, experiments, and the independent parts of a split experiment such as the
 sampling table's rows) started critical-path first (``bench.paper.schedule``), one per
 process. An experiment that fails is recorded as failed in its JSON (with the error line) and

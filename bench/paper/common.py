@@ -56,15 +56,16 @@ class JobLog:
     """The finished jobs of one experiment, so that a rerun continues where a run stopped.
 
     A job (one learner × seed × skill, say) is recorded as one JSON line ``{"key", "sizes",
-    "rows"}`` appended to ``<out>/cache/runs/<experiment>-<mode>.jsonl`` once it has finished
+    "rows"}`` appended to ``<out>/runs/<experiment>-<mode>.jsonl`` once it has finished
     (one ``write`` of a whole line, flushed and fsynced: an interrupted run loses at most the
     job it was running, and a torn last line is ignored). Lines recorded under other sizes
     (``sizes`` is the experiment's row of its ``SIZES`` table) are ignored, so changing a
-    mode's sizes reruns its jobs.
+    mode's sizes reruns its jobs. The logs are results, committed with the report (unlike
+    ``cache/``), so a long run can be finished in several sessions.
     """
 
     def __init__(self, ctx: Context, experiment: str, sizes: Mapping[str, Any]) -> None:
-        folder = ctx.cache / "runs"
+        folder = ctx.out / "runs"
         folder.mkdir(parents=True, exist_ok=True)
         self.path = folder / f"{experiment}-{ctx.mode}.jsonl"
         self.sizes = hashlib.sha256(json.dumps(sizes, sort_keys=True, default=str)

@@ -17,7 +17,12 @@ pool, the next ``n_test`` the held-out test set.
 
 from __future__ import annotations
 
+import gzip
+import importlib.metadata
+import json
+import os
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -60,17 +65,65 @@ class Pool:
 
 def get_pool(ctx: Context, backend: str, skill: str, n_train: int, n_test: int) -> Pool:
     """Collect (or resume) ``n_train + n_test`` uniform random pre-check-valid trials and
-    split them."""
+    split them.
+
+    The trials are also kept as a committed archive, ``<out>/pools/<name>.jsonl.gz``: a fresh
+    clone restores its cache from it and collects only the trials the archive lacks, and the
+    archive is rewritten (deterministically: same trials, same bytes) whenever collection adds
+    trials.
+    """
     folder = ctx.cache / "pools"
     folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"{backend}_{skill}_s{POOL_SEED}_valid.jsonl"
+    name = f"{backend}_{skill}_s{POOL_SEED}_valid"
+    path = folder / f"{name}.jsonl"
+    archive = ctx.out / "pools" / f"{name}.jsonl.gz"
+    restore_pool(archive, path)
     n = n_train + n_test
     job = CollectJob(skill=skill, backend=backend, n=n, seed=POOL_SEED, valid_only=True)
     collect(job, path, workers=ctx.workers if backend != "synthetic" else 1,
             progress=ctx.progress)
     by_index = {r.index: r for r in TrialDataset(path).read() if r.skill == skill}
+    archive_pool(list(by_index.values()), archive)
     records = [by_index[i] for i in range(n) if i in by_index]
     return Pool(backend, skill, records[:n_train], records[n_train:n])
+
+
+def restore_pool(archive: Path, path: Path) -> int:
+    """Append to the trial file ``path`` the archived trials it lacks (by index); returns
+    how many. Archive lines are trial records plus provenance keys, read as data."""
+    if not archive.is_file():
+        return 0
+    dataset = TrialDataset(path)
+    done = dataset.done_indices()
+    with gzip.open(archive, "rt", encoding="utf-8") as handle:
+        missing = [record for line in handle if line.strip()
+                   if (record := TrialRecord.from_dict(json.loads(line))).index not in done]
+    dataset.append(missing)
+    return len(missing)
+
+
+def archive_pool(records: list[TrialRecord], archive: Path) -> bool:
+    """Write ``records`` (sorted by index) to the gzip archive, each line a trial record with
+    ``pool_seed`` and ``ltamp_version`` beside its own ``backend`` and ``seed``; atomic
+    (temporary file + rename) and byte-for-byte reproducible (gzip mtime 0). Returns False
+    (nothing written) when the archive already holds exactly these trials."""
+    if archive.is_file():
+        with gzip.open(archive, "rt", encoding="utf-8") as handle:
+            archived = sorted(json.loads(line)["index"] for line in handle if line.strip())
+        if archived == sorted(r.index for r in records):
+            return False
+    version = importlib.metadata.version("ltamp")
+    lines = []
+    for record in sorted(records, key=lambda r: r.index):
+        data = json.loads(record.to_json())
+        data.update(pool_seed=POOL_SEED, ltamp_version=version)
+        lines.append(json.dumps(data, sort_keys=True) + "\n")
+    archive.parent.mkdir(parents=True, exist_ok=True)
+    partial = archive.with_name(archive.name + ".partial")
+    with partial.open("wb") as raw, gzip.GzipFile(fileobj=raw, mode="wb", mtime=0) as handle:
+        handle.write("".join(lines).encode("utf-8"))
+    os.replace(partial, archive)
+    return True
 
 
 def spec_of(backend_name: str, skill: str) -> SkillSpec:
