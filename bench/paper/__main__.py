@@ -22,6 +22,7 @@ import importlib
 import json
 import os
 import resource
+import subprocess
 import sys
 import time
 import traceback
@@ -230,6 +231,20 @@ def experiment_records(units: list[Unit], results: list[Result]) -> dict[str, di
     return records
 
 
+def source_commit() -> str:
+    """The checked-out commit (``+dirty`` with uncommitted changes), or ``unknown``."""
+    try:
+        commit = subprocess.run(["git", "-C", str(REPO), "rev-parse", "--short=12", "HEAD"],
+                                capture_output=True, text=True, check=True,
+                                timeout=10).stdout.strip()
+        dirty = subprocess.run(["git", "-C", str(REPO), "status", "--porcelain",
+                                "--untracked-files=no"], capture_output=True, text=True,
+                               check=True, timeout=10).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    return commit + ("+dirty" if dirty else "")
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m bench.paper", description=__doc__)
     mode = parser.add_mutually_exclusive_group(required=True)
@@ -283,7 +298,8 @@ def main(argv: list[str] | None = None) -> int:
     usage = [resource.getrusage(who) for who in (resource.RUSAGE_SELF,
                                                  resource.RUSAGE_CHILDREN)]
     total_cpu = sum(u.ru_utime + u.ru_stime for u in usage)
-    record = {"mode": args.mode, "total_wall_s": round(total, 1),
+    record = {"mode": args.mode, "commit": source_commit(), "finished": time.strftime(
+                  "%Y-%m-%d %H:%M UTC", time.gmtime()), "total_wall_s": round(total, 1),
               "total_cpu_s": round(total_cpu, 1), "jobs": args.jobs,
               "experiments": experiment_records(units, results),
               "units": {k: {"wall_s": round(s, 1), "cpu_s": round(c, 1), "error": e}

@@ -637,6 +637,8 @@ def write_report(out: Path, report: Path) -> Path:
         "when the other method is significantly better or ≥ 10 units put the interval below "
         f"a margin ({RATE_MARGIN} for rates and F1), and is *inconclusive* otherwise. Curves "
         "show mean ± standard error.",
+        f"- Produced by commit `{run.get('commit', 'unknown')}`, finished "
+        f"{run.get('finished', '?')}.",
         f"- Total wall time: {run.get('total_wall_s', '?')} s with {run.get('jobs', '?')} "
         f"jobs (processes) at a time; total CPU time {run.get('total_cpu_s', '?')} s (all "
         "processes: what the run costs on otherwise idle cores)"
