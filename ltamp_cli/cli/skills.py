@@ -7,7 +7,7 @@ from typing import Annotated, Any
 
 import typer
 
-from ltamp_cli.backends import BACKEND_FACTORIES, load_backend
+from ltamp_cli.backends import discover_backends, load_backend
 
 
 def register(app: typer.Typer) -> None:
@@ -46,8 +46,11 @@ def backend_listing(name: str) -> dict[str, Any]:
 def skills_command(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")] = False,
 ) -> None:
-    """List every backend's skills: context and control parameters with their bounds."""
-    listings = [backend_listing(name) for name in BACKEND_FACTORIES]
+    """List every backend's skills: context and control parameters with their bounds.
+
+    Backends of installed plugins (entry points of group `ltamp.backends`) are listed too.
+    """
+    listings = [backend_listing(name) for name in discover_backends()]
     if as_json:
         typer.echo(json.dumps({"backends": listings}, indent=2))
         return

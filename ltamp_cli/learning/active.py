@@ -38,6 +38,7 @@ from ltamp_cli.learning.gp import fit_gp
 from ltamp_cli.learning.kernels import KERNEL_NAMES
 from ltamp_cli.learning.metrics import Evaluation, SkillEvaluator
 from ltamp_cli.learning.model import LevelSetModel, PhysicalValidity, SkillModel
+from ltamp_cli.threads import limited_threads
 from ltamp_cli.trials.record import TrialDataset, TrialRecord
 
 STRATEGIES = ("lse", "lse2", "gp", "random", *SKLEARN_KINDS)
@@ -61,6 +62,7 @@ class LearningConfig:
     dense_refit: int = 40
     refit_every: int = 5
     pool_neighbourhood: float = 0.02
+    threads: int | None = 1  # thread-pool limit while learning (ltamp_cli.threads)
 
     def __post_init__(self) -> None:
         if self.strategy not in STRATEGIES:
@@ -184,7 +186,24 @@ def learn_online(
 
     Trials already in ``dataset`` (same skill) count toward the budget: a rerun resumes.
     ``evaluator`` with ``eval_every > 0`` records a learning curve every ``eval_every`` trials.
+    Thread pools are limited to ``config.threads`` meanwhile, as in ``ltamp train``.
     """
+    with limited_threads(config.threads):
+        return _learn_online(backend, skill, config, dataset, evaluator, eval_every, progress,
+                             evaluate_success)
+
+
+def _learn_online(
+    backend: SkillBackend,
+    skill: str,
+    config: LearningConfig,
+    dataset: TrialDataset | None = None,
+    evaluator: SkillEvaluator | None = None,
+    eval_every: int = 0,
+    progress: bool = False,
+    evaluate_success: bool = True,
+) -> LearningResult:
+    """:func:`learn_online` without the thread limit."""
     spec = backend.skills()[skill]
     records = dataset.read() if dataset is not None and dataset.exists() else []
     strangers = [r for r in records if r.skill != skill]
@@ -311,8 +330,24 @@ def learn_from_pool(
     Active strategies pick the remaining trial with the largest straddle ψ (``lse``: over the
     whole pool; ``lse2``: among the ``pool_neighbourhood`` fraction of remaining trials whose
     contexts are nearest to that of a uniformly drawn remaining trial); the others take the
-    pool in a random order. At most ``min(budget, len(pool))`` trials are used.
+    pool in a random order. At most ``min(budget, len(pool))`` trials are used. Thread pools
+    are limited to ``config.threads`` meanwhile, as in ``ltamp train``.
     """
+    with limited_threads(config.threads):
+        return _learn_from_pool(spec, pool, config, evaluator, eval_every, progress,
+                                evaluate_success)
+
+
+def _learn_from_pool(
+    spec: SkillSpec,
+    pool: Sequence[TrialRecord],
+    config: LearningConfig,
+    evaluator: SkillEvaluator | None = None,
+    eval_every: int = 0,
+    progress: bool = False,
+    evaluate_success: bool = True,
+) -> LearningResult:
+    """:func:`learn_from_pool` without the thread limit."""
     pool = [r for r in pool if r.skill == spec.name]
     if not pool:
         raise ValueError(f"the pool has no trials of skill {spec.name!r}")

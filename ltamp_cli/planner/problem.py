@@ -52,6 +52,7 @@ from ltamp_cli.planner.pddl.syntax import (
     TypedName,
 )
 from ltamp_cli.planner.problem_schema import validate_problem_document
+from ltamp_cli.shipped import resolve_problem_path
 from ltamp_cli.yamlfile import YamlDocument
 
 BINDINGS_FACTORY = "make_streams"
@@ -217,8 +218,12 @@ def _parse_goal(doc: YamlDocument) -> Formula:
 
 
 def load_problem(path: str | Path, domain_dir: str | Path | None = None) -> PlanningProblem:
-    """Load a YAML problem (or a PDDL problem file with ``domain_dir``) and check it."""
-    path = Path(path)
+    """Load a YAML problem (or a PDDL problem file with ``domain_dir``) and check it.
+
+    ``path`` may also be a built-in problem name such as ``kitchen2d/coffee`` (see
+    :func:`ltamp_cli.shipped.resolve_problem_path`).
+    """
+    path = resolve_problem_path(path)
     if path.suffix == ".pddl":
         if domain_dir is None:
             raise InputError("a PDDL problem file needs its domain folder (--domain DIR)",

@@ -1,0 +1,54 @@
+"""Thread limits for numerics: the GPs and samplers of ltamp are small.
+
+Small GP fits and predictions run several times slower on two threads than on one (OpenMP
+and OpenBLAS oversubscription, see the field facts). Every ``ltamp`` command therefore limits
+the thread pools to one thread with :func:`use_one_thread`, and the Python API's entry points
+(:func:`ltamp_cli.planner.api.solve`, :func:`ltamp_cli.learning.active.learn_online` and
+``learn_from_pool``) run inside :func:`limited_threads` with the ``threads`` of their config
+(default 1; ``None`` leaves the pools alone), so the API behaves like the command line.
+
+Only pools already loaded are limited (numpy's and scipy's OpenBLAS, torch's OpenMP via
+threadpoolctl, and torch's own intra-op pool): call these after the imports that matter.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+
+def use_one_thread() -> None:
+    """Limit every loaded thread pool to one thread for the rest of the process (the CLI)."""
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(limits=1)
+    torch = sys.modules.get("torch")
+    if torch is not None:
+        torch.set_num_threads(1)
+
+
+@contextmanager
+def limited_threads(limit: int | None = 1) -> Iterator[None]:
+    """Within the block, every loaded thread pool uses at most ``limit`` threads; the previous
+    limits are restored after it. ``None``: no change."""
+    if limit is None:
+        yield
+        return
+    if limit < 1:
+        raise ValueError(f"threads: expected a number >= 1 or None, got {limit}")
+    from threadpoolctl import threadpool_limits
+
+    torch = sys.modules.get("torch")
+    torch_threads = torch.get_num_threads() if torch is not None else None
+    with threadpool_limits(limits=limit):
+        if torch is not None:
+            torch.set_num_threads(limit)
+        try:
+            yield
+        finally:
+            if torch is not None and torch_threads is not None:
+                torch.set_num_threads(torch_threads)
+
+
+__all__ = ["limited_threads", "use_one_thread"]
