@@ -6,9 +6,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
-import numpy as np
 import typer
-from tqdm import tqdm
 
 from ltamp_cli.cli.conventions import progress_enabled
 from ltamp_cli.errors import InputError
@@ -97,6 +95,9 @@ def _live_success_rate(
 ) -> float | None:
     if trials == 0:
         return None
+    import numpy as np  # lazy, like every command's heavy imports: keeps `ltamp --help` fast
+    from tqdm import tqdm
+
     rng = np.random.default_rng(seed)
     successes = 0
     for index in tqdm(

@@ -7,8 +7,6 @@ from typing import Annotated, Any
 
 import typer
 
-from ltamp_cli.backends import discover_backends, load_backend
-
 
 def register(app: typer.Typer) -> None:
     app.command(name="skills")(skills_command)
@@ -23,6 +21,8 @@ def _space(space: Any) -> list[dict[str, Any]]:
 
 def backend_listing(name: str) -> dict[str, Any]:
     """``{"name", "available", "skills" | "error"}`` for one backend (never raises)."""
+    from ltamp_cli.backends import load_backend
+
     try:
         backend = load_backend(name)
     except Exception as error:  # an unimplemented or broken backend is reported, not fatal
@@ -50,6 +50,8 @@ def skills_command(
 
     Backends of installed plugins (entry points of group `ltamp.backends`) are listed too.
     """
+    from ltamp_cli.backends import discover_backends
+
     listings = [backend_listing(name) for name in discover_backends()]
     if as_json:
         typer.echo(json.dumps({"backends": listings}, indent=2))

@@ -5,7 +5,6 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated, Any
 
-import numpy as np
 import typer
 
 from ltamp_cli.errors import InputError
@@ -17,6 +16,8 @@ def register(app: typer.Typer) -> None:
 
 def heldout_from_records(records: list[Any], skill: str) -> Any:
     """A :class:`~ltamp_cli.learning.metrics.HeldOutSet` from the trial records of ``skill``."""
+    import numpy as np
+
     from ltamp_cli.learning.metrics import HeldOutSet
     from ltamp_cli.trials.record import records_to_arrays
 
