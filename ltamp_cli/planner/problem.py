@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from ltamp_cli.errors import InputError, SourceLocation
+from ltamp_cli.extras import missing_module_hint
 from ltamp_cli.planner.pddl.check import check_domain, check_problem, check_streams
 from ltamp_cli.planner.pddl.parse import (
     parse_domain,
@@ -113,18 +114,25 @@ def load_streams_factory(spec: str, base: Path, where: SourceLocation
             except Exception as error:
                 del sys.modules[module_name]
                 raise InputError(f"bindings file {spec!r} failed to import: "
-                                 f"{type(error).__name__}: {error}", where) from None
+                                 f"{type(error).__name__}: {error}"
+                                 f"{_install_hint(error)}", where) from None
     else:
         try:
             module = importlib.import_module(spec)
         except Exception as error:
             raise InputError(f"bindings module {spec!r} failed to import: "
-                             f"{type(error).__name__}: {error}", where) from None
+                             f"{type(error).__name__}: {error}"
+                             f"{_install_hint(error)}", where) from None
     factory = getattr(module, BINDINGS_FACTORY, None)
     if not callable(factory):
         raise InputError(f"bindings {spec!r} define no {BINDINGS_FACTORY}(world, rng) function",
                          where)
     return factory
+
+
+def _install_hint(error: Exception) -> str:
+    """How to install the optional dependency whose absence ``error`` reports ('' if none)."""
+    return missing_module_hint(error) if isinstance(error, ImportError) else ""
 
 
 _WORLD_PATH = re.compile(r"world((?:\s*[.:]\s*[\w\-]+)*)")
