@@ -81,8 +81,8 @@ def build_app() -> typer.Typer:
 
 def main(argv: list[str] | None = None) -> None:
     """Console entry point: run the app, turning input errors into exit code 2."""
-    app = build_app()
     try:
+        app = build_app()
         code = app(args=argv, prog_name="ltamp", standalone_mode=False)
     except InputError as error:
         print(f"ltamp: error: {error}", file=sys.stderr)
@@ -101,4 +101,6 @@ def main(argv: list[str] | None = None) -> None:
         sys.exit(EXIT_BAD_INPUT)
     finally:
         logging.shutdown()
+    if code == EXIT_INTERRUPTED:  # Typer turns Ctrl-C (KeyboardInterrupt) into 130, silently
+        print("ltamp: interrupted", file=sys.stderr)
     sys.exit(code if isinstance(code, int) else 0)
