@@ -10,7 +10,6 @@ and Ctrl-C ends with one line and exit code 130.
 
 from __future__ import annotations
 
-import logging
 import sys
 from typing import Annotated
 
@@ -99,8 +98,6 @@ def main(argv: list[str] | None = None) -> None:
             sys.exit(0)
         print(f"ltamp: error: {message}", file=sys.stderr)
         sys.exit(EXIT_BAD_INPUT)
-    finally:
-        logging.shutdown()
     if code == EXIT_INTERRUPTED:  # Typer turns Ctrl-C (KeyboardInterrupt) into 130, silently
         print("ltamp: interrupted", file=sys.stderr)
     sys.exit(code if isinstance(code, int) else 0)
