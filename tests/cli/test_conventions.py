@@ -192,3 +192,54 @@ def test_api_solve_limits_thread_pools_like_the_cli(tmp_path: Path) -> None:
             assert torch.get_num_threads() == 2
     finally:
         torch.set_num_threads(before)
+
+
+def test_progress_on_a_terminal_only(tmp_path: Path) -> None:
+    """Executing a plan draws a progress line on stderr when it is a terminal (in pipes
+    nothing is drawn: see the Ctrl-C test)."""
+    import pty
+
+    env = dict(os.environ, XDG_CACHE_HOME=str(tmp_path / "cache"), PYTHONPATH=str(REPO_ROOT))
+    leader, follower = pty.openpty()
+    process = subprocess.Popen(
+        [sys.executable, "-m", "ltamp_cli", "solve", "kitchen2d/fill_and_serve", "--seed", "3",
+         "--backend", "box2d", "--json"],
+        cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=follower, text=True)
+    os.close(follower)
+    chunks = []
+    while True:
+        try:
+            chunk = os.read(leader, 4096)
+        except OSError:  # the terminal closed: the process ended
+            break
+        if not chunk:
+            break
+        chunks.append(chunk)
+    out, _ = process.communicate(timeout=300)
+    os.close(leader)
+    assert process.returncode == 0 and json.loads(out)["goal_holds"]
+    drawn = b"".join(chunks).decode(errors="replace")
+    assert "executing" in drawn and "actions on box2d" in drawn
+
+
+def test_quiet_hides_progress_and_verbose_shows_info(monkeypatch: pytest.MonkeyPatch) -> None:
+    import logging
+
+    from ltamp_cli.cli.conventions import CliSettings, configure_logging, progress_enabled
+
+    class Terminal:
+        def isatty(self) -> bool:
+            return True
+
+    monkeypatch.setattr(sys, "stderr", Terminal())
+    try:
+        configure_logging(CliSettings(verbosity=-1))
+        assert not progress_enabled()
+        configure_logging(CliSettings(verbosity=0))
+        assert progress_enabled() and not logging.getLogger("ltamp").isEnabledFor(logging.INFO)
+        configure_logging(CliSettings(verbosity=2))
+        assert logging.getLogger("ltamp.x").isEnabledFor(logging.DEBUG)
+    finally:
+        monkeypatch.undo()  # the real stderr again, before logging is reset to it
+        logging.basicConfig(level=logging.WARNING, force=True)
+        logging.captureWarnings(False)
