@@ -4,8 +4,9 @@ Small GP fits and predictions run several times slower on two threads than on on
 and OpenBLAS oversubscription, see the field facts). Every ``ltamp`` command therefore limits
 the thread pools to one thread with :func:`use_one_thread`, and the Python API's entry points
 (:func:`ltamp_cli.planner.api.solve`, :func:`ltamp_cli.learning.active.learn_online` and
-``learn_from_pool``) run inside :func:`limited_threads` with the ``threads`` of their config
-(default 1; ``None`` leaves the pools alone), so the API behaves like the command line.
+``learn_from_pool``, see :func:`limits_threads`) run inside :func:`limited_threads` with the
+``threads`` of their config (default 1; ``None`` leaves the pools alone), so the API behaves
+like the command line.
 
 Only pools already loaded are limited (numpy's and scipy's OpenBLAS, torch's OpenMP via
 threadpoolctl, and torch's own intra-op pool): call these after the imports that matter.
@@ -13,9 +14,15 @@ threadpoolctl, and torch's own intra-op pool): call these after the imports that
 
 from __future__ import annotations
 
+import functools
+import inspect
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from typing import ParamSpec, TypeVar
+
+P = ParamSpec("P")
+R = TypeVar("R")
 
 
 def use_one_thread() -> None:
@@ -51,4 +58,18 @@ def limited_threads(limit: int | None = 1) -> Iterator[None]:
                 torch.set_num_threads(torch_threads)
 
 
-__all__ = ["limited_threads", "use_one_thread"]
+def limits_threads(function: Callable[P, R]) -> Callable[P, R]:
+    """Decorate an API entry point whose argument ``config`` has a ``threads`` field: the call
+    runs inside :func:`limited_threads` of that field."""
+    signature = inspect.signature(function)
+
+    @functools.wraps(function)
+    def limited(*args: P.args, **kwargs: P.kwargs) -> R:
+        config = signature.bind(*args, **kwargs).arguments["config"]
+        with limited_threads(getattr(config, "threads", 1)):
+            return function(*args, **kwargs)
+
+    return limited
+
+
+__all__ = ["limited_threads", "limits_threads", "use_one_thread"]

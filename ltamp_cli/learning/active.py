@@ -38,7 +38,7 @@ from ltamp_cli.learning.gp import fit_gp
 from ltamp_cli.learning.kernels import KERNEL_NAMES
 from ltamp_cli.learning.metrics import Evaluation, SkillEvaluator
 from ltamp_cli.learning.model import LevelSetModel, PhysicalValidity, SkillModel
-from ltamp_cli.threads import limited_threads
+from ltamp_cli.threads import limits_threads
 from ltamp_cli.trials.record import TrialDataset, TrialRecord
 
 STRATEGIES = ("lse", "lse2", "gp", "random", *SKLEARN_KINDS)
@@ -172,6 +172,7 @@ class _Curve:
             self.points.append(self.evaluator.evaluate(learner.current(), n, self.success))
 
 
+@limits_threads
 def learn_online(
     backend: SkillBackend,
     skill: str,
@@ -188,22 +189,6 @@ def learn_online(
     ``evaluator`` with ``eval_every > 0`` records a learning curve every ``eval_every`` trials.
     Thread pools are limited to ``config.threads`` meanwhile, as in ``ltamp train``.
     """
-    with limited_threads(config.threads):
-        return _learn_online(backend, skill, config, dataset, evaluator, eval_every, progress,
-                             evaluate_success)
-
-
-def _learn_online(
-    backend: SkillBackend,
-    skill: str,
-    config: LearningConfig,
-    dataset: TrialDataset | None = None,
-    evaluator: SkillEvaluator | None = None,
-    eval_every: int = 0,
-    progress: bool = False,
-    evaluate_success: bool = True,
-) -> LearningResult:
-    """:func:`learn_online` without the thread limit."""
     spec = backend.skills()[skill]
     records = dataset.read() if dataset is not None and dataset.exists() else []
     strangers = [r for r in records if r.skill != skill]
@@ -316,6 +301,7 @@ def _propose(
     return context, spec.control.sample_uniform(rng, 1)[0]
 
 
+@limits_threads
 def learn_from_pool(
     spec: SkillSpec,
     pool: Sequence[TrialRecord],
@@ -333,21 +319,6 @@ def learn_from_pool(
     pool in a random order. At most ``min(budget, len(pool))`` trials are used. Thread pools
     are limited to ``config.threads`` meanwhile, as in ``ltamp train``.
     """
-    with limited_threads(config.threads):
-        return _learn_from_pool(spec, pool, config, evaluator, eval_every, progress,
-                                evaluate_success)
-
-
-def _learn_from_pool(
-    spec: SkillSpec,
-    pool: Sequence[TrialRecord],
-    config: LearningConfig,
-    evaluator: SkillEvaluator | None = None,
-    eval_every: int = 0,
-    progress: bool = False,
-    evaluate_success: bool = True,
-) -> LearningResult:
-    """:func:`learn_from_pool` without the thread limit."""
     pool = [r for r in pool if r.skill == spec.name]
     if not pool:
         raise ValueError(f"the pool has no trials of skill {spec.name!r}")

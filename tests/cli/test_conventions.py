@@ -243,3 +243,37 @@ def test_quiet_hides_progress_and_verbose_shows_info(monkeypatch: pytest.MonkeyP
         monkeypatch.undo()  # the real stderr again, before logging is reset to it
         logging.basicConfig(level=logging.WARNING, force=True)
         logging.captureWarnings(False)
+
+
+def test_api_learning_limits_thread_pools_like_the_cli() -> None:
+    torch = pytest.importorskip("torch")
+    from ltamp_cli.backends import load_backend
+    from ltamp_cli.learning.active import LearningConfig, learn_online
+
+    synthetic = load_backend("synthetic")
+    seen: list[int] = []
+
+    class Recording:
+        """The synthetic backend, noting the torch threads available to each trial."""
+
+        name = "recording"
+
+        def __getattr__(self, attribute: str):  # type: ignore[no-untyped-def]
+            return getattr(synthetic, attribute)
+
+        def run_trial(self, skill, context, control, seed):  # type: ignore[no-untyped-def]
+            seen.append(torch.get_num_threads())
+            return synthetic.run_trial(skill, context, control, seed)
+
+    before = torch.get_num_threads()
+    torch.set_num_threads(2)
+    try:
+        config = LearningConfig(strategy="lse2", budget=12, init=4, seed=0)
+        result = learn_online(Recording(), "moving2d", config)
+        assert len(result.records) == 12 and set(seen) == {1}
+        assert torch.get_num_threads() == 2
+        seen.clear()
+        learn_online(Recording(), "moving2d", LearningConfig(budget=5, init=5, threads=None))
+        assert set(seen) == {2}
+    finally:
+        torch.set_num_threads(before)
