@@ -139,11 +139,23 @@ def test_backends_of_installed_distributions_are_discovered(tmp_path: Path) -> N
     assert discover_backends().keys() >= BUILTIN_BACKENDS.keys()
 
 
-def test_missing_optional_modules_name_their_extra() -> None:
-    hint = missing_module_hint(ModuleNotFoundError("No module named 'pybullet'",
-                                                   name="pybullet"))
-    assert "pip install 'ltamp[pybullet]'" in hint
+def test_missing_optional_modules_name_their_extra(tmp_path: Path) -> None:
     assert missing_module_hint(ModuleNotFoundError("x", name="numpy")) == ""
+    # A folder first on the path where importing pybullet fails as if it were not installed.
+    absent = tmp_path / "absent" / "pybullet"
+    absent.mkdir(parents=True)
+    (absent / "__init__.py").write_text(
+        "raise ModuleNotFoundError(\"No module named 'pybullet'\", name='pybullet')\n")
+    hint = "install it with: pip install 'ltamp[pybullet]'"
+    for argv in (("solve", "kitchen3d/wash"),
+                 ("train", "pour", "--backend", "pybullet", "--out", "m")):
+        done = ltamp(tmp_path, *argv, pythonpath=(absent.parent,))
+        assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+        assert done.stderr.startswith("ltamp: error: ") and hint in done.stderr
+    listed = ltamp(tmp_path, "skills", "--json", pythonpath=(absent.parent,))
+    backends = {b["name"]: b for b in json.loads(listed.stdout)["backends"]}
+    assert not backends["pybullet"]["available"] and hint in backends["pybullet"]["error"]
+    assert backends["box2d"]["available"]
 
 
 THREAD_DOMAIN = """\
