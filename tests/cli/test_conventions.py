@@ -68,6 +68,11 @@ def test_version_help_and_usage_lines(tmp_path: Path) -> None:
     assert "ltamp[ray]" in ltamp(tmp_path, "collect", "--help").stdout
     completion = ltamp(tmp_path, "--help").stdout
     assert "--install-completion" in completion and "--show-completion" in completion
+    env = dict(os.environ, PYTHONPATH=str(REPO_ROOT), _LTAMP_COMPLETE="complete_bash",
+               COMP_WORDS="ltamp so", COMP_CWORD="1")
+    completed = subprocess.run([sys.executable, "-m", "ltamp_cli"], cwd=tmp_path, env=env,
+                               capture_output=True, text=True, timeout=120, check=False)
+    assert completed.stdout.split() == ["solve"]  # what bash completes `ltamp so` to
 
 
 def test_human_text_by_default_json_on_request(tmp_path: Path) -> None:
