@@ -16,7 +16,7 @@ setup: $(STAMP)
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install --quiet --disable-pip-version-check -c constraints.txt -e '.[dev,fd,sapien,ray]'
+	$(BIN)/pip install --quiet --disable-pip-version-check -c constraints.txt -e '.[dev,pybullet,sapien,fd,ray,gpytorch]'
 	touch $(STAMP)
 
 # The coffee task of the 2D kitchen: plan with the shipped pour/scoop models, execute the plan

@@ -38,11 +38,11 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from ltamp_cli.cli.threads import use_one_thread
 from ltamp_cli.planner.algorithms.common import ALGORITHMS, PlannerConfig
 from ltamp_cli.planner.api import solve
 from ltamp_cli.planner.problem import load_problem
 from ltamp_cli.planner.validate import validate_plan
+from ltamp_cli.threads import use_one_thread
 
 REPO = Path(__file__).resolve().parent.parent
 EXAMPLES = REPO / "problems" / "examples"

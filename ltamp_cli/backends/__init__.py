@@ -3,13 +3,21 @@
 Backends are looked up by name through :func:`load_backend`, which imports the backend's
 module only when asked, so a missing optional dependency (e.g. SAPIEN) only matters to
 users of that backend.
+
+Other packages add backends (and with them skills) through the entry-point group
+``ltamp.backends``: an entry ``slide = "my_package.slide:make_backend"`` in the plugin's
+``pyproject.toml`` makes ``--backend slide`` work in every command. The backend module may
+also define ``make_executor(**options)`` to execute plans (see
+:mod:`ltamp_cli.backends.execution`). :func:`discover_backends` returns the current mapping;
+nothing is registered globally.
 """
 
 from __future__ import annotations
 
 import importlib
 from collections.abc import Mapping
-from types import MappingProxyType
+from importlib.metadata import entry_points
+from types import MappingProxyType, ModuleType
 from typing import Any
 
 from ltamp_cli.backends.protocol import (
@@ -19,9 +27,12 @@ from ltamp_cli.backends.protocol import (
     TrialResult,
 )
 from ltamp_cli.errors import InputError
+from ltamp_cli.extras import missing_module_hint
+
+ENTRY_POINT_GROUP = "ltamp.backends"
 
 # name -> "module:factory"; a factory takes keyword options and returns a SkillBackend.
-BACKEND_FACTORIES: Mapping[str, str] = MappingProxyType(
+BUILTIN_BACKENDS: Mapping[str, str] = MappingProxyType(
     {
         "synthetic": "ltamp_cli.backends.synthetic:make_backend",
         "box2d": "ltamp_cli.backends.box2d:make_backend",
@@ -31,24 +42,54 @@ BACKEND_FACTORIES: Mapping[str, str] = MappingProxyType(
 )
 
 
+def discover_backends() -> Mapping[str, str]:
+    """Every backend name -> ``"module:factory"``: the built-in ones, then the entry points
+    of group ``ltamp.backends`` of the installed packages (a plugin cannot replace a
+    built-in name; of two plugins with one name, the first found is used)."""
+    found = dict(BUILTIN_BACKENDS)
+    for entry in entry_points(group=ENTRY_POINT_GROUP):
+        found.setdefault(entry.name, entry.value)
+    return MappingProxyType(found)
+
+
+def backend_module(name: str) -> tuple[ModuleType, str]:
+    """Import the module of backend ``name``; returns it and its factory's name.
+
+    Unknown names and modules that fail to import raise :class:`InputError`.
+    """
+    known = discover_backends()
+    if name not in known:
+        raise InputError(f"unknown backend {name!r}: expected one of {', '.join(sorted(known))}")
+    module_name, _, factory_name = known[name].partition(":")
+    try:
+        module = importlib.import_module(module_name.strip())
+    except ImportError as error:
+        raise InputError(f"backend {name!r} is not available here: {error}"
+                         f"{missing_module_hint(error)}") from None
+    return module, factory_name.strip() or "make_backend"
+
+
 def load_backend(name: str, **options: Any) -> SkillBackend:
     """Create the backend called ``name``; bad names raise :class:`InputError`."""
-    if name not in BACKEND_FACTORIES:
-        known = ", ".join(sorted(BACKEND_FACTORIES))
-        raise InputError(f"unknown backend {name!r}: expected one of {known}")
-    module_name, factory_name = BACKEND_FACTORIES[name].split(":")
+    module, factory_name = backend_module(name)
+    factory = getattr(module, factory_name, None)
+    if not callable(factory):
+        raise InputError(f"backend {name!r}: {module.__name__} has no factory {factory_name!r}")
     try:
-        module = importlib.import_module(module_name)
-    except ImportError as error:
-        raise InputError(f"backend {name!r} is not available here: {error}") from error
-    return getattr(module, factory_name)(**options)
+        return factory(**options)
+    except ImportError as error:  # backends import their physics engine only when created
+        raise InputError(f"backend {name!r} is not available here: {error}"
+                         f"{missing_module_hint(error)}") from None
 
 
 __all__ = [
-    "BACKEND_FACTORIES",
+    "BUILTIN_BACKENDS",
+    "ENTRY_POINT_GROUP",
     "ParamSpace",
     "SkillBackend",
     "SkillSpec",
     "TrialResult",
+    "backend_module",
+    "discover_backends",
     "load_backend",
 ]

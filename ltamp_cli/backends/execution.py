@@ -1,18 +1,19 @@
 """Executing a plan in a backend's simulator and checking the goal physically.
 
-A backend that can replay plans provides ``make_executor(**options) -> PlanExecutor`` in its
-package (``ltamp_cli.backends.<name>``), next to ``make_backend``. :func:`execute_plan` loads
-it lazily, the way :func:`ltamp_cli.backends.load_backend` loads backends.
+A backend that can replay plans provides ``make_executor(**options) -> PlanExecutor`` in the
+module of its factory (built-in: ``ltamp_cli.backends.<name>``; plugins: the module of their
+``ltamp.backends`` entry point), next to ``make_backend``. :func:`execute_plan` loads it
+lazily, the way :func:`ltamp_cli.backends.load_backend` loads backends.
 """
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
 from ltamp_cli.errors import InputError
+from ltamp_cli.extras import missing_module_hint
 
 
 @dataclass(frozen=True)
@@ -45,20 +46,23 @@ class PlanExecutor(Protocol):
 
 
 def load_executor(backend_name: str, **options: Any) -> PlanExecutor:
-    """``ltamp_cli.backends.<backend_name>:make_executor(**options)``; ``InputError`` if the
-    backend is unknown or cannot execute plans."""
-    if not backend_name.isidentifier():
-        raise InputError(f"--backend: not a backend name: {backend_name!r}")
+    """``make_executor(**options)`` of the module of backend ``backend_name`` (a built-in
+    backend or an ``ltamp.backends`` plugin); ``InputError`` if the backend is unknown or
+    cannot execute plans."""
+    from ltamp_cli.backends import backend_module
+
     try:
-        module = importlib.import_module(f"ltamp_cli.backends.{backend_name}")
-    except ModuleNotFoundError as error:
-        if error.name and error.name.startswith("ltamp_cli.backends"):
-            raise InputError(f"--backend: unknown backend {backend_name!r}") from None
-        raise
+        module, _ = backend_module(backend_name)
+    except InputError as error:
+        raise InputError(f"--backend: {error.message}") from None
     factory = getattr(module, "make_executor", None)
     if factory is None:
         raise InputError(f"--backend: backend {backend_name!r} cannot execute plans")
-    return factory(**options)
+    try:
+        return factory(**options)
+    except ImportError as error:
+        raise InputError(f"--backend: backend {backend_name!r} is not available here: {error}"
+                         f"{missing_module_hint(error)}") from None
 
 
 def execute_plan(

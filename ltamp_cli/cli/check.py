@@ -70,10 +70,21 @@ def check_problem_file(path: Path, domain_dir: Path | None = None, seed: int = 0
 
 
 def check_command(
-    problem: Annotated[Path, typer.Argument(help="Problem file (.yaml, or .pddl with --domain).")],
+    problem: Annotated[Path, typer.Argument(
+        help="Problem file (.yaml, or .pddl with --domain), or a built-in name.")],
     domain: Annotated[Path | None, typer.Option(
         help="Domain folder, for a .pddl problem file.")] = None,
     seed: Annotated[int, typer.Option(help="Seed passed to make_streams.")] = 0,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
-    """Validate PROBLEM, its domain, streams and bindings; exit 0 if valid, 2 otherwise."""
-    print(check_problem_file(problem, domain, seed).line())
+    """Validate PROBLEM, its domain, streams and bindings; exit 0 if valid, 2 otherwise.
+
+    PROBLEM is a file or a built-in name (see `ltamp problems`).
+    """
+    from dataclasses import asdict
+
+    from ltamp_cli.cli.conventions import emit
+
+    summary = check_problem_file(problem, domain, seed)
+    emit({"ok": True, "problem": str(problem), **asdict(summary)}, as_json,
+         lambda _: [summary.line()])

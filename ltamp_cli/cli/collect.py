@@ -35,11 +35,13 @@ def collect_command(
         typer.Option(
             "--ray",
             help="Run trials on Ray: 'local' (a local cluster) or a cluster address. "
-            "Needs the ltamp[ray] extra.",
+            "Needs the ltamp\\[ray] extra.",
         ),
     ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Collect N random trials (uniform control; context from the backend), resumably."""
+    from ltamp_cli.cli.conventions import emit
     from ltamp_cli.trials.collect import CollectJob, collect
 
     if n < 0:
@@ -50,4 +52,7 @@ def collect_command(
         raise InputError(f"--out: {out} is a directory, expected a .jsonl file path")
     job = CollectJob(skill=skill, backend=backend, n=n, seed=seed, valid_only=valid_only)
     added = collect(job, out, workers=workers, ray_address=ray)
-    typer.echo(f"{added} new trials; {out} now holds trials 0..{n - 1}", err=True)
+    if as_json:
+        emit({"out": str(out), "added": added, "n": n}, as_json)
+    else:
+        typer.echo(f"{added} new trials; {out} now holds trials 0..{n - 1}", err=True)

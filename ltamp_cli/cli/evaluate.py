@@ -2,15 +2,13 @@
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
-import numpy as np
 import typer
-from tqdm import tqdm
 
+from ltamp_cli.cli.conventions import progress_enabled
 from ltamp_cli.errors import InputError
 
 if TYPE_CHECKING:
@@ -42,10 +40,11 @@ def evaluate_command(
     --data and the success rate runs one live trial of θ* per sampled context.
     """
     from ltamp_cli.backends import load_backend
-    from ltamp_cli.cli.threads import use_one_thread
+    from ltamp_cli.cli.conventions import emit
     from ltamp_cli.cli.train import heldout_from_records, read_records
     from ltamp_cli.learning.metrics import SkillEvaluator
     from ltamp_cli.learning.model_dir import load_model
+    from ltamp_cli.threads import use_one_thread
 
     use_one_thread()
     if trials < 0 or n_test < 1:
@@ -88,12 +87,7 @@ def evaluate_command(
             report["n_contexts"] = trials
     finally:
         physics.close()
-    if as_json:
-        typer.echo(json.dumps(report, indent=2))
-        return
-    for key, value in report.items():
-        shown = f"{value:.3f}" if isinstance(value, float) else value
-        typer.echo(f"{key}: {shown}")
+    emit(report, as_json)
 
 
 def _live_success_rate(
@@ -101,11 +95,14 @@ def _live_success_rate(
 ) -> float | None:
     if trials == 0:
         return None
+    import numpy as np  # lazy, like every command's heavy imports: keeps `ltamp --help` fast
+    from tqdm import tqdm
+
     rng = np.random.default_rng(seed)
     successes = 0
     for index in tqdm(
         range(trials),
-        disable=not sys.stderr.isatty(),
+        disable=not progress_enabled(),
         file=sys.stderr,
         desc=f"θ* trials {skill}",
         unit="trial",

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
@@ -22,13 +21,16 @@ def import_command(
     backend: Annotated[
         str, typer.Option("--backend", help="Backend whose skill defines the parameters.")
     ] = "synthetic",
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Convert recorded trials of SKILL into the trial format, skipping ones already in --out.
 
-    Columns: every context and control parameter (see `ltamp skills`), `score` or a measured
-    `fraction`, optional `valid` and `seed`.
+    Columns: every context and control parameter (see `ltamp skills`), `score`, optional
+    `valid` and `seed`. A backend that defines `score_from_fraction(skill, fraction)` (none
+    of the built-in ones does) also accepts a measured `fraction` column instead of `score`.
     """
     from ltamp_cli.backends import load_backend
+    from ltamp_cli.cli.conventions import emit
     from ltamp_cli.trials.importing import import_file
 
     if out.exists() and not out.is_file():
@@ -45,13 +47,5 @@ def import_command(
         summary = import_file(source, specs[skill], out, score_from_fraction)
     finally:
         physics.close()
-    typer.echo(
-        json.dumps(
-            {
-                "out": str(out),
-                "rows": summary.rows,
-                "added": summary.added,
-                "skipped_duplicates": summary.skipped,
-            }
-        )
-    )
+    emit({"out": str(out), "rows": summary.rows, "added": summary.added,
+          "skipped_duplicates": summary.skipped}, as_json)

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
+from ltamp_cli.cli.conventions import emit, progress_enabled
 from ltamp_cli.errors import InputError
 
 
@@ -61,6 +61,7 @@ def level_set_command(
         float | None, typer.Option("--beta", help="Use this μ/σ threshold instead.")
     ] = None,
     seed: Annotated[int, typer.Option("--seed", help="Seed of every random choice.")] = 0,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Draw MODEL_DIR's predicted level set over two controls, with its training trials.
 
@@ -70,12 +71,12 @@ def level_set_command(
 
     from ltamp_cli.cli.options import check_confidence_options
     from ltamp_cli.cli.sample import parse_context
-    from ltamp_cli.cli.threads import use_one_thread
     from ltamp_cli.learning.model import LevelSetModel
     from ltamp_cli.learning.model_dir import load_model
     from ltamp_cli.sampling.factory import make_sampler
     from ltamp_cli.sampling.level_set_plot import plot_level_set
     from ltamp_cli.sampling.superlevel import build_superlevel_set
+    from ltamp_cli.threads import use_one_thread
 
     use_one_thread()
     if out.suffix.lower() != ".png":
@@ -111,9 +112,13 @@ def level_set_command(
     success = model.gp.y_np > 0.0
     plot_level_set(superlevel, chosen, out, training_controls=train_controls,
                    training_success=success, samples=drawn)
-    typer.echo(f"{out}: {spec.name} level set over {spec.control.names[chosen[0]]}, "
-               f"{spec.control.names[chosen[1]]} (β = {superlevel.beta:.3f}, "
-               f"{len(train_controls)} trials, {len(drawn)} samples)")
+    summary = {"out": str(out), "skill": spec.name,
+               "dims": [spec.control.names[chosen[0]], spec.control.names[chosen[1]]],
+               "beta": float(superlevel.beta), "trials": len(train_controls),
+               "samples": len(drawn)}
+    emit(summary, as_json, lambda s: [
+        f"{out}: {spec.name} level set over {s['dims'][0]}, {s['dims'][1]} "
+        f"(β = {s['beta']:.3f}, {s['trials']} trials, {s['samples']} samples)"])
 
 
 def curves_command(
@@ -134,6 +139,7 @@ def curves_command(
     kernel: Annotated[str, typer.Option("--kernel", help="rbf, matern52 or mlp.")
                       ] = "matern52",
     seed: Annotated[int, typer.Option("--seed", help="Seed of the first run.")] = 0,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """F1 and success rate against the number of trials, every strategy on one figure.
 
@@ -162,8 +168,8 @@ def curves_command(
         title = f"{', '.join(sorted(skills))}: {len(runs)} run(s)"
     else:
         from ltamp_cli.backends import load_backend
-        from ltamp_cli.cli.threads import use_one_thread
         from ltamp_cli.learning.active import STRATEGIES
+        from ltamp_cli.threads import use_one_thread
 
         names = [name.strip() for name in (strategies or "").split(",") if name.strip()]
         unknown = [name for name in names if name not in STRATEGIES]
@@ -183,7 +189,7 @@ def curves_command(
             try:
                 rows = train_curves(backend, skill, names, budget=budget, seeds=seeds,
                                     eval_every=eval_every, init=init, kernel=kernel,
-                                    seed=seed, progress=sys.stderr.isatty())
+                                    seed=seed, progress=progress_enabled())
             except ValueError as error:
                 raise InputError(str(error)) from None
         finally:
@@ -194,4 +200,5 @@ def curves_command(
     except ValueError as error:
         raise InputError(f"plot curves: {error}") from None
     learners = sorted({str(row["learner"]) for row in rows})
-    typer.echo(f"{png}: learning curves of {', '.join(learners)} (data: {data})")
+    emit({"out": str(png), "data": str(data), "learners": learners}, as_json,
+         lambda _: [f"{png}: learning curves of {', '.join(learners)} (data: {data})"])

@@ -72,11 +72,11 @@ def sample_command(
     import numpy as np
 
     from ltamp_cli.cli.options import check_confidence_options
-    from ltamp_cli.cli.threads import use_one_thread
     from ltamp_cli.learning.model import LevelSetModel
     from ltamp_cli.learning.model_dir import load_model
     from ltamp_cli.sampling.factory import SAMPLER_NAMES, make_sampler
     from ltamp_cli.sampling.kernel_learning import load_kernel
+    from ltamp_cli.threads import use_one_thread
 
     use_one_thread()
     if sampler not in SAMPLER_NAMES:

@@ -7,8 +7,6 @@ from typing import Annotated, Any
 
 import typer
 
-from ltamp_cli.backends import BACKEND_FACTORIES, load_backend
-
 
 def register(app: typer.Typer) -> None:
     app.command(name="skills")(skills_command)
@@ -23,6 +21,8 @@ def _space(space: Any) -> list[dict[str, Any]]:
 
 def backend_listing(name: str) -> dict[str, Any]:
     """``{"name", "available", "skills" | "error"}`` for one backend (never raises)."""
+    from ltamp_cli.backends import load_backend
+
     try:
         backend = load_backend(name)
     except Exception as error:  # an unimplemented or broken backend is reported, not fatal
@@ -46,8 +46,13 @@ def backend_listing(name: str) -> dict[str, Any]:
 def skills_command(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")] = False,
 ) -> None:
-    """List every backend's skills: context and control parameters with their bounds."""
-    listings = [backend_listing(name) for name in BACKEND_FACTORIES]
+    """List every backend's skills: context and control parameters with their bounds.
+
+    Backends of installed plugins (entry points of group `ltamp.backends`) are listed too.
+    """
+    from ltamp_cli.backends import discover_backends
+
+    listings = [backend_listing(name) for name in discover_backends()]
     if as_json:
         typer.echo(json.dumps({"backends": listings}, indent=2))
         return

@@ -16,7 +16,9 @@ def register(app: typer.Typer) -> None:
 
 
 def solve_command(
-    problem: Annotated[Path, typer.Argument(help="Problem file (.yaml, or .pddl with --domain).")],
+    problem: Annotated[Path, typer.Argument(
+        help="Problem file (.yaml, or .pddl with --domain), or a built-in name such as "
+        "kitchen2d/coffee (see `ltamp problems`).")],
     algorithm: Annotated[str | None, typer.Option(
         help="adaptive | binding | focused | incremental (default: the problem's, else "
         "adaptive).")] = None,
@@ -46,10 +48,11 @@ def solve_command(
         "--render", help="With --backend: write the execution as a GIF.")] = None,
 ) -> None:
     """Solve PROBLEM; exit 0 when solved, 1 when infeasible or out of time, 2 on bad input."""
-    from ltamp_cli.cli.threads import use_one_thread
+    from ltamp_cli.cli.conventions import progress_line
     from ltamp_cli.planner.algorithms.common import PlannerConfig, StreamError
     from ltamp_cli.planner.api import solve
     from ltamp_cli.planner.problem import load_problem
+    from ltamp_cli.threads import use_one_thread
 
     loaded = load_problem(problem, domain)
     use_one_thread()  # after loading the bindings: learned streams bring torch and scipy
@@ -85,7 +88,8 @@ def solve_command(
         options["statistics_dir"] = str(default_statistics_dir())
     try:
         config = PlannerConfig(**options)
-        result = solve(loaded, config)
+        with progress_line(f"solving {loaded.name}"):
+            result = solve(loaded, config)
     except StreamError as error:
         raise InputError(f"{loaded.bindings_source}: {error}") from None
     except TypeError as error:
@@ -96,7 +100,9 @@ def solve_command(
     if backend is not None and result.solved:
         from ltamp_cli.backends.execution import execute_plan
 
-        report = execute_plan(backend, loaded, result, config.seed, render)
+        label = f"executing {len(result.plan or [])} actions on {backend}"
+        with progress_line(label + (f", rendering {render}" if render else "")):
+            report = execute_plan(backend, loaded, result, config.seed, render)
     if json_output:
         if report is None:
             print(result.to_json())

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated
 
@@ -19,11 +18,13 @@ def tell_command(
     valid: Annotated[
         bool, typer.Option("--valid/--invalid", help="Whether the trial could be run.")
     ] = True,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Record the pending trial's score in DIR/trials.jsonl, refit and save the model."""
-    from ltamp_cli.cli.threads import use_one_thread
+    from ltamp_cli.cli.conventions import emit
     from ltamp_cli.learning.ask_tell import tell
+    from ltamp_cli.threads import use_one_thread
 
     use_one_thread()
     record = tell(directory, score, valid)
-    typer.echo(json.dumps({"model": str(directory), "index": record.index, "score": score}))
+    emit({"model": str(directory), "index": record.index, "score": score}, as_json)

@@ -2,12 +2,9 @@
 
 from __future__ import annotations
 
-import json
-import sys
 from pathlib import Path
 from typing import Annotated, Any
 
-import numpy as np
 import typer
 
 from ltamp_cli.errors import InputError
@@ -19,6 +16,8 @@ def register(app: typer.Typer) -> None:
 
 def heldout_from_records(records: list[Any], skill: str) -> Any:
     """A :class:`~ltamp_cli.learning.metrics.HeldOutSet` from the trial records of ``skill``."""
+    import numpy as np
+
     from ltamp_cli.learning.metrics import HeldOutSet
     from ltamp_cli.trials.record import records_to_arrays
 
@@ -68,6 +67,7 @@ def train_command(
     ask: Annotated[
         bool, typer.Option("--ask", help="Propose the next trial (see `ltamp tell`), not run it.")
     ] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Learn SKILL's success constraint and save the model to --out.
 
@@ -75,11 +75,12 @@ def train_command(
     pool mode (--data) picks trials from recorded ones instead.
     """
     from ltamp_cli.backends import load_backend
-    from ltamp_cli.cli.threads import use_one_thread
+    from ltamp_cli.cli.conventions import emit, progress_enabled
     from ltamp_cli.learning.active import LearningConfig, learn_from_pool, learn_online
     from ltamp_cli.learning.confidence import beta_star
     from ltamp_cli.learning.curves import plot_curves
     from ltamp_cli.learning.metrics import SkillEvaluator
+    from ltamp_cli.threads import use_one_thread
     from ltamp_cli.trials.record import TrialDataset
 
     use_one_thread()
@@ -109,7 +110,7 @@ def train_command(
                 raise InputError("--ask proposes live trials: it cannot be used with --data")
             from ltamp_cli.learning.ask_tell import ask as ask_next
 
-            typer.echo(json.dumps(ask_next(physics, skill, config, out).to_json()))
+            emit(ask_next(physics, skill, config, out).to_json(), as_json)
             return
         evaluator = None
         if eval_every > 0:
@@ -120,7 +121,7 @@ def train_command(
                 evaluator = SkillEvaluator.synthetic(physics, skill, seed=seed + 12345)
             else:
                 raise InputError("--curve/--eval-every on a physical backend needs --test-data")
-        progress = sys.stderr.isatty()
+        progress = progress_enabled()
         if data is not None:
             pool = read_records(data, "--data")
             try:
@@ -167,4 +168,4 @@ def train_command(
     summary = {"model": str(out), "kind": result.model.kind, "n_trials": len(result.records)}
     if curve_rows:
         summary.update({k: curve_rows[-1][k] for k in ("f1", "success_rate")})
-    typer.echo(json.dumps(summary))
+    emit(summary, as_json)

@@ -38,6 +38,7 @@ from ltamp_cli.learning.gp import fit_gp
 from ltamp_cli.learning.kernels import KERNEL_NAMES
 from ltamp_cli.learning.metrics import Evaluation, SkillEvaluator
 from ltamp_cli.learning.model import LevelSetModel, PhysicalValidity, SkillModel
+from ltamp_cli.threads import limits_threads
 from ltamp_cli.trials.record import TrialDataset, TrialRecord
 
 STRATEGIES = ("lse", "lse2", "gp", "random", *SKLEARN_KINDS)
@@ -61,6 +62,7 @@ class LearningConfig:
     dense_refit: int = 40
     refit_every: int = 5
     pool_neighbourhood: float = 0.02
+    threads: int | None = 1  # thread-pool limit while learning (ltamp_cli.threads)
 
     def __post_init__(self) -> None:
         if self.strategy not in STRATEGIES:
@@ -170,6 +172,7 @@ class _Curve:
             self.points.append(self.evaluator.evaluate(learner.current(), n, self.success))
 
 
+@limits_threads
 def learn_online(
     backend: SkillBackend,
     skill: str,
@@ -184,6 +187,7 @@ def learn_online(
 
     Trials already in ``dataset`` (same skill) count toward the budget: a rerun resumes.
     ``evaluator`` with ``eval_every > 0`` records a learning curve every ``eval_every`` trials.
+    Thread pools are limited to ``config.threads`` meanwhile, as in ``ltamp train``.
     """
     spec = backend.skills()[skill]
     records = dataset.read() if dataset is not None and dataset.exists() else []
@@ -297,6 +301,7 @@ def _propose(
     return context, spec.control.sample_uniform(rng, 1)[0]
 
 
+@limits_threads
 def learn_from_pool(
     spec: SkillSpec,
     pool: Sequence[TrialRecord],
@@ -311,7 +316,8 @@ def learn_from_pool(
     Active strategies pick the remaining trial with the largest straddle ψ (``lse``: over the
     whole pool; ``lse2``: among the ``pool_neighbourhood`` fraction of remaining trials whose
     contexts are nearest to that of a uniformly drawn remaining trial); the others take the
-    pool in a random order. At most ``min(budget, len(pool))`` trials are used.
+    pool in a random order. At most ``min(budget, len(pool))`` trials are used. Thread pools
+    are limited to ``config.threads`` meanwhile, as in ``ltamp train``.
     """
     pool = [r for r in pool if r.skill == spec.name]
     if not pool:

@@ -23,7 +23,6 @@ from ltamp_cli.learning.kernels import (
     _ASIN_LIMIT,
     KERNEL_NAMES,
     CrossCovariance,
-    to_gpytorch,
     unit_kernel,
 )
 
@@ -301,7 +300,10 @@ class GaussianProcess:
         return summary
 
     def gpytorch_kernel(self):
-        """The equivalent gpytorch ``ScaleKernel`` (outputscale in scaled-score units)."""
+        """The equivalent gpytorch ``ScaleKernel`` (outputscale in scaled-score units); needs
+        the ``ltamp[gpytorch]`` extra."""
+        from ltamp_cli.learning.gpytorch_kernels import to_gpytorch
+
         return to_gpytorch(self.kernel, torch.as_tensor(self.kernel_params), self._outputscale)
 
     # ---- prediction --------------------------------------------------------------------------

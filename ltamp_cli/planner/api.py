@@ -21,6 +21,7 @@ from ltamp_cli.planner.problem import PlanningProblem
 from ltamp_cli.planner.result import PlanResult
 from ltamp_cli.planner.search.engine import SEARCH_ALGORITHMS
 from ltamp_cli.planner.statistics import StreamStatistics
+from ltamp_cli.threads import limited_threads
 
 COST_EPSILON = 1e-6
 # Generation-0 threshold while a solve runs (CPython's default is 700). Search and grounding
@@ -89,7 +90,7 @@ def solve(problem: PlanningProblem, config: PlannerConfig | None = None) -> Plan
                          f"{', '.join(SEARCH_ALGORITHMS)}")
     if config.max_time <= 0:
         raise InputError(f"max time must be positive, got {config.max_time}")
-    with _relaxed_gc():
+    with _relaxed_gc(), limited_threads(config.threads):
         return _solve(problem, config)
 
 

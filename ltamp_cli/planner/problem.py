@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from ltamp_cli.errors import InputError, SourceLocation
+from ltamp_cli.extras import missing_module_hint
 from ltamp_cli.planner.pddl.check import check_domain, check_problem, check_streams
 from ltamp_cli.planner.pddl.parse import (
     parse_domain,
@@ -52,6 +53,7 @@ from ltamp_cli.planner.pddl.syntax import (
     TypedName,
 )
 from ltamp_cli.planner.problem_schema import validate_problem_document
+from ltamp_cli.shipped import resolve_problem_path
 from ltamp_cli.yamlfile import YamlDocument
 
 BINDINGS_FACTORY = "make_streams"
@@ -112,18 +114,25 @@ def load_streams_factory(spec: str, base: Path, where: SourceLocation
             except Exception as error:
                 del sys.modules[module_name]
                 raise InputError(f"bindings file {spec!r} failed to import: "
-                                 f"{type(error).__name__}: {error}", where) from None
+                                 f"{type(error).__name__}: {error}"
+                                 f"{_install_hint(error)}", where) from None
     else:
         try:
             module = importlib.import_module(spec)
         except Exception as error:
             raise InputError(f"bindings module {spec!r} failed to import: "
-                             f"{type(error).__name__}: {error}", where) from None
+                             f"{type(error).__name__}: {error}"
+                             f"{_install_hint(error)}", where) from None
     factory = getattr(module, BINDINGS_FACTORY, None)
     if not callable(factory):
         raise InputError(f"bindings {spec!r} define no {BINDINGS_FACTORY}(world, rng) function",
                          where)
     return factory
+
+
+def _install_hint(error: Exception) -> str:
+    """How to install the optional dependency whose absence ``error`` reports ('' if none)."""
+    return missing_module_hint(error) if isinstance(error, ImportError) else ""
 
 
 _WORLD_PATH = re.compile(r"world((?:\s*[.:]\s*[\w\-]+)*)")
@@ -217,8 +226,12 @@ def _parse_goal(doc: YamlDocument) -> Formula:
 
 
 def load_problem(path: str | Path, domain_dir: str | Path | None = None) -> PlanningProblem:
-    """Load a YAML problem (or a PDDL problem file with ``domain_dir``) and check it."""
-    path = Path(path)
+    """Load a YAML problem (or a PDDL problem file with ``domain_dir``) and check it.
+
+    ``path`` may also be a built-in problem name such as ``kitchen2d/coffee`` (see
+    :func:`ltamp_cli.shipped.resolve_problem_path`).
+    """
+    path = resolve_problem_path(path)
     if path.suffix == ".pddl":
         if domain_dir is None:
             raise InputError("a PDDL problem file needs its domain folder (--domain DIR)",

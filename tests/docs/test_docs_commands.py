@@ -6,11 +6,14 @@ has ``file=PATH`` (e.g. ```` ```python file=my_domain/streams.py ````) are writt
 first, so a page can build a domain and then solve it. Commands run in document order (later
 ones use earlier outputs) as ``python -m ltamp_cli ...`` from a temporary directory where the
 repository's ``problems/``, ``domains/`` and ``models/`` are symlinked, so relative output
-paths in the docs land in that directory, never in the repository.
+paths in the docs land in that directory, never in the repository. A ``pip install PATH`` line
+(a page's plugin package) installs into ``.site/`` of that directory, without dependencies,
+and later commands see it on ``PYTHONPATH``.
 """
 
 from __future__ import annotations
 
+import os
 import re
 import shlex
 import subprocess
@@ -39,6 +42,7 @@ class DocCommand:
     line: int
     argv: tuple[str, ...]
     slow: bool
+    program: str = "ltamp"
 
     @property
     def where(self) -> str:
@@ -85,6 +89,9 @@ def parse_page(path: Path) -> DocPage:
             words = shlex.split(stripped, comments=True)
             commands.append(DocCommand(path.name, number, tuple(words[1:]),
                                        bool(SLOW_MARK.search(stripped))))
+        elif language == "bash" and stripped.startswith("pip install "):
+            words = shlex.split(stripped, comments=True)
+            commands.append(DocCommand(path.name, number, tuple(words[2:]), False, "pip"))
     assert language is None, f"docs/{path.name}: unclosed code fence"
     return DocPage(tuple(commands), files)
 
@@ -100,11 +107,20 @@ def prepare_workspace(root: Path, page: DocPage) -> Path:
 
 
 def run_command(command: DocCommand, workdir: Path, timeout_s: float) -> None:
-    completed = subprocess.run(
-        [sys.executable, "-m", "ltamp_cli", *command.argv], cwd=workdir, capture_output=True,
-        text=True, timeout=timeout_s, check=False)
+    site = workdir / ".site"
+    if command.program == "pip":
+        argv = [sys.executable, "-m", "pip", "install", "--quiet", "--no-deps",
+                "--no-build-isolation", "--no-index", "--disable-pip-version-check",
+                "--target", str(site), *command.argv]
+    else:
+        argv = [sys.executable, "-m", "ltamp_cli", *command.argv]
+    paths = [str(site), str(REPO_ROOT), os.environ.get("PYTHONPATH", "")]
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in paths if p))
+    completed = subprocess.run(argv, cwd=workdir, env=env, capture_output=True, text=True,
+                               timeout=timeout_s, check=False)
     assert completed.returncode == 0, (
-        f"{command.where}: `ltamp {shlex.join(command.argv)}` exited {completed.returncode}\n"
+        f"{command.where}: `{command.program} {shlex.join(command.argv)}` exited "
+        f"{completed.returncode}\n"
         f"{completed.stderr[-2000:]}")
     for output in command.outputs():
         produced = workdir / output

@@ -33,13 +33,14 @@ def test_cli_ask_tell_round_trip(capsys, synthetic, tmp_path):
     out = tmp_path / "robot"
     code, _, err = run(capsys, "tell", str(out), "--score", "1")
     assert code == 2 and "no pending trial" in err and "Traceback" not in err
-    code, stdout, _ = run(capsys, "train", "moving2d", "--ask", "--out", str(out), "--init", "3")
+    ask = ("train", "--json", "moving2d", "--ask", "--out", str(out), "--init", "3")
+    code, stdout, _ = run(capsys, *ask)
     assert code == 0
     first = json.loads(stdout)
     assert set(first["control"]) == {"x", "y"} and set(first["context"]) == {"phase"}
     assert (out / PENDING_FILE).is_file() and not (out / "trials.jsonl").exists()
     # Asking again before telling repeats the same pending trial.
-    _, again, _ = run(capsys, "train", "moving2d", "--ask", "--out", str(out), "--init", "3")
+    _, again, _ = run(capsys, *ask)
     assert json.loads(again) == first
     code, _, _ = run(capsys, "tell", str(out), "--score", "-0.5", "--invalid")
     assert code == 0 and not (out / PENDING_FILE).exists()

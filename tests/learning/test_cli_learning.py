@@ -36,6 +36,7 @@ def test_train_then_evaluate(capsys, tmp_path):
     code, stdout, _ = run(
         capsys,
         "train",
+        "--json",
         "moving2d",
         "--backend",
         "synthetic",
@@ -82,6 +83,7 @@ def test_train_pool_mode_from_a_dataset(capsys, tmp_path, synthetic):
     code, stdout, _ = run(
         capsys,
         "train",
+        "--json",
         "moving2d",
         "--strategy",
         "rf-r",

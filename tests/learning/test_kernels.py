@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
-import gpytorch
 import numpy as np
 import pytest
 import torch
 
-from ltamp_cli.learning.kernels import ArcsineKernel, arcsine, matern52, rbf, to_gpytorch
+from ltamp_cli.learning.kernels import arcsine, matern52, rbf
+
+gpytorch = pytest.importorskip("gpytorch")
+from ltamp_cli.learning.gpytorch_kernels import ArcsineKernel, to_gpytorch  # noqa: E402
 
 
 @pytest.fixture

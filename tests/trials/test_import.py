@@ -68,7 +68,7 @@ def test_cli_import_appends_once_and_skips_duplicates(capsys, synthetic, tmp_pat
     contexts, controls, scores = _true_rows(synthetic, 8, seed=2)
     _write_csv(tmp_path / "a.csv", contexts, controls, scores)
     out = tmp_path / "trials.jsonl"
-    argv = ("import", str(tmp_path / "a.csv"), "--skill", "moving2d", "--out", str(out))
+    argv = ("import", "--json", str(tmp_path / "a.csv"), "--skill", "moving2d", "--out", str(out))
     code, stdout, _ = run(capsys, *argv)
     assert code == 0 and json.loads(stdout)["added"] == 8
     code, stdout, _ = run(capsys, *argv)
@@ -88,8 +88,8 @@ def test_cli_import_appends_once_and_skips_duplicates(capsys, synthetic, tmp_pat
         np.concatenate([scores[:3], more_s]),
     )
     code, stdout, _ = run(
-        capsys, "import", str(tmp_path / "b.csv"), "--skill", "moving2d", "--out", str(out)
-    )
+        capsys, "import", "--json", str(tmp_path / "b.csv"), "--skill", "moving2d", "--out",
+        str(out))
     assert code == 0 and json.loads(stdout)["added"] == 5
     assert len(TrialDataset(out).read()) == 13
 
@@ -154,6 +154,7 @@ def test_train_data_learns_from_imported_trials(capsys, synthetic, tmp_path):
     code, stdout, _ = run(
         capsys,
         "train",
+        "--json",
         "moving2d",
         "--data",
         str(trials),

@@ -90,6 +90,7 @@ class PlannerConfig:
     skeleton: tuple[str, ...] = ()
     statistics_dir: str | None = None
     eager_cheap_streams: bool = False
+    threads: int | None = 1  # thread-pool limit while solving (ltamp_cli.threads)
 
 
 def external_domain(external: External) -> tuple[Atom, ...]:
