@@ -89,8 +89,23 @@ def solve(problem: PlanningProblem, config: PlannerConfig | None = None) -> Plan
                          f"{', '.join(SEARCH_ALGORITHMS)}")
     if config.max_time <= 0:
         raise InputError(f"max time must be positive, got {config.max_time}")
+    refuse_unsupported(problem, config.algorithm)
     with _relaxed_gc():
         return _solve(problem, config)
+
+
+def refuse_unsupported(problem: PlanningProblem, algorithm: str) -> None:
+    """Refuse, before solving, a construct the algorithm does not support (an answer of
+    "infeasible" would be wrong): ``:fluents`` streams need a state to be called in, which
+    only the algorithms that plan with optimistic stream outputs provide."""
+    if algorithm != "incremental" or problem.stream_file is None:
+        return
+    for stream in problem.stream_file.streams:
+        if stream.fluents:
+            raise InputError(
+                f"stream {stream.name!r} declares :fluents, which the incremental algorithm "
+                "does not support: use --algorithm adaptive, binding or focused",
+                stream.fluents_location)
 
 
 def _solve(problem: PlanningProblem, config: PlannerConfig) -> PlanResult:

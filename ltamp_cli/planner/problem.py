@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from ltamp_cli.errors import InputError, SourceLocation
-from ltamp_cli.planner.pddl.check import check_domain, check_problem, check_streams
+from ltamp_cli.planner.pddl.check import check_domain, check_problem, prepare_streams
 from ltamp_cli.planner.pddl.parse import (
     parse_domain,
     parse_formula,
@@ -88,7 +88,7 @@ def load_domain(folder: Path, where: SourceLocation) -> tuple[Domain, StreamFile
     stream_file = None
     if stream_path.exists():
         stream_file = parse_stream_file(read_text(stream_path, "stream file"), stream_path)
-        check_streams(stream_file, domain)
+        domain, stream_file = prepare_streams(stream_file, domain)
     return domain, stream_file
 
 

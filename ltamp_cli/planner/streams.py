@@ -74,24 +74,69 @@ class Binding:
 External = Stream | StreamFunction | ExternalPredicate
 
 
+def _always_true(*_inputs: Any, **_fluents: Any) -> bool:
+    return True
+
+
+# A rule is an always-true test evaluated as soon as its inputs exist (PDDLStream's rules).
+RULE_BINDING = Binding(_always_true, StreamInfo(p_success=1.0, overhead=0.0, eager=True))
+
+
+def _by_lower_name(provided: Mapping[str, Any], source: str) -> dict[str, Any]:
+    """``provided`` keyed by lower-cased names (PDDL names are case-insensitive)."""
+    lowered: dict[str, Any] = {}
+    originals: dict[str, str] = {}
+    for key, value in provided.items():
+        name = str(key).lower()
+        if name in lowered:
+            raise InputError(f"{source} binds both {originals[name]!r} and {key!r}: PDDL names "
+                             "are case-insensitive, so they name the same stream")
+        lowered[name] = value
+        originals[name] = str(key)
+    return lowered
+
+
 def resolve_bindings(stream_file: StreamFile, provided: Mapping[str, Any], source: str
                      ) -> dict[str, Binding]:
-    """Check that every declared stream has a binding; normalise to :class:`Binding`."""
+    """Check that every declared stream has a binding; normalise to :class:`Binding`.
+
+    Names match case-insensitively; rules need no binding. A missing or unusable binding is
+    reported at the declaration in the stream file.
+    """
+    lowered = _by_lower_name(provided, source)
     bindings: dict[str, Binding] = {}
-    for name in stream_file.external_names():
-        if name not in provided:
+    externals: list[External] = [*stream_file.streams, *stream_file.functions,
+                                 *stream_file.predicates]
+    for external in externals:
+        name = external.name
+        if isinstance(external, Stream) and external.is_rule:
+            bindings[name] = RULE_BINDING
+            continue
+        kind = ("stream" if isinstance(external, Stream) else
+                "function" if isinstance(external, StreamFunction) else "predicate")
+        if name not in lowered:
             raise InputError(
-                f"stream {name!r} has no Python binding: {source} provides "
-                f"{', '.join(sorted(provided)) or 'nothing'}"
-            )
-        value = provided[name]
+                f"{kind} {name!r} has no Python binding: {source} provides "
+                f"{', '.join(sorted(map(str, provided))) or 'nothing'}", external.location)
+        value = lowered[name]
         if isinstance(value, Binding):
             bindings[name] = value
         elif callable(value):
             bindings[name] = Binding(value)
         else:
-            raise InputError(f"the binding of stream {name!r} in {source} is not callable")
+            raise InputError(f"the binding of {kind} {name!r} in {source} is not callable",
+                             external.location)
     return bindings
+
+
+@dataclass(frozen=True)
+class WildOutput:
+    """One output of a stream plus facts it certifies beyond its ``:certified`` ones
+    (PDDLStream's wild streams). ``values``: the output tuple; ``facts``: tuples
+    ``(predicate, value, ...)`` whose arguments are Python values like the outputs'."""
+
+    values: tuple[Any, ...]
+    facts: tuple[tuple[Any, ...], ...] = ()
 
 
 # CPU time of a stream's calls is measured for its first CPU_TIMED_FIRST_CALLS calls and
@@ -132,6 +177,8 @@ class StreamInstance:
         self.exhausted = False
         self.disabled = False
         self.results: list[tuple[str, ...]] = []  # output object names, one tuple per output
+        # Facts certified beyond :certified (wild outputs), per output tuple (object names).
+        self.wild_facts: dict[tuple[str, ...], tuple[tuple[str, ...], ...]] = {}
         self._iterator: Iterator[Any] | None = None
         self.value: Any = None  # test / predicate truth or function value once evaluated
 
@@ -176,7 +223,11 @@ class StreamInstance:
     def _next(self, values: list[Any], objects: ObjectTable) -> list[tuple[str, ...]]:
         external = self.external
         if not isinstance(external, Stream) or external.is_test:
-            self.value = self.binding.function(*values)
+            if isinstance(external, Stream) and external.fluents:
+                self.value = self.binding.function(*values,
+                                                   fluents=self._fluent_values(objects))
+            else:
+                self.value = self.binding.function(*values)
             self.exhausted = True
             if isinstance(external, StreamFunction):
                 self.value = float(self.value)
@@ -185,9 +236,7 @@ class StreamInstance:
             return []
         if self._iterator is None:
             if external.fluents:
-                fluents = [(fact[0], *(objects.value(a) for a in fact[1:]))
-                           for fact in self.fluent_facts]
-                produced = self.binding.function(*values, fluents=fluents)
+                produced = self.binding.function(*values, fluents=self._fluent_values(objects))
             else:
                 produced = self.binding.function(*values)
             if produced is None:
@@ -208,6 +257,10 @@ class StreamInstance:
         batch = item if isinstance(item, list) else [item]
         return self._outputs(batch, objects)
 
+    def _fluent_values(self, objects: ObjectTable) -> list[tuple[Any, ...]]:
+        """The state facts of a ``:fluents`` stream, with Python values as arguments."""
+        return [(fact[0], *(objects.value(a) for a in fact[1:])) for fact in self.fluent_facts]
+
     def _outputs(self, batch: list[Any], objects: ObjectTable) -> list[tuple[str, ...]]:
         assert isinstance(self.external, Stream)
         arity = len(self.external.outputs)
@@ -215,15 +268,37 @@ class StreamInstance:
         for output in batch:
             if output is None:
                 continue
+            extra: tuple[tuple[Any, ...], ...] = ()
+            if isinstance(output, WildOutput):
+                output, extra = tuple(output.values), output.facts
             if not isinstance(output, tuple) or len(output) != arity:
                 raise InputError(
                     f"stream {self.name!r} must produce tuples of {arity} value(s) "
                     f"(one per output {' '.join(self.external.outputs)}), got {output!r:.80}"
                 )
-            outputs.append(tuple(
+            names = tuple(
                 objects.intern(value, variable[1:])
-                for value, variable in zip(output, self.external.outputs, strict=True)))
+                for value, variable in zip(output, self.external.outputs, strict=True))
+            if extra:
+                self.wild_facts[names] = self.wild_facts.get(names, ()) + tuple(
+                    _wild_fact(self.name, fact, objects) for fact in extra)
+            outputs.append(names)
         return outputs
+
+
+def _wild_fact(stream: str, fact: Any, objects: ObjectTable) -> tuple[str, ...]:
+    """A wild fact ``(predicate, value, ...)`` as a fact over object names."""
+    if not isinstance(fact, tuple | list) or not fact or not isinstance(fact[0], str):
+        raise InputError(f"stream {stream!r} certified {fact!r:.80}: a wild fact must be a "
+                         "tuple (predicate, value, ...)")
+    return (fact[0].lower(), *(_object_name(value, objects) for value in fact[1:]))
+
+
+def _object_name(value: Any, objects: ObjectTable) -> str:
+    """A symbolic object given by its name stays that object; other values are interned."""
+    if isinstance(value, str) and value in objects and objects.value(value) == value:
+        return value
+    return objects.intern(value)
 
 
 def seeded_rng(seed: int | None) -> np.random.Generator:

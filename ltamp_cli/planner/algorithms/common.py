@@ -264,17 +264,38 @@ class PlannerState:
                 for fact in facts:
                     self.add_fact(fact, result)
             return outputs
+        exogenous = self.exogenous_context(instance)
         for output in outputs:
             for name in output:
                 self.object_types.setdefault(name, OBJECT_TYPE)
             facts = certified_facts(instance, output)
+            wild = [f for f in instance.wild_facts.get(output, ()) if f not in facts]
+            for fact in wild:
+                for name in fact[1:]:
+                    self.object_types.setdefault(name, OBJECT_TYPE)
+            facts.extend(wild)
             result = StreamResult(instance.name, instance.inputs, output, tuple(facts))
             for fact in facts:
-                self.add_fact(fact, result)
+                added = self.add_fact(fact, result)
                 if isinstance(instance.external, Stream) and instance.external.fluents:
                     self.fluent_requirements.setdefault(fact, []).append(
                         (instance.external.fluents, instance.fluent_facts))
+                if exogenous is not None and (added or fact in self.fluent_requirements):
+                    self.fluent_requirements.setdefault(fact, []).append(exogenous)
+                elif exogenous is None and fact in self.fluent_requirements:
+                    # Also certified unconditionally now: it holds in every state.
+                    self.fluent_requirements[fact].append(((), ()))
         return outputs
+
+    def exogenous_context(self, instance: StreamInstance) -> Context | None:
+        """For a stream whose :domain has facts that actions change (PDDLStream's exogenous
+        streams), the context in which what it certifies holds: those facts, instantiated
+        with the instance's inputs. ``None`` for other streams."""
+        external = instance.external
+        if not isinstance(external, Stream) or not external.fluent_domain:
+            return None
+        mapping = dict(zip(external.inputs, instance.inputs, strict=True))
+        return ((), tuple(instantiate_atoms(external.fluent_domain, mapping)))
 
     def search(self, init: Iterable[Fact], objects: Mapping[str, str],
                function_values: Mapping[Fact, float], max_expansions: int | None = None,

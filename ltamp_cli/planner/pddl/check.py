@@ -7,6 +7,7 @@ problem as an :class:`~ltamp_cli.errors.InputError` at its source location.
 from __future__ import annotations
 
 from collections.abc import Iterable
+from dataclasses import replace
 
 from ltamp_cli.errors import InputError, SourceLocation
 from ltamp_cli.planner.pddl.syntax import (
@@ -18,6 +19,7 @@ from ltamp_cli.planner.pddl.syntax import (
     ForAllEffect,
     FunctionTerm,
     IncreaseCost,
+    PredicateSignature,
     Problem,
     StreamFile,
     TypedName,
@@ -176,7 +178,7 @@ def check_streams(streams: StreamFile, domain: Domain) -> None:
         if overlap:
             raise InputError(f"{what} uses {sorted(overlap)[0]} as both input and output",
                              stream.location)
-        for atom in stream.domain:
+        for atom in (*stream.domain, *stream.fluent_domain):
             _check_atom(atom, arities, set(stream.inputs), constants, f"the :domain of {what}")
         for atom in stream.certified:
             _check_atom(atom, arities, set(stream.inputs) | set(stream.outputs), constants,
@@ -206,3 +208,98 @@ def check_streams(streams: StreamFile, domain: Domain) -> None:
         for atom in predicate.domain:
             _check_atom(atom, arities, set(predicate.head.args), constants,
                         f"the domain of predicate {predicate.name!r}")
+
+
+def _stream_file_atoms(streams: StreamFile) -> list[Atom]:
+    """Every atom written in a stream file (domains, certified facts, predicate heads)."""
+    atoms: list[Atom] = []
+    for stream in streams.streams:
+        atoms.extend((*stream.domain, *stream.fluent_domain, *stream.certified))
+    for function in streams.functions:
+        atoms.extend(function.domain)
+    for predicate in streams.predicates:
+        atoms.extend((predicate.head, *predicate.domain))
+    return atoms
+
+
+def declare_stream_predicates(domain: Domain, streams: StreamFile) -> Domain:
+    """``domain`` plus the predicates that only the stream file uses (PDDLStream accepts
+    predicates that appear only in stream files and ``init``); their arity is that of their
+    first use and must be the same everywhere."""
+    known = domain.predicate_map()
+    added: dict[str, PredicateSignature] = {}
+    for atom in _stream_file_atoms(streams):
+        if atom.predicate == EQUALITY or atom.predicate in known:
+            continue
+        first = added.get(atom.predicate)
+        if first is None:
+            parameters = tuple(TypedName(f"?x{i}") for i in range(len(atom.args)))
+            added[atom.predicate] = PredicateSignature(atom.predicate, parameters,
+                                                       atom.location)
+        elif first.arity != len(atom.args):
+            raise InputError(
+                f"predicate {atom.predicate!r} takes {first.arity} argument(s) where it is "
+                f"first used ({first.location}), got {len(atom.args)}", atom.location)
+    if not added:
+        return domain
+    return replace(domain, predicates=(*domain.predicates, *added.values()))
+
+
+def fluent_predicates(domain: Domain) -> frozenset[str]:
+    """Predicates whose facts actions change (any add or delete effect) and derived ones."""
+    changed = {atom.predicate for action in domain.actions
+               for atom, _ in effect_atoms(action.effect)}
+    return frozenset(changed | domain.derived_predicates())
+
+
+def _split_static(atoms: tuple[Atom, ...], inputs: tuple[str, ...], fluent: frozenset[str],
+                  what: str, location: SourceLocation) -> tuple[tuple[Atom, ...], tuple[Atom, ...]]:
+    """(static atoms, atoms of fluent predicates); every input must be in a static one."""
+    static = tuple(a for a in atoms if a.predicate not in fluent)
+    changing = tuple(a for a in atoms if a.predicate in fluent)
+    if changing:
+        covered = {arg for atom in static for arg in atom.args}
+        for variable in inputs:
+            if variable not in covered:
+                raise InputError(
+                    f"input {variable} of {what} appears only in :domain facts that actions "
+                    f"change ({', '.join(str(a) for a in changing)}): no algorithm supports "
+                    "this; give it a :domain fact that no action changes", location)
+    return static, changing
+
+
+def prepare_streams(streams: StreamFile, domain: Domain) -> tuple[Domain, StreamFile]:
+    """Read a stream file as PDDLStream does, then check it against the domain.
+
+    * predicates used only in the stream file (and ``init``) are declared in the domain;
+    * ``:function`` declarations the domain does not declare in ``:functions`` are dropped
+      (no action can use them; PDDLStream ignores them too);
+    * :domain facts of predicates that actions change (PDDLStream's exogenous streams) move
+      to ``Stream.fluent_domain``: inputs come from the static facts, and what the stream
+      certifies holds only in states where those facts hold. In a ``:function`` or
+      ``:predicate`` domain such facts are dropped (the actions that use them check them).
+    """
+    domain = declare_stream_predicates(domain, streams)
+    fluent = fluent_predicates(domain)
+    declared_functions = {signature.name for signature in domain.functions}
+    prepared_streams = []
+    for stream in streams.streams:
+        static, changing = _split_static(stream.domain, stream.inputs, fluent,
+                                         f"stream {stream.name!r}", stream.location)
+        prepared_streams.append(replace(stream, domain=static, fluent_domain=changing))
+    functions = []
+    for function in streams.functions:
+        if function.name not in declared_functions:
+            continue
+        static, _ = _split_static(function.domain, function.head.args, fluent,
+                                  f"function {function.name!r}", function.location)
+        functions.append(replace(function, domain=static))
+    predicates = []
+    for predicate in streams.predicates:
+        static, _ = _split_static(predicate.domain, predicate.head.args, fluent,
+                                  f"predicate {predicate.name!r}", predicate.location)
+        predicates.append(replace(predicate, domain=static))
+    prepared = replace(streams, streams=tuple(prepared_streams), functions=tuple(functions),
+                       predicates=tuple(predicates))
+    check_streams(prepared, domain)
+    return domain, prepared
