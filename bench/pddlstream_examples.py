@@ -43,6 +43,8 @@ from ltamp_cli.planner.api import solve as plan
 REPO = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = REPO / "bench" / "results" / "pddlstream_examples.json"
 SKIPPED_DIRS = ("retired", "todo", "pybullet")
+# PDDLStream's solvers: whatever algorithm an example calls, the bench solves with adaptive.
+SOLVERS = ("solve", "solve_adaptive", "solve_binding", "solve_focused", "solve_incremental")
 
 
 class Recorder:
@@ -70,22 +72,47 @@ class Recorder:
                       plan=[str(step) for step in result.plan or []])
         return to_solution(result)
 
+    def solve_from_pddl(self, domain_pddl: str, problem_pddl: str, **_: Any) -> Any:
+        start = time.perf_counter()
+        record: dict[str, Any] = {"loaded": False, "solved": False}
+        self.runs.append(record)
+        found, cost = api.solve_from_pddl(domain_pddl, problem_pddl, max_time=self.max_time)
+        record.update(loaded=True, load_s=0.0, solved=found is not None,
+                      solve_s=time.perf_counter() - start, cost=cost,
+                      plan=[str(step) for step in found or []])
+        return found, cost
+
+
+class Unsupported:
+    """Stands for a ``pddlstream`` name that neither the API nor the checkout's helper
+    modules provide (visualisation, FD internals, ...): importing it works, using it raises,
+    so an example fails only if it really needs it before ``solve`` returns."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        raise NotImplementedError(f"{self.name} is not part of ltamp_cli.pddlstream")
+
+    def __repr__(self) -> str:
+        return f"<unsupported {self.name}>"
+
 
 class PddlstreamRedirect(importlib.abc.MetaPathFinder, importlib.abc.Loader):
     """Serves ``pddlstream`` and every ``pddlstream.*`` module as a view of the API."""
 
-    def __init__(self, recorder: Recorder, helpers: types.ModuleType | None,
-                 checkout: Path) -> None:
+    def __init__(self, recorder: Recorder, checkout: Path) -> None:
         self.recorder = recorder
-        self.helpers = helpers
         self.checkout = checkout
+        self.helpers: list[types.ModuleType] = []
+        self.unsupported: set[str] = set()
 
     def find_spec(self, fullname: str, path: Sequence[str] | None, target: Any = None
                   ) -> importlib.machinery.ModuleSpec | None:
         if fullname != "pddlstream" and not fullname.startswith("pddlstream."):
             return None
-        # Only the checkout's real modules: ``from pddlstream.x import NAME`` must fail
-        # for a NAME the API lacks rather than import a submodule called NAME.
+        # Only the checkout's real modules: ``from pddlstream.x import NAME`` must not
+        # import a submodule called NAME.
         where = self.checkout.joinpath(*fullname.split("."))
         if not (where.is_dir() or where.with_suffix(".py").is_file()):
             return None
@@ -94,16 +121,22 @@ class PddlstreamRedirect(importlib.abc.MetaPathFinder, importlib.abc.Loader):
     def create_module(self, spec: importlib.machinery.ModuleSpec) -> types.ModuleType:
         module = types.ModuleType(spec.name)
         module.__path__ = []  # a package: its submodules are served here too
-        recorder, helpers = self.recorder, self.helpers
+        redirect = self
 
         def lookup(name: str) -> Any:
-            if name == "solve":
-                return recorder.solve
+            if name.startswith("__"):
+                raise AttributeError(name)
+            if name in SOLVERS:
+                return redirect.recorder.solve
+            if name == "solve_from_pddl":
+                return redirect.recorder.solve_from_pddl
             if hasattr(api, name):
                 return getattr(api, name)
-            if helpers is not None and hasattr(helpers, name) and not name.startswith("_"):
-                return getattr(helpers, name)
-            raise AttributeError(f"{spec.name}.{name} is not in ltamp_cli.pddlstream")
+            for helpers in redirect.helpers:
+                if hasattr(helpers, name) and not name.startswith("_"):
+                    return getattr(helpers, name)
+            redirect.unsupported.add(f"{spec.name}.{name}")
+            return Unsupported(f"{spec.name}.{name}")
 
         module.__getattr__ = lookup  # type: ignore[method-assign]
         return module
@@ -111,19 +144,21 @@ class PddlstreamRedirect(importlib.abc.MetaPathFinder, importlib.abc.Loader):
     def exec_module(self, module: types.ModuleType) -> None:
         return None
 
-
-def load_helpers(checkout: Path) -> types.ModuleType | None:
-    """The checkout's ``pddlstream/utils.py`` (general helpers) under a private name."""
-    path = checkout / "pddlstream" / "utils.py"
-    spec = importlib.util.spec_from_file_location("_pddlstream_checkout_utils", path)
-    if spec is None or spec.loader is None:
-        return None
-    module = importlib.util.module_from_spec(spec)
-    try:
-        spec.loader.exec_module(module)
-    except Exception:
-        return None
-    return module
+    def load_helpers(self) -> None:
+        """The checkout's general helper modules (tuple/formula utilities, no planner)."""
+        for relative in ("pddlstream/utils.py", "pddlstream/language/constants.py"):
+            path = self.checkout / relative
+            name = "_pddlstream_checkout_" + path.stem
+            spec = importlib.util.spec_from_file_location(name, path)
+            if spec is None or spec.loader is None:
+                continue
+            module = importlib.util.module_from_spec(spec)
+            try:
+                spec.loader.exec_module(module)
+            except Exception as error:  # a helper module that does not load is left out
+                print(f"not using {relative}: {type(error).__name__}: {error}")
+                continue
+            self.helpers.append(module)
 
 
 def example_scripts(checkout: Path) -> list[Path]:
@@ -189,7 +224,9 @@ def main() -> int:
         print(f"no PDDLStream checkout at {checkout} (no examples/ folder): skipped")
         return 0
     recorder = Recorder(args.max_time)
-    sys.meta_path.insert(0, PddlstreamRedirect(recorder, load_helpers(checkout), checkout))
+    redirect = PddlstreamRedirect(recorder, checkout)
+    sys.meta_path.insert(0, redirect)
+    redirect.load_helpers()
     sys.path.insert(0, str(checkout))
     only = [o for o in args.only.split(",") if o]
     rows = []
@@ -197,8 +234,10 @@ def main() -> int:
         relative = str(path.relative_to(checkout / "examples"))
         if only and not any(relative.startswith(prefix) for prefix in only):
             continue
+        redirect.unsupported.clear()
         rows.append(run_example(checkout, path, recorder))
         row = rows[-1]
+        row["unsupported_names"] = sorted(redirect.unsupported)
         print(f"{row['example']:<40} loaded={row['loaded']!s:<5} solved={row['solved']!s:<5} "
               f"load={row.get('load_s', float('nan')):.3f}s "
               f"solve={row.get('solve_s', float('nan')):.3f}s {row.get('error', '')[:90]}",

@@ -108,10 +108,9 @@ class StreamInfo:
 
 @dataclass(frozen=True)
 class FunctionInfo:
-    """Hints for a ``:function``: ``opt_fn`` gives an optimistic lower bound of its value
-    (called on the inputs when they are known values; ltamp uses 0 otherwise), ``p_success``
-    and ``overhead`` as for streams. ``eager``/``verbose``/``effort`` are accepted and
-    ignored."""
+    """Hints for a ``:function``: ``p_success`` and ``overhead`` as for streams. ``opt_fn``
+    (PDDLStream's optimistic value), ``eager``, ``verbose``, ``effort`` and ``defer_fn`` are
+    accepted and ignored: ltamp's optimistic value of a function is 0."""
 
     opt_fn: Callable[..., Any] | None = None
     eager: bool = False
@@ -119,11 +118,42 @@ class FunctionInfo:
     p_success: float | None = None
     overhead: float | None = None
     effort: float | None = None
+    defer_fn: Callable[..., Any] | None = None
 
 
 PredicateInfo = FunctionInfo
 
-__all__ = ["FunctionInfo", "PredicateInfo", "StreamInfo", "empty_gen", "empty_test",
-           "fn_from_constant", "from_constant", "from_fn", "from_gen", "from_gen_fn",
-           "from_list_fn", "from_list_gen_fn", "from_sampler", "from_test", "negate_test",
-           "universe_test"]
+
+
+def outputs_from_boolean(boolean: Any) -> tuple[()] | None:
+    """A test's truth as one empty output tuple (true) or no output (false)."""
+    return () if boolean else None
+
+
+# PDDLStream's deferral policies (``StreamInfo(defer_fn=...)``). ltamp never defers a stream
+# call past planning, so these are accepted and have no effect.
+def never_defer(*_args: Any, **_kwargs: Any) -> bool:
+    return False
+
+
+def defer_unique(*_args: Any, **_kwargs: Any) -> bool:
+    return False
+
+
+def defer_shared(*_args: Any, **_kwargs: Any) -> bool:
+    return False
+
+
+def get_defer_all_unbound(inputs: str = "") -> Callable[..., bool]:
+    return never_defer
+
+
+def get_defer_any_unbound() -> Callable[..., bool]:
+    return never_defer
+
+
+__all__ = ["FunctionInfo", "PredicateInfo", "StreamInfo", "defer_shared", "defer_unique",
+           "empty_gen", "empty_test", "fn_from_constant", "from_constant", "from_fn", "from_gen",
+           "from_gen_fn", "from_list_fn", "from_list_gen_fn", "from_sampler", "from_test",
+           "get_defer_all_unbound", "get_defer_any_unbound", "negate_test", "never_defer",
+           "outputs_from_boolean", "universe_test"]

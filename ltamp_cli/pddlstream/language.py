@@ -11,9 +11,10 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, NamedTuple
 
-from ltamp_cli.planner.streams import WildOutput
+from ltamp_cli.errors import InputError
+from ltamp_cli.planner.streams import WildOutput as PlannerWildOutput
 
-Fact = tuple[Any, ...]
+FactTuple = tuple[Any, ...]
 Formula = tuple[Any, ...]
 
 
@@ -46,7 +47,7 @@ class PDDLProblem(NamedTuple):
     constant_map: Mapping[str, Any]
     stream_pddl: str | Sequence[str] | None
     stream_map: Mapping[str, Callable[..., Any]]
-    init: Iterable[Fact]
+    init: Iterable[FactTuple]
     goal: Formula
 
 
@@ -103,9 +104,53 @@ def ForAll(parameters: Sequence[str], formula: Any) -> Formula:
     return ("forall", tuple(parameters), formula)
 
 
+def WildOutput(values: Iterable[Any] = (), facts: Iterable[FactTuple] = (),
+               actions: Iterable[Any] = (), enumerated: bool = False,
+               replan: bool = False) -> PlannerWildOutput:
+    """What one call of a stream yields (PDDLStream's ``WildOutput``): a list of output
+    ``values`` plus ``facts`` it certifies beyond its ``:certified`` ones; ``enumerated``:
+    nothing more for these inputs. ``actions`` are not supported; ``replan`` is ignored."""
+    if list(actions):
+        raise InputError("WildOutput(actions=...) is not supported")
+    return PlannerWildOutput(tuple(tuple(v) for v in values), tuple(tuple(f) for f in facts),
+                             enumerated)
+
+
+def Fact(predicate: str, args: Iterable[Any]) -> Fact:
+    """``(predicate, *args)``."""
+    return (predicate, *args)
+
+
+class PartialInputs(NamedTuple):
+    """PDDLStream's optimistic-output policy for ``StreamInfo(opt_gen_fn=...)``; accepted
+    and ignored (ltamp's optimistic outputs are always placeholders)."""
+
+    inputs: str = ""
+    unique: bool = False
+    test: Callable[..., Any] | None = None
+
+
 def Output(*values: Any) -> tuple[Any, ...]:
     """One output tuple of a stream (PDDLStream's ``Output``)."""
     return values
+
+
+WILD = "*"
+# ``stream_map=DEBUG``: every stream yields one new placeholder value per input tuple;
+# ``SHARED_DEBUG``: one placeholder per stream and output, whatever the inputs.
+DEBUG = "debug"
+SHARED_DEBUG = "shared_debug"
+
+
+class PlanConstraints(NamedTuple):
+    """``skeletons``: at most one skeleton, a list of ``(action name, args)`` whose args are
+    values, ``?variables`` or :data:`WILD`; ``exact``: the plan is exactly the skeleton (else
+    other actions may come between). ``hint`` and ``max_cost`` are accepted and ignored."""
+
+    skeletons: Sequence[Sequence[tuple[str, Sequence[Any]]]] | None = None
+    exact: bool = True
+    hint: bool = False
+    max_cost: float = float("inf")
 
 
 def print_solution(solution: Solution) -> None:
@@ -119,6 +164,7 @@ def print_solution(solution: Solution) -> None:
         print(f"{index}) {action.name} {' '.join(map(str, action.args))}")
 
 
-__all__ = ["Action", "And", "Certificate", "Equal", "Exists", "ForAll", "Imply", "Not",
-           "Or", "Output", "PDDLProblem", "PDDLText", "Solution", "WildOutput",
-           "get_file_path", "print_solution", "read"]
+__all__ = ["DEBUG", "SHARED_DEBUG", "WILD", "Action", "And", "Certificate", "Equal", "Exists",
+           "Fact", "ForAll", "Imply", "Not", "Or", "Output", "PDDLProblem", "PDDLText",
+           "PartialInputs", "PlanConstraints",
+           "Solution", "WildOutput", "get_file_path", "print_solution", "read"]

@@ -9,14 +9,14 @@ unhashable values by identity). A string that is a valid PDDL name becomes the o
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from ltamp_cli.errors import InputError
-from ltamp_cli.pddlstream.generator import FunctionInfo, StreamInfo
-from ltamp_cli.pddlstream.language import PDDLProblem
+from ltamp_cli.pddlstream.generator import FunctionInfo, StreamInfo, fn_from_constant
+from ltamp_cli.pddlstream.language import DEBUG, SHARED_DEBUG, PDDLProblem
 from ltamp_cli.planner.objects import ObjectTable
 from ltamp_cli.planner.pddl import syntax
 from ltamp_cli.planner.pddl.check import check_domain, check_problem, prepare_streams
@@ -32,7 +32,7 @@ from ltamp_cli.planner.pddl.syntax import (
     TypedName,
 )
 from ltamp_cli.planner.problem import PlanningProblem
-from ltamp_cli.planner.streams import Binding, External, Stream
+from ltamp_cli.planner.streams import Binding, External, Stream, WildOutput
 from ltamp_cli.planner.streams import StreamInfo as PlannerStreamInfo
 
 Info = StreamInfo | FunctionInfo
@@ -198,8 +198,10 @@ def to_planning_problem(problem: PDDLProblem, stream_info: Mapping[str, Info] | 
                             goal_formula)
     check_problem(parsed, domain)
     if isinstance(stream_map, str):
-        raise InputError(f"stream_map {stream_map!r} is not supported: bind every stream to "
-                         "a Python procedure")
+        if stream_map.lower() not in (DEBUG, SHARED_DEBUG):
+            raise InputError(f"stream_map {stream_map!r}: expected a mapping of stream name "
+                             "to procedure, DEBUG or SHARED_DEBUG")
+        stream_map = debug_stream_map(stream_file, shared=stream_map.lower() == SHARED_DEBUG)
     factory = None
     if stream_file is not None:
         factory = _bindings_factory(stream_file, _lowered(stream_map, "stream_map"),
@@ -209,6 +211,48 @@ def to_planning_problem(problem: PDDLProblem, stream_info: Mapping[str, Info] | 
         "stream_map", {}, {n: (names.types[n], names.table.value(n))
                            for n in names.table.names()},
         tuple(atoms), tuple(values), goal_formula)
+
+
+@dataclass(frozen=True)
+class DebugValue:
+    """A placeholder output of a stream run in DEBUG mode: which stream, which output and
+    (unless shared) which inputs it stands for."""
+
+    stream: str
+    output: str
+    inputs: tuple[Any, ...] | None
+
+    def __repr__(self) -> str:
+        return f"#{self.output[1:]}<{self.stream}>"
+
+
+def debug_stream_map(stream_file: StreamFile | None, shared: bool) -> dict[str, Any]:
+    """Procedures for PDDLStream's DEBUG / SHARED_DEBUG modes: every stream yields one
+    placeholder output per input tuple (shared: per stream), tests and predicates are true,
+    functions cost 1."""
+    procedures: dict[str, Any] = {}
+    for stream in stream_file.streams if stream_file is not None else ():
+        procedures[stream.name] = _debug_stream(stream, shared)
+    for function in stream_file.functions if stream_file is not None else ():
+        procedures[function.name] = fn_from_constant(1.0)
+    for predicate in stream_file.predicates if stream_file is not None else ():
+        procedures[predicate.name] = fn_from_constant(True)
+    return procedures
+
+
+def _debug_stream(stream: Stream, shared: bool) -> Callable[..., Any]:
+    def placeholder(*inputs: Any, **_fluents: Any) -> Any:
+        key = None if shared else tuple(_hashable(v) for v in inputs)
+        return iter([[tuple(DebugValue(stream.name, out, key) for out in stream.outputs)]])
+    return placeholder
+
+
+def _hashable(value: Any) -> Any:
+    try:
+        hash(value)
+    except TypeError:
+        return id(value)
+    return value
 
 
 def _bindings_factory(stream_file: StreamFile, stream_map: dict[str, Any],
@@ -257,18 +301,23 @@ def _adapt(external: External, procedure: Callable[..., Any]) -> Callable[..., A
             return (_batch(batch) for batch in produced)
         return generate
 
-    def test(*inputs: Any, **kwargs: Any) -> bool:
+    def test(*inputs: Any, **kwargs: Any) -> bool | WildOutput:
         produced = procedure(*inputs, **kwargs)
         if produced is None or isinstance(produced, bool | np.bool_ | int | float):
             return bool(produced)
+        if isinstance(produced, WildOutput):
+            return produced
         first = next(iter(produced), [])
-        return bool(first)
+        return first if isinstance(first, WildOutput) else bool(first)
     return test
 
 
-def _batch(batch: Any) -> list[Any]:
-    """One item of a list generator as a list of output tuples (lists become tuples)."""
+def _batch(batch: Any) -> list[Any] | WildOutput:
+    """One item of a list generator as a list of output tuples (lists become tuples); a
+    :class:`WildOutput` stays one."""
     if batch is None:
         return []
+    if isinstance(batch, WildOutput):
+        return batch
     items = [batch] if isinstance(batch, tuple) else list(batch)
     return [tuple(item) if isinstance(item, list) else item for item in items if item is not None]

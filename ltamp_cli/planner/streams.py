@@ -131,12 +131,17 @@ def resolve_bindings(stream_file: StreamFile, provided: Mapping[str, Any], sourc
 
 @dataclass(frozen=True)
 class WildOutput:
-    """One output of a stream plus facts it certifies beyond its ``:certified`` ones
-    (PDDLStream's wild streams). ``values``: the output tuple; ``facts``: tuples
-    ``(predicate, value, ...)`` whose arguments are Python values like the outputs'."""
+    """What one call of a stream produced, including facts it certifies beyond its
+    ``:certified`` ones (PDDLStream's wild streams).
 
-    values: tuple[Any, ...]
+    ``values``: output tuples (for a test: ``[()]`` when true); ``facts``: tuples
+    ``(predicate, value, ...)`` whose arguments are Python values like the outputs';
+    ``enumerated``: the stream has nothing more for these inputs.
+    """
+
+    values: tuple[tuple[Any, ...], ...] = ()
     facts: tuple[tuple[Any, ...], ...] = ()
+    enumerated: bool = False
 
 
 # CPU time of a stream's calls is measured for its first CPU_TIMED_FIRST_CALLS calls and
@@ -177,8 +182,9 @@ class StreamInstance:
         self.exhausted = False
         self.disabled = False
         self.results: list[tuple[str, ...]] = []  # output object names, one tuple per output
-        # Facts certified beyond :certified (wild outputs), per output tuple (object names).
-        self.wild_facts: dict[tuple[str, ...], tuple[tuple[str, ...], ...]] = {}
+        # Facts certified beyond :certified by the calls so far (wild outputs; object
+        # names), until the planner takes them (:meth:`take_wild_facts`).
+        self.wild_facts: list[tuple[str, ...]] = []
         self._iterator: Iterator[Any] | None = None
         self.value: Any = None  # test / predicate truth or function value once evaluated
 
@@ -228,6 +234,9 @@ class StreamInstance:
                                                    fluents=self._fluent_values(objects))
             else:
                 self.value = self.binding.function(*values)
+            if isinstance(self.value, WildOutput):
+                self._record_wild(self.value, objects)
+                self.value = bool(self.value.values)
             self.exhausted = True
             if isinstance(external, StreamFunction):
                 self.value = float(self.value)
@@ -254,8 +263,20 @@ class StreamInstance:
         except StopIteration:
             self.exhausted = True
             return []
+        if isinstance(item, WildOutput):
+            self._record_wild(item, objects)
+            self.exhausted = self.exhausted or item.enumerated
+            return self._outputs(list(item.values), objects)
         batch = item if isinstance(item, list) else [item]
         return self._outputs(batch, objects)
+
+    def _record_wild(self, produced: WildOutput, objects: ObjectTable) -> None:
+        self.wild_facts.extend(_wild_fact(self.name, fact, objects) for fact in produced.facts)
+
+    def take_wild_facts(self) -> list[tuple[str, ...]]:
+        """The wild facts certified since the last time they were taken."""
+        taken, self.wild_facts = self.wild_facts, []
+        return taken
 
     def _fluent_values(self, objects: ObjectTable) -> list[tuple[Any, ...]]:
         """The state facts of a ``:fluents`` stream, with Python values as arguments."""
@@ -268,21 +289,14 @@ class StreamInstance:
         for output in batch:
             if output is None:
                 continue
-            extra: tuple[tuple[Any, ...], ...] = ()
-            if isinstance(output, WildOutput):
-                output, extra = tuple(output.values), output.facts
             if not isinstance(output, tuple) or len(output) != arity:
                 raise InputError(
                     f"stream {self.name!r} must produce tuples of {arity} value(s) "
                     f"(one per output {' '.join(self.external.outputs)}), got {output!r:.80}"
                 )
-            names = tuple(
+            outputs.append(tuple(
                 objects.intern(value, variable[1:])
-                for value, variable in zip(output, self.external.outputs, strict=True))
-            if extra:
-                self.wild_facts[names] = self.wild_facts.get(names, ()) + tuple(
-                    _wild_fact(self.name, fact, objects) for fact in extra)
-            outputs.append(names)
+                for value, variable in zip(output, self.external.outputs, strict=True)))
         return outputs
 
 

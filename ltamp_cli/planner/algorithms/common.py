@@ -251,6 +251,7 @@ class PlannerState:
             raise StreamError(instance, error) from error
         finally:
             self.sampling_time += time.perf_counter() - start
+        self.add_wild_facts(instance)
         external = instance.external
         if isinstance(external, StreamFunction):
             mapping = dict(zip(external.head.args, instance.inputs, strict=True))
@@ -269,11 +270,6 @@ class PlannerState:
             for name in output:
                 self.object_types.setdefault(name, OBJECT_TYPE)
             facts = certified_facts(instance, output)
-            wild = [f for f in instance.wild_facts.get(output, ()) if f not in facts]
-            for fact in wild:
-                for name in fact[1:]:
-                    self.object_types.setdefault(name, OBJECT_TYPE)
-            facts.extend(wild)
             result = StreamResult(instance.name, instance.inputs, output, tuple(facts))
             for fact in facts:
                 added = self.add_fact(fact, result)
@@ -286,6 +282,17 @@ class PlannerState:
                     # Also certified unconditionally now: it holds in every state.
                     self.fluent_requirements[fact].append(((), ()))
         return outputs
+
+    def add_wild_facts(self, instance: StreamInstance) -> None:
+        """Facts a call certified beyond the stream's :certified ones (wild outputs)."""
+        wild = instance.take_wild_facts()
+        if not wild:
+            return
+        result = StreamResult(instance.name, instance.inputs, (), tuple(wild))
+        for fact in wild:
+            for name in fact[1:]:
+                self.object_types.setdefault(name, OBJECT_TYPE)
+            self.add_fact(fact, result)
 
     def exogenous_context(self, instance: StreamInstance) -> Context | None:
         """For a stream whose :domain has facts that actions change (PDDLStream's exogenous

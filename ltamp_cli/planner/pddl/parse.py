@@ -420,9 +420,9 @@ def _parse_stream(node: SList) -> Stream:
         if ":outputs" in sections else ()
     domain = _conjunction_atoms(sections[":domain"][0], f"the :domain of {name!r}") \
         if ":domain" in sections else ()
-    if ":certified" not in sections:
-        raise InputError(f"stream {name!r} has no :certified facts", node.location)
-    certified = _conjunction_atoms(sections[":certified"][0], f"the :certified of {name!r}")
+    # No :certified: a stream whose calls certify only wild facts (PDDLStream accepts it).
+    certified = _conjunction_atoms(sections[":certified"][0], f"the :certified of {name!r}") \
+        if ":certified" in sections else ()
     fluents: tuple[str, ...] = ()
     fluents_location = node.location
     if ":fluents" in sections:
