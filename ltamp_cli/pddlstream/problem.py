@@ -181,7 +181,6 @@ def to_planning_problem(problem: PDDLProblem, stream_info: Mapping[str, Info] | 
                          "stream_map, init, goal)")
     domain_pddl, constant_map, stream_pddl, stream_map, init, goal = problem
     domain = parse_domain(domain_pddl, _label(domain_pddl, "domain.pddl"))
-    check_domain(domain)
     names = ObjectNames()
     constants = _lowered(constant_map, "constant_map")
     for constant in domain.constants:
@@ -191,7 +190,9 @@ def to_planning_problem(problem: PDDLProblem, stream_info: Mapping[str, Info] | 
     goal_formula = to_formula(goal, names)
     stream_file = _stream_file(stream_pddl)
     domain = _declare(domain, atoms)
-    if stream_file is not None:
+    if stream_file is None:
+        check_domain(domain)
+    else:
         domain, stream_file = prepare_streams(stream_file, domain)
     objects = tuple(TypedName(n, names.types[n]) for n in names.table.names())
     parsed = syntax.Problem("pddlstream", domain.name, objects, tuple(atoms), tuple(values),

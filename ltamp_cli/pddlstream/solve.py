@@ -22,6 +22,7 @@ from ltamp_cli.planner.api import solve as plan
 from ltamp_cli.planner.objects import value_key as _value_key
 from ltamp_cli.planner.pddl.check import check_domain, check_problem
 from ltamp_cli.planner.pddl.parse import parse_domain, parse_problem
+from ltamp_cli.planner.pddl.syntax import Domain, IncreaseCost
 from ltamp_cli.planner.problem import PlanningProblem
 from ltamp_cli.planner.result import PlanResult
 
@@ -53,7 +54,17 @@ def solve(problem: PDDLProblem, algorithm: str = "adaptive",
     if verbose:
         print(f"ltamp {algorithm}: {result.status} in {result.time_s:.3f} s"
               + (f", cost {result.cost:g}" if result.solved else ""))
-    return to_solution(result)
+    return to_solution(result, unit_costs or not has_action_costs(planning_problem.domain))
+
+
+def has_action_costs(domain: Domain) -> bool:
+    """Whether any action increases ``total-cost`` (else, as in PDDLStream, each costs 1)."""
+    def costs(effect: object) -> bool:
+        if isinstance(effect, IncreaseCost):
+            return True
+        return any(costs(part) for part in getattr(effect, "parts", ())) or (
+            hasattr(effect, "effect") and costs(effect.effect))
+    return any(costs(action.effect) for action in domain.actions)
 
 
 def solve_incremental(problem: PDDLProblem, **options: Any) -> Solution:
@@ -117,7 +128,9 @@ def solve_from_pddl(domain_pddl: str, problem_pddl: str, unit_costs: bool = Fals
     result = plan(problem, PlannerConfig(max_time=max_time, unit_costs=unit_costs))
     if not result.solved or result.plan is None:
         return None, math.inf
-    return [Action(step.name, step.args) for step in result.plan], result.cost
+    cost = (float(len(result.plan)) if unit_costs or not has_action_costs(domain)
+            else result.cost)
+    return [Action(step.name, step.args) for step in result.plan], cost
 
 
 def get_cost_scale() -> float:
@@ -135,8 +148,9 @@ def create_parser(default_algorithm: str = "adaptive") -> argparse.ArgumentParse
     return parser
 
 
-def to_solution(result: PlanResult) -> Solution:
-    """The planner's result with every object replaced by its Python value."""
+def to_solution(result: PlanResult, unit_costs: bool = False) -> Solution:
+    """The planner's result with every object replaced by its Python value (``unit_costs``:
+    the cost is the number of actions)."""
     def value(name: str) -> Any:
         return result.objects.get(name, name)
 
@@ -148,4 +162,5 @@ def to_solution(result: PlanResult) -> Solution:
     if result.plan is None or not result.solved:
         return Solution(None, math.inf, certificate)
     plan_steps = [Action(step.name, tuple(step.values)) for step in result.plan]
-    return Solution(plan_steps, result.cost, certificate)
+    return Solution(plan_steps, float(len(plan_steps)) if unit_costs else result.cost,
+                    certificate)

@@ -252,53 +252,47 @@ def fluent_predicates(domain: Domain) -> frozenset[str]:
     return frozenset(changed | domain.derived_predicates())
 
 
-def _split_static(atoms: tuple[Atom, ...], inputs: tuple[str, ...], fluent: frozenset[str],
-                  what: str, location: SourceLocation) -> tuple[tuple[Atom, ...], tuple[Atom, ...]]:
-    """(static atoms, atoms of fluent predicates); every input must be in a static one."""
-    static = tuple(a for a in atoms if a.predicate not in fluent)
+def _split_static(atoms: tuple[Atom, ...], fluent: frozenset[str]
+                  ) -> tuple[tuple[Atom, ...], tuple[Atom, ...]]:
+    """(atoms that enumerate the inputs, atoms of fluent predicates). Inputs are enumerated
+    from the static atoms plus those fluent atoms needed to cover an input that no static
+    atom mentions (matched against the facts known so far, as without this split)."""
+    static = [a for a in atoms if a.predicate not in fluent]
     changing = tuple(a for a in atoms if a.predicate in fluent)
-    if changing:
-        covered = {arg for atom in static for arg in atom.args}
-        for variable in inputs:
-            if variable not in covered:
-                raise InputError(
-                    f"input {variable} of {what} appears only in :domain facts that actions "
-                    f"change ({', '.join(str(a) for a in changing)}): no algorithm supports "
-                    "this; give it a :domain fact that no action changes", location)
-    return static, changing
+    covered = {arg for atom in static for arg in atom.args}
+    for atom in changing:
+        if any(is_variable(arg) and arg not in covered for arg in atom.args):
+            static.append(atom)
+            covered.update(atom.args)
+    return tuple(static), changing
 
 
 def prepare_streams(streams: StreamFile, domain: Domain) -> tuple[Domain, StreamFile]:
-    """Read a stream file as PDDLStream does, then check it against the domain.
+    """Read a stream file as PDDLStream does, then check the domain and the stream file.
 
-    * predicates used only in the stream file (and ``init``) are declared in the domain;
+    * predicates used only in the stream file (and ``init``) are declared in the domain,
+      whose actions may use them;
     * ``:function`` declarations the domain does not declare in ``:functions`` are dropped
       (no action can use them; PDDLStream ignores them too);
-    * :domain facts of predicates that actions change (PDDLStream's exogenous streams) move
-      to ``Stream.fluent_domain``: inputs come from the static facts, and what the stream
-      certifies holds only in states where those facts hold. In a ``:function`` or
-      ``:predicate`` domain such facts are dropped (the actions that use them check them).
+    * :domain facts of predicates that actions change (PDDLStream's exogenous streams) go
+      to ``Stream.fluent_domain``: what the stream certifies holds only in states where
+      those facts hold. Inputs are enumerated from the other :domain facts (and from such a
+      fact only where it alone mentions an input). In a ``:function`` or ``:predicate``
+      domain such facts are dropped unless needed for an input (the actions that use the
+      value check them).
     """
     domain = declare_stream_predicates(domain, streams)
+    check_domain(domain)
     fluent = fluent_predicates(domain)
     declared_functions = {signature.name for signature in domain.functions}
     prepared_streams = []
     for stream in streams.streams:
-        static, changing = _split_static(stream.domain, stream.inputs, fluent,
-                                         f"stream {stream.name!r}", stream.location)
+        static, changing = _split_static(stream.domain, fluent)
         prepared_streams.append(replace(stream, domain=static, fluent_domain=changing))
-    functions = []
-    for function in streams.functions:
-        if function.name not in declared_functions:
-            continue
-        static, _ = _split_static(function.domain, function.head.args, fluent,
-                                  f"function {function.name!r}", function.location)
-        functions.append(replace(function, domain=static))
-    predicates = []
-    for predicate in streams.predicates:
-        static, _ = _split_static(predicate.domain, predicate.head.args, fluent,
-                                  f"predicate {predicate.name!r}", predicate.location)
-        predicates.append(replace(predicate, domain=static))
+    functions = [replace(function, domain=_split_static(function.domain, fluent)[0])
+                 for function in streams.functions if function.name in declared_functions]
+    predicates = [replace(predicate, domain=_split_static(predicate.domain, fluent)[0])
+                  for predicate in streams.predicates]
     prepared = replace(streams, streams=tuple(prepared_streams), functions=tuple(functions),
                        predicates=tuple(predicates))
     check_streams(prepared, domain)
