@@ -19,14 +19,17 @@ from ltamp_cli.pddlstream.generator import FunctionInfo, StreamInfo, fn_from_con
 from ltamp_cli.pddlstream.language import DEBUG, SHARED_DEBUG, PDDLProblem
 from ltamp_cli.planner.objects import ObjectTable
 from ltamp_cli.planner.pddl import syntax
-from ltamp_cli.planner.pddl.check import check_domain, check_problem, prepare_streams
+from ltamp_cli.planner.pddl.check import (
+    check_domain,
+    check_problem,
+    declare_predicates,
+    prepare_streams,
+)
 from ltamp_cli.planner.pddl.parse import parse_domain, parse_stream_file
 from ltamp_cli.planner.pddl.syntax import (
     Atom,
-    Domain,
     FunctionTerm,
     FunctionValue,
-    PredicateSignature,
     StreamFile,
     StreamFunction,
     TypedName,
@@ -116,18 +119,6 @@ def to_formula(formula: Any, names: ObjectNames, what: str = "the goal") -> synt
     return to_atom(formula, names, what, variables=True)
 
 
-def _declare(domain: Domain, atoms: Iterable[Atom]) -> Domain:
-    """``domain`` plus predicates used only in ``init`` (PDDLStream accepts them)."""
-    known = domain.predicate_map()
-    added: dict[str, PredicateSignature] = {}
-    for atom in atoms:
-        if atom.predicate not in known and atom.predicate not in added \
-                and atom.predicate != syntax.EQUALITY:
-            parameters = tuple(TypedName(f"?x{i}") for i in range(len(atom.args)))
-            added[atom.predicate] = PredicateSignature(atom.predicate, parameters)
-    return replace(domain, predicates=(*domain.predicates, *added.values())) if added else domain
-
-
 def _stream_file(stream_pddl: Any) -> StreamFile | None:
     """One stream file from ``None``, a text or a list of texts (rules renumbered)."""
     if stream_pddl is None:
@@ -189,7 +180,7 @@ def to_planning_problem(problem: PDDLProblem, stream_info: Mapping[str, Info] | 
     atoms, values = _init(init, names)
     goal_formula = to_formula(goal, names)
     stream_file = _stream_file(stream_pddl)
-    domain = _declare(domain, atoms)
+    domain = declare_predicates(domain, atoms)  # predicates used only in init
     if stream_file is None:
         check_domain(domain)
     else:

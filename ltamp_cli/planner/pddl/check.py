@@ -222,13 +222,13 @@ def _stream_file_atoms(streams: StreamFile) -> list[Atom]:
     return atoms
 
 
-def declare_stream_predicates(domain: Domain, streams: StreamFile) -> Domain:
-    """``domain`` plus the predicates that only the stream file uses (PDDLStream accepts
+def declare_predicates(domain: Domain, atoms: Iterable[Atom]) -> Domain:
+    """``domain`` plus the predicates of ``atoms`` it does not declare (PDDLStream accepts
     predicates that appear only in stream files and ``init``); their arity is that of their
     first use and must be the same everywhere."""
     known = domain.predicate_map()
     added: dict[str, PredicateSignature] = {}
-    for atom in _stream_file_atoms(streams):
+    for atom in atoms:
         if atom.predicate == EQUALITY or atom.predicate in known:
             continue
         first = added.get(atom.predicate)
@@ -281,7 +281,7 @@ def prepare_streams(streams: StreamFile, domain: Domain) -> tuple[Domain, Stream
       domain such facts are dropped unless needed for an input (the actions that use the
       value check them).
     """
-    domain = declare_stream_predicates(domain, streams)
+    domain = declare_predicates(domain, _stream_file_atoms(streams))
     check_domain(domain)
     fluent = fluent_predicates(domain)
     declared_functions = {signature.name for signature in domain.functions}
