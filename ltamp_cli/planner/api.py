@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import gc
 import threading
+import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import replace
 
 from ltamp_cli.errors import InputError
 from ltamp_cli.planner.algorithms.common import (
@@ -18,7 +20,7 @@ from ltamp_cli.planner.algorithms.focused import solve_focused
 from ltamp_cli.planner.algorithms.incremental import solve_incremental
 from ltamp_cli.planner.algorithms.skeletons import solve_with_skeletons
 from ltamp_cli.planner.problem import PlanningProblem
-from ltamp_cli.planner.result import PlanResult
+from ltamp_cli.planner.result import INFEASIBLE, TIMEOUT, PlanResult
 from ltamp_cli.planner.search.engine import SEARCH_ALGORITHMS
 from ltamp_cli.planner.statistics import StreamStatistics
 
@@ -108,12 +110,46 @@ def refuse_unsupported(problem: PlanningProblem, algorithm: str) -> None:
                 stream.fluents_location)
 
 
+def _infeasibility_unproven(problem: PlanningProblem, config: PlannerConfig,
+                            state: PlannerState) -> bool:
+    """Whether an optimistic algorithm's "infeasible" may be wrong: some stream certifies
+    facts it does not declare (wild outputs seen, or a stream with no :certified facts),
+    which no optimistic plan can anticipate."""
+    if config.algorithm == "incremental" or problem.stream_file is None:
+        return False
+    return state.saw_wild_facts or any(
+        not stream.certified and not stream.is_rule for stream in problem.stream_file.streams)
+
+
+def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
+                               state: PlannerState, statistics: StreamStatistics
+                               ) -> PlanResult:
+    """The incremental algorithm, which calls every stream instance and so finds wild facts,
+    for the time left; a timeout (not "infeasible") when it cannot run (:fluents)."""
+    remaining = state.deadline - time.perf_counter()
+    note = "wild facts: the optimistic plans' failure proves nothing"
+    if remaining <= 0 or any(s.fluents for s in problem.stream_file.streams):  # type: ignore[union-attr]
+        result = state.result(TIMEOUT, None)
+        result.diagnostics["infeasibility_unproven"] = note
+        return result
+    statistics.update(state.stream_stats)
+    fallback = initial_state(problem, replace(config, algorithm="incremental",
+                                              max_time=remaining))
+    fallback.history = statistics.totals
+    result = solve_incremental(fallback)
+    state.stream_stats = fallback.stream_stats
+    result.stats["completed_by"] = f"incremental ({note})"
+    return result
+
+
 def _solve(problem: PlanningProblem, config: PlannerConfig) -> PlanResult:
     statistics = StreamStatistics.load(config.statistics_dir, problem.domain.name)
     state = initial_state(problem, config)
     state.history = statistics.totals
     run = _algorithm(config.algorithm)
     best = run(state)
+    if best.status == INFEASIBLE and _infeasibility_unproven(problem, config, state):
+        best = _complete_with_incremental(problem, config, state, statistics)
     improvements = [best.cost] if best.solved else []
     while (best.solved and best.cost > config.success_cost + COST_EPSILON
            and not state.timed_out()):

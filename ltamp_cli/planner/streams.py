@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import inspect
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -126,6 +126,12 @@ def resolve_bindings(stream_file: StreamFile, provided: Mapping[str, Any], sourc
         else:
             raise InputError(f"the binding of {kind} {name!r} in {source} is not callable",
                              external.location)
+        if isinstance(external, Stream) and not external.certified:
+            # It certifies only what its calls yield (wild facts), which no optimistic plan
+            # can anticipate: call it as soon as its inputs exist, like PDDLStream's
+            # incremental algorithm would.
+            bindings[name] = replace(bindings[name], info=replace(bindings[name].info,
+                                                                  eager=True))
     return bindings
 
 

@@ -301,3 +301,36 @@ def sampler_problem(folder: Path) -> PDDLProblem:
     return PDDLProblem(write(folder, "domain.pddl", domain), {},
                        write(folder, "stream.pddl", streams), stream_map, [("Obj", "mug")],
                        Exists(["?p"], And(("Placed", "mug", "?p"), ("Far", "?p"))))
+
+
+# A roadmap whose edges only a wild stream certifies, for configurations another stream
+# samples: no optimistic plan exists, so only calling the streams finds the plan.
+ROADMAP_DOMAIN = """
+(define (domain roadmap)
+  (:predicates (Conf ?q) (At ?q) (Edge ?a ?b) (Dock ?q))
+  (:action drive :parameters (?a ?b) :precondition (and (Edge ?a ?b) (At ?a))
+    :effect (and (At ?b) (not (At ?a)))))
+"""
+
+ROADMAP_STREAMS = """
+(define (stream roadmap)
+  (:stream sample-dock :outputs (?q) :certified (and (Conf ?q) (Dock ?q)))
+  (:stream connect :inputs (?q) :domain (Conf ?q)))
+"""
+
+
+def roadmap_problem(folder: Path) -> PDDLProblem:
+    """``connect`` links each new configuration to those seen before (wild ``Edge`` facts)."""
+    seen: list[float] = []
+
+    def connect(q: float) -> Any:
+        facts = [fact for other in seen for fact in (("Edge", other, q), ("Edge", q, other))]
+        seen.append(q)
+        return iter([WildOutput(facts=facts)])
+
+    docks = iter([2.5, 7.5])
+    return PDDLProblem(write(folder, "domain.pddl", ROADMAP_DOMAIN), {},
+                       write(folder, "stream.pddl", ROADMAP_STREAMS),
+                       {"sample-dock": from_fn(lambda: (next(docks),)), "connect": connect},
+                       [("Conf", 0.0), ("At", 0.0)],
+                       Exists(["?q"], And(("At", "?q"), ("Dock", "?q"))))

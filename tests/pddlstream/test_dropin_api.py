@@ -14,6 +14,7 @@ from pddlstream_problems import (
     lookout_problem,
     map_problem,
     reach_problem,
+    roadmap_problem,
     sampler_problem,
     shelf_problem,
     write,
@@ -107,8 +108,12 @@ def test_incremental_refuses_fluent_streams_at_their_declaration(tmp_path: Path)
 
 
 @pytest.mark.parametrize("algorithm", ALGORITHMS)
-def test_wild_facts_of_a_test_stream_open_the_way(tmp_path: Path, algorithm: str) -> None:
-    problem, info = map_problem(tmp_path)
+@pytest.mark.parametrize("eager", [True, False])
+def test_wild_facts_of_a_test_stream_open_the_way(tmp_path: Path, algorithm: str,
+                                                  eager: bool) -> None:
+    """A stream without :certified facts only yields wild facts: it is evaluated eagerly
+    whether or not its StreamInfo says so (no optimistic plan could call it)."""
+    problem, info = map_problem(tmp_path, eager=eager)
     solution = run(problem, algorithm, stream_info=info)
     assert [a.args for a in solution.plan] == [("hall", "kitchen"), ("kitchen", "garden")]
 
@@ -120,6 +125,15 @@ def test_wild_facts_come_with_generator_outputs(tmp_path: Path) -> None:
     assert names(solution) == ["saw", "mount"]
     assert solution.plan[1].args == (("oak", 3),)
     assert ("length", ("oak", 3), 3) in solution.certificate.all_facts
+
+
+@pytest.mark.parametrize("algorithm", ALGORITHMS)
+def test_no_wrong_infeasible_when_only_wild_facts_lead_to_the_goal(tmp_path: Path,
+                                                                   algorithm: str) -> None:
+    """No optimistic plan exists (edges are wild facts of sampled configurations): the
+    optimistic algorithms' failure proves nothing, and calling every stream finds the plan."""
+    solution = run(roadmap_problem(tmp_path), algorithm)
+    assert [a.args for a in solution.plan] == [(0.0, 2.5)]
 
 
 @pytest.mark.parametrize("algorithm", ALGORITHMS)

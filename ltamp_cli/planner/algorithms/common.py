@@ -161,6 +161,9 @@ class PlannerState:
     real_inputs: dict[str, list[tuple[str, ...]]] = field(default_factory=dict)
     # Expansions allowed to a budgeted search (see :meth:`search`).
     search_budget: int = INITIAL_SEARCH_EXPANSIONS
+    # Whether a stream certified facts it does not declare (wild outputs): optimistic
+    # plans cannot anticipate those, so their failure proves nothing.
+    saw_wild_facts: bool = False
 
     def open_real_bindings(self, external: External) -> list[tuple[str, ...]]:
         """The input tuples of ``external`` whose domain facts are real (kept up to date
@@ -288,6 +291,7 @@ class PlannerState:
         wild = instance.take_wild_facts()
         if not wild:
             return
+        self.saw_wild_facts = True
         result = StreamResult(instance.name, instance.inputs, (), tuple(wild))
         for fact in wild:
             for name in fact[1:]:
