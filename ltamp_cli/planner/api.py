@@ -19,6 +19,7 @@ from ltamp_cli.planner.algorithms.common import (
 from ltamp_cli.planner.algorithms.focused import solve_focused
 from ltamp_cli.planner.algorithms.incremental import solve_incremental
 from ltamp_cli.planner.algorithms.skeletons import solve_with_skeletons
+from ltamp_cli.planner.pddl.syntax import Stream
 from ltamp_cli.planner.problem import PlanningProblem
 from ltamp_cli.planner.result import INFEASIBLE, TIMEOUT, PlanResult
 from ltamp_cli.planner.search.engine import SEARCH_ALGORITHMS
@@ -117,8 +118,26 @@ def _infeasibility_unproven(problem: PlanningProblem, config: PlannerConfig,
     which no optimistic plan can anticipate."""
     if config.algorithm == "incremental" or problem.stream_file is None:
         return False
-    return state.saw_wild_facts or any(
-        not stream.certified and not stream.is_rule for stream in problem.stream_file.streams)
+    if state.saw_wild_facts or any(not stream.certified and not stream.is_rule
+                                   for stream in problem.stream_file.streams):
+        return True
+    _probe_uncalled_instances(state)
+    return state.saw_wild_facts
+
+
+def _probe_uncalled_instances(state: PlannerState) -> None:
+    """Call once every stream instance over the real facts that was never called (a stream
+    may certify wild facts that the optimistic plans could not anticipate): one round of
+    what the incremental algorithm does, within the time left."""
+    for external in state.externals.values():
+        if not isinstance(external, Stream) or external.fluents or external.is_rule:
+            continue
+        for inputs in list(state.bindings_of(external, state.facts)):
+            if state.timed_out():
+                return
+            instance = state.instance(external.name, inputs)
+            if instance.num_calls == 0:
+                state.call(instance)
 
 
 def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
