@@ -277,7 +277,8 @@ class StreamInstance:
         return self._outputs(batch, objects)
 
     def _record_wild(self, produced: WildOutput, objects: ObjectTable) -> None:
-        self.wild_facts.extend(_wild_fact(self.name, fact, objects) for fact in produced.facts)
+        self.wild_facts.extend(_wild_fact(self.external, fact, objects)
+                               for fact in produced.facts)
 
     def take_wild_facts(self) -> list[tuple[str, ...]]:
         """The wild facts certified since the last time they were taken."""
@@ -298,19 +299,19 @@ class StreamInstance:
             if not isinstance(output, tuple) or len(output) != arity:
                 raise InputError(
                     f"stream {self.name!r} must produce tuples of {arity} value(s) "
-                    f"(one per output {' '.join(self.external.outputs)}), got {output!r:.80}"
-                )
+                    f"(one per output {' '.join(self.external.outputs)}), got {output!r:.80}",
+                    self.external.location)
             outputs.append(tuple(
                 objects.intern(value, variable[1:])
                 for value, variable in zip(output, self.external.outputs, strict=True)))
         return outputs
 
 
-def _wild_fact(stream: str, fact: Any, objects: ObjectTable) -> tuple[str, ...]:
+def _wild_fact(stream: External, fact: Any, objects: ObjectTable) -> tuple[str, ...]:
     """A wild fact ``(predicate, value, ...)`` as a fact over object names."""
     if not isinstance(fact, tuple | list) or not fact or not isinstance(fact[0], str):
-        raise InputError(f"stream {stream!r} certified {fact!r:.80}: a wild fact must be a "
-                         "tuple (predicate, value, ...)")
+        raise InputError(f"stream {stream.name!r} certified {fact!r:.80}: a wild fact must be "
+                         "a tuple (predicate, value, ...)", stream.location)
     return (fact[0].lower(), *(_object_name(value, objects) for value in fact[1:]))
 
 
