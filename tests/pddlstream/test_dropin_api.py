@@ -31,6 +31,10 @@ from ltamp_cli.pddlstream import (
     solve,
     solve_from_pddl,
 )
+from ltamp_cli.pddlstream.problem import to_planning_problem
+from ltamp_cli.planner.algorithms.common import PlannerConfig
+from ltamp_cli.planner.api import solve as plan
+from ltamp_cli.planner.validate import validate_plan
 
 ALGORITHMS = ("adaptive", "binding", "focused", "incremental")
 MAX_TIME = 30.0
@@ -235,3 +239,19 @@ def test_unsolvable_problem_reports_no_plan(tmp_path: Path) -> None:
     stream_map = {**problem.stream_map, "inverse-KINEMATICS": from_fn(lambda i, p: None)}
     solution = run(problem._replace(stream_map=stream_map), "incremental")
     assert solution.plan is None and solution.cost == float("inf")
+
+
+@pytest.mark.parametrize("build", [
+    lambda folder: reach_problem(folder)[0], lookout_problem, shelf_problem,
+    lambda folder: map_problem(folder, eager=False)[0], cut_problem, lamps_problem,
+    sampler_problem, roadmap_problem,
+], ids=["rule", "exogenous", "fluents", "wild-test", "wild-outputs", "adl", "samplers",
+        "wild-roadmap"])
+def test_independent_validator_accepts_the_plans(tmp_path: Path, build: object) -> None:
+    """The planner's own validator replays each plan: rules are always true, wild facts are
+    trusted as their call's results, everything else is re-derived."""
+    problem = to_planning_problem(build(tmp_path))  # type: ignore[operator]
+    result = plan(problem, PlannerConfig(algorithm="adaptive", max_time=MAX_TIME))
+    assert result.solved
+    report = validate_plan(problem, result)
+    assert report.valid, report

@@ -292,7 +292,7 @@ class PlannerState:
         if not wild:
             return
         self.saw_wild_facts = True
-        result = StreamResult(instance.name, instance.inputs, (), tuple(wild))
+        result = StreamResult(instance.name, instance.inputs, (), tuple(wild), wild=True)
         for fact in wild:
             for name in fact[1:]:
                 self.object_types.setdefault(name, OBJECT_TYPE)
