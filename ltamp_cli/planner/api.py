@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import gc
 import threading
+import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import replace
 
 from ltamp_cli.errors import InputError
 from ltamp_cli.planner.algorithms.common import (
@@ -17,8 +19,9 @@ from ltamp_cli.planner.algorithms.common import (
 from ltamp_cli.planner.algorithms.focused import solve_focused
 from ltamp_cli.planner.algorithms.incremental import solve_incremental
 from ltamp_cli.planner.algorithms.skeletons import solve_with_skeletons
+from ltamp_cli.planner.pddl.syntax import Stream
 from ltamp_cli.planner.problem import PlanningProblem
-from ltamp_cli.planner.result import PlanResult
+from ltamp_cli.planner.result import INFEASIBLE, TIMEOUT, PlanResult
 from ltamp_cli.planner.search.engine import SEARCH_ALGORITHMS
 from ltamp_cli.planner.statistics import StreamStatistics
 from ltamp_cli.threads import limited_threads
@@ -90,8 +93,73 @@ def solve(problem: PlanningProblem, config: PlannerConfig | None = None) -> Plan
                          f"{', '.join(SEARCH_ALGORITHMS)}")
     if config.max_time <= 0:
         raise InputError(f"max time must be positive, got {config.max_time}")
+    refuse_unsupported(problem, config.algorithm)
     with _relaxed_gc(), limited_threads(config.threads):
         return _solve(problem, config)
+
+
+def refuse_unsupported(problem: PlanningProblem, algorithm: str) -> None:
+    """Refuse, before solving, a construct the algorithm does not support (an answer of
+    "infeasible" would be wrong): ``:fluents`` streams need a state to be called in, which
+    only the algorithms that plan with optimistic stream outputs provide."""
+    if algorithm != "incremental" or problem.stream_file is None:
+        return
+    for stream in problem.stream_file.streams:
+        if stream.fluents:
+            raise InputError(
+                f"stream {stream.name!r} declares :fluents, which the incremental algorithm "
+                "does not support: use --algorithm adaptive, binding or focused",
+                stream.fluents_location)
+
+
+def _infeasibility_unproven(problem: PlanningProblem, config: PlannerConfig,
+                            state: PlannerState) -> bool:
+    """Whether an optimistic algorithm's "infeasible" may be wrong: some stream certifies
+    facts it does not declare (wild outputs seen, or a stream with no :certified facts),
+    which no optimistic plan can anticipate."""
+    if config.algorithm == "incremental" or problem.stream_file is None:
+        return False
+    if state.saw_wild_facts or any(not stream.certified and not stream.is_rule
+                                   for stream in problem.stream_file.streams):
+        return True
+    _probe_uncalled_instances(state)
+    return state.saw_wild_facts
+
+
+def _probe_uncalled_instances(state: PlannerState) -> None:
+    """Call once every stream instance over the real facts that was never called (a stream
+    may certify wild facts that the optimistic plans could not anticipate): one round of
+    what the incremental algorithm does, within the time left."""
+    for external in state.externals.values():
+        if not isinstance(external, Stream) or external.fluents or external.is_rule:
+            continue
+        for inputs in list(state.bindings_of(external, state.facts)):
+            if state.timed_out():
+                return
+            instance = state.instance(external.name, inputs)
+            if instance.num_calls == 0:
+                state.call(instance)
+
+
+def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
+                               state: PlannerState, statistics: StreamStatistics
+                               ) -> PlanResult:
+    """The incremental algorithm, which calls every stream instance and so finds wild facts,
+    for the time left; a timeout (not "infeasible") when it cannot run (:fluents)."""
+    remaining = state.deadline - time.perf_counter()
+    note = "wild facts: the optimistic plans' failure proves nothing"
+    if remaining <= 0 or any(s.fluents for s in problem.stream_file.streams):  # type: ignore[union-attr]
+        result = state.result(TIMEOUT, None)
+        result.diagnostics["infeasibility_unproven"] = note
+        return result
+    statistics.update(state.stream_stats)
+    fallback = initial_state(problem, replace(config, algorithm="incremental",
+                                              max_time=remaining))
+    fallback.history = statistics.totals
+    result = solve_incremental(fallback)
+    state.stream_stats = fallback.stream_stats
+    result.stats["completed_by"] = f"incremental ({note})"
+    return result
 
 
 def _solve(problem: PlanningProblem, config: PlannerConfig) -> PlanResult:
@@ -100,6 +168,8 @@ def _solve(problem: PlanningProblem, config: PlannerConfig) -> PlanResult:
     state.history = statistics.totals
     run = _algorithm(config.algorithm)
     best = run(state)
+    if best.status == INFEASIBLE and _infeasibility_unproven(problem, config, state):
+        best = _complete_with_incremental(problem, config, state, statistics)
     improvements = [best.cost] if best.solved else []
     while (best.solved and best.cost > config.success_cost + COST_EPSILON
            and not state.timed_out()):

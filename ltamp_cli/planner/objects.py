@@ -13,13 +13,15 @@ from typing import Any
 import numpy as np
 
 
-def _value_key(value: Any) -> Hashable:
+def value_key(value: Any) -> Hashable:
+    """What identifies a value as an object: contents for arrays and containers, identity
+    for other unhashable values."""
     if isinstance(value, np.ndarray):
         return ("ndarray", value.dtype.str, value.shape, value.tobytes())
     if isinstance(value, list | tuple):
-        return (type(value).__name__, tuple(_value_key(v) for v in value))
+        return (type(value).__name__, tuple(value_key(v) for v in value))
     if isinstance(value, dict):
-        return ("dict", tuple(sorted((str(k), _value_key(v)) for k, v in value.items())))
+        return ("dict", tuple(sorted((str(k), value_key(v)) for k, v in value.items())))
     if isinstance(value, float | int | str | bool | type(None)):
         return (type(value).__name__, value)
     try:
@@ -39,11 +41,11 @@ class ObjectTable:
         """Register a named object (from the problem file)."""
         self._values[name] = value
         if value is not None:
-            self._by_key.setdefault(_value_key(value), name)
+            self._by_key.setdefault(value_key(value), name)
 
     def intern(self, value: Any, prefix: str = "v") -> str:
         """The object for ``value``, created as ``@{prefix}{n}`` if new."""
-        key = _value_key(value)
+        key = value_key(value)
         name = self._by_key.get(key)
         if name is None:
             name = f"@{prefix}{self._counter}"

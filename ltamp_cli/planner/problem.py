@@ -32,7 +32,7 @@ from typing import Any
 
 from ltamp_cli.errors import InputError, SourceLocation
 from ltamp_cli.extras import missing_module_hint
-from ltamp_cli.planner.pddl.check import check_domain, check_problem, check_streams
+from ltamp_cli.planner.pddl.check import check_domain, check_problem, prepare_streams
 from ltamp_cli.planner.pddl.parse import (
     parse_domain,
     parse_formula,
@@ -85,13 +85,12 @@ def load_domain(folder: Path, where: SourceLocation) -> tuple[Domain, StreamFile
     if not domain_path.exists():
         raise InputError(f"no domain.pddl in {str(folder)!r}", where)
     domain = parse_domain(read_text(domain_path, "domain file"), domain_path)
-    check_domain(domain)
     stream_path = folder / "stream.pddl"
-    stream_file = None
-    if stream_path.exists():
-        stream_file = parse_stream_file(read_text(stream_path, "stream file"), stream_path)
-        check_streams(stream_file, domain)
-    return domain, stream_file
+    if not stream_path.exists():
+        check_domain(domain)
+        return domain, None
+    stream_file = parse_stream_file(read_text(stream_path, "stream file"), stream_path)
+    return prepare_streams(stream_file, domain)
 
 
 def load_streams_factory(spec: str, base: Path, where: SourceLocation

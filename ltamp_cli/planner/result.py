@@ -32,6 +32,9 @@ class StreamResult:
     inputs: tuple[str, ...]
     outputs: tuple[str, ...]
     certified: tuple[tuple[str, ...], ...]
+    # Facts a call certified beyond the stream's :certified ones (wild outputs): known only
+    # from that call, so a validator cannot derive them from the declaration.
+    wild: bool = False
 
 
 @dataclass

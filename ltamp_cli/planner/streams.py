@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import inspect
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -74,24 +74,80 @@ class Binding:
 External = Stream | StreamFunction | ExternalPredicate
 
 
+def _always_true(*_inputs: Any, **_fluents: Any) -> bool:
+    return True
+
+
+# A rule is an always-true test evaluated as soon as its inputs exist (PDDLStream's rules).
+RULE_BINDING = Binding(_always_true, StreamInfo(p_success=1.0, overhead=0.0, eager=True))
+
+
+def _by_lower_name(provided: Mapping[str, Any], source: str) -> dict[str, Any]:
+    """``provided`` keyed by lower-cased names (PDDL names are case-insensitive)."""
+    lowered: dict[str, Any] = {}
+    originals: dict[str, str] = {}
+    for key, value in provided.items():
+        name = str(key).lower()
+        if name in lowered:
+            raise InputError(f"{source} binds both {originals[name]!r} and {key!r}: PDDL names "
+                             "are case-insensitive, so they name the same stream")
+        lowered[name] = value
+        originals[name] = str(key)
+    return lowered
+
+
 def resolve_bindings(stream_file: StreamFile, provided: Mapping[str, Any], source: str
                      ) -> dict[str, Binding]:
-    """Check that every declared stream has a binding; normalise to :class:`Binding`."""
+    """Check that every declared stream has a binding; normalise to :class:`Binding`.
+
+    Names match case-insensitively; rules need no binding. A missing or unusable binding is
+    reported at the declaration in the stream file.
+    """
+    lowered = _by_lower_name(provided, source)
     bindings: dict[str, Binding] = {}
-    for name in stream_file.external_names():
-        if name not in provided:
+    externals: list[External] = [*stream_file.streams, *stream_file.functions,
+                                 *stream_file.predicates]
+    for external in externals:
+        name = external.name
+        if isinstance(external, Stream) and external.is_rule:
+            bindings[name] = RULE_BINDING
+            continue
+        kind = ("stream" if isinstance(external, Stream) else
+                "function" if isinstance(external, StreamFunction) else "predicate")
+        if name not in lowered:
             raise InputError(
-                f"stream {name!r} has no Python binding: {source} provides "
-                f"{', '.join(sorted(provided)) or 'nothing'}"
-            )
-        value = provided[name]
+                f"{kind} {name!r} has no Python binding: {source} provides "
+                f"{', '.join(sorted(map(str, provided))) or 'nothing'}", external.location)
+        value = lowered[name]
         if isinstance(value, Binding):
             bindings[name] = value
         elif callable(value):
             bindings[name] = Binding(value)
         else:
-            raise InputError(f"the binding of stream {name!r} in {source} is not callable")
+            raise InputError(f"the binding of {kind} {name!r} in {source} is not callable",
+                             external.location)
+        if isinstance(external, Stream) and not external.certified:
+            # It certifies only what its calls yield (wild facts), which no optimistic plan
+            # can anticipate: call it as soon as its inputs exist, like PDDLStream's
+            # incremental algorithm would.
+            bindings[name] = replace(bindings[name], info=replace(bindings[name].info,
+                                                                  eager=True))
     return bindings
+
+
+@dataclass(frozen=True)
+class WildOutput:
+    """What one call of a stream produced, including facts it certifies beyond its
+    ``:certified`` ones (PDDLStream's wild streams).
+
+    ``values``: output tuples (for a test: ``[()]`` when true); ``facts``: tuples
+    ``(predicate, value, ...)`` whose arguments are Python values like the outputs';
+    ``enumerated``: the stream has nothing more for these inputs.
+    """
+
+    values: tuple[tuple[Any, ...], ...] = ()
+    facts: tuple[tuple[Any, ...], ...] = ()
+    enumerated: bool = False
 
 
 # CPU time of a stream's calls is measured for its first CPU_TIMED_FIRST_CALLS calls and
@@ -132,6 +188,9 @@ class StreamInstance:
         self.exhausted = False
         self.disabled = False
         self.results: list[tuple[str, ...]] = []  # output object names, one tuple per output
+        # Facts certified beyond :certified by the calls so far (wild outputs; object
+        # names), until the planner takes them (:meth:`take_wild_facts`).
+        self.wild_facts: list[tuple[str, ...]] = []
         self._iterator: Iterator[Any] | None = None
         self.value: Any = None  # test / predicate truth or function value once evaluated
 
@@ -176,7 +235,14 @@ class StreamInstance:
     def _next(self, values: list[Any], objects: ObjectTable) -> list[tuple[str, ...]]:
         external = self.external
         if not isinstance(external, Stream) or external.is_test:
-            self.value = self.binding.function(*values)
+            if isinstance(external, Stream) and external.fluents:
+                self.value = self.binding.function(*values,
+                                                   fluents=self._fluent_values(objects))
+            else:
+                self.value = self.binding.function(*values)
+            if isinstance(self.value, WildOutput):
+                self._record_wild(self.value, objects)
+                self.value = bool(self.value.values)
             self.exhausted = True
             if isinstance(external, StreamFunction):
                 self.value = float(self.value)
@@ -185,9 +251,7 @@ class StreamInstance:
             return []
         if self._iterator is None:
             if external.fluents:
-                fluents = [(fact[0], *(objects.value(a) for a in fact[1:]))
-                           for fact in self.fluent_facts]
-                produced = self.binding.function(*values, fluents=fluents)
+                produced = self.binding.function(*values, fluents=self._fluent_values(objects))
             else:
                 produced = self.binding.function(*values)
             if produced is None:
@@ -205,8 +269,25 @@ class StreamInstance:
         except StopIteration:
             self.exhausted = True
             return []
+        if isinstance(item, WildOutput):
+            self._record_wild(item, objects)
+            self.exhausted = self.exhausted or item.enumerated
+            return self._outputs(list(item.values), objects)
         batch = item if isinstance(item, list) else [item]
         return self._outputs(batch, objects)
+
+    def _record_wild(self, produced: WildOutput, objects: ObjectTable) -> None:
+        self.wild_facts.extend(_wild_fact(self.external, fact, objects)
+                               for fact in produced.facts)
+
+    def take_wild_facts(self) -> list[tuple[str, ...]]:
+        """The wild facts certified since the last time they were taken."""
+        taken, self.wild_facts = self.wild_facts, []
+        return taken
+
+    def _fluent_values(self, objects: ObjectTable) -> list[tuple[Any, ...]]:
+        """The state facts of a ``:fluents`` stream, with Python values as arguments."""
+        return [(fact[0], *(objects.value(a) for a in fact[1:])) for fact in self.fluent_facts]
 
     def _outputs(self, batch: list[Any], objects: ObjectTable) -> list[tuple[str, ...]]:
         assert isinstance(self.external, Stream)
@@ -218,12 +299,27 @@ class StreamInstance:
             if not isinstance(output, tuple) or len(output) != arity:
                 raise InputError(
                     f"stream {self.name!r} must produce tuples of {arity} value(s) "
-                    f"(one per output {' '.join(self.external.outputs)}), got {output!r:.80}"
-                )
+                    f"(one per output {' '.join(self.external.outputs)}), got {output!r:.80}",
+                    self.external.location)
             outputs.append(tuple(
                 objects.intern(value, variable[1:])
                 for value, variable in zip(output, self.external.outputs, strict=True)))
         return outputs
+
+
+def _wild_fact(stream: External, fact: Any, objects: ObjectTable) -> tuple[str, ...]:
+    """A wild fact ``(predicate, value, ...)`` as a fact over object names."""
+    if not isinstance(fact, tuple | list) or not fact or not isinstance(fact[0], str):
+        raise InputError(f"stream {stream.name!r} certified {fact!r:.80}: a wild fact must be "
+                         "a tuple (predicate, value, ...)", stream.location)
+    return (fact[0].lower(), *(_object_name(value, objects) for value in fact[1:]))
+
+
+def _object_name(value: Any, objects: ObjectTable) -> str:
+    """A symbolic object given by its name stays that object; other values are interned."""
+    if isinstance(value, str) and value in objects and objects.value(value) == value:
+        return value
+    return objects.intern(value)
 
 
 def seeded_rng(seed: int | None) -> np.random.Generator:

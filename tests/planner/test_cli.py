@@ -161,7 +161,7 @@ GOOD_YAML = line_yaml("5", 2)
      "problem.yaml:5:", "predicate 'at' takes 1 argument(s), got 2"),
     # stream with no Python binding
     (LINE_DOMAIN, LINE_STREAMS, GOOD_YAML, LINE_BINDINGS.replace('"test-goal"', '"goal-test"'),
-     "", "stream 'test-goal' has no Python binding"),
+     "stream.pddl:7:3:", "stream 'test-goal' has no Python binding"),
     # binding module that fails to import
     (LINE_DOMAIN, LINE_STREAMS, GOOD_YAML, "import numpy\nfrom numpy import no_such_name\n",
      "problem.yaml:2:11:", "failed to import: ImportError"),

@@ -112,12 +112,11 @@ def test_domain_semantic_errors(make_problem: MakeProblem, domain: str, line: in
 
 
 @pytest.mark.parametrize(("streams", "line", "column", "fragment"), [
-    ("(define (stream d)\n  (:stream s :inputs (?x) :domain (P ?x) :outputs (?y)))", 2, 3,
-     "stream 's' has no :certified facts"),
     ("(define (stream d)\n  (:stream s :inputs (?x)\n    :output (?y)\n"
      "    :certified (P ?y)))", 3, 5, "unexpected ':output' in stream 's'"),
     ("(define (stream d)\n  (:stream s :inputs (?x) :domain (P ?x) :outputs (?y)\n"
-     "    :certified (and (P ?y) (Near ?x ?y))))", 3, 28, "unknown predicate 'near'"),
+     "    :certified (and (P ?y) (Near ?x ?y) (Near ?y))))", 3, 41,
+     "predicate 'near' takes 2 argument(s) where it is first used"),
     ("(define (stream d)\n  (:stream s :inputs (?x) :domain (Q ?x) :outputs (?y)\n"
      "    :certified (P ?y)))", 2, 35, "predicate 'q' takes 2 argument(s), got 1"),
     ("(define (stream d)\n  (:stream s :inputs (?x) :domain (P ?x) :outputs (?y)\n"
@@ -125,8 +124,8 @@ def test_domain_semantic_errors(make_problem: MakeProblem, domain: str, line: in
     ("(define (stream d)\n  (:sampler s))", 2, 3, "unknown stream-file section ':sampler'"),
     ("(define (stream d)\n  (:stream s :inputs (?x) :domain (P ?x)\n"
      "    :certified (P ?x))", 1, 1, "unclosed '('"),  # (:stream is closed, define not
-    ("(define (stream d)\n  (:function (Dist ?x) (P ?x)))", 2, 3,
-     "function 'dist' is not declared in the domain's :functions"),
+    ("(define (stream d)\n  (:rule :inputs (?x) :domain (P ?x)))", 2, 3,
+     "a rule has no :certified facts"),
 ])
 def test_bad_stream_file(make_problem: MakeProblem, streams: str, line: int, column: int,
                          fragment: str) -> None:

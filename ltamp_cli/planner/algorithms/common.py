@@ -162,6 +162,9 @@ class PlannerState:
     real_inputs: dict[str, list[tuple[str, ...]]] = field(default_factory=dict)
     # Expansions allowed to a budgeted search (see :meth:`search`).
     search_budget: int = INITIAL_SEARCH_EXPANSIONS
+    # Whether a stream certified facts it does not declare (wild outputs): optimistic
+    # plans cannot anticipate those, so their failure proves nothing.
+    saw_wild_facts: bool = False
 
     def open_real_bindings(self, external: External) -> list[tuple[str, ...]]:
         """The input tuples of ``external`` whose domain facts are real (kept up to date
@@ -252,6 +255,7 @@ class PlannerState:
             raise StreamError(instance, error) from error
         finally:
             self.sampling_time += time.perf_counter() - start
+        self.add_wild_facts(instance)
         external = instance.external
         if isinstance(external, StreamFunction):
             mapping = dict(zip(external.head.args, instance.inputs, strict=True))
@@ -265,17 +269,45 @@ class PlannerState:
                 for fact in facts:
                     self.add_fact(fact, result)
             return outputs
+        exogenous = self.exogenous_context(instance)
         for output in outputs:
             for name in output:
                 self.object_types.setdefault(name, OBJECT_TYPE)
             facts = certified_facts(instance, output)
             result = StreamResult(instance.name, instance.inputs, output, tuple(facts))
             for fact in facts:
-                self.add_fact(fact, result)
+                added = self.add_fact(fact, result)
                 if isinstance(instance.external, Stream) and instance.external.fluents:
                     self.fluent_requirements.setdefault(fact, []).append(
                         (instance.external.fluents, instance.fluent_facts))
+                if exogenous is not None and (added or fact in self.fluent_requirements):
+                    self.fluent_requirements.setdefault(fact, []).append(exogenous)
+                elif exogenous is None and fact in self.fluent_requirements:
+                    # Also certified unconditionally now: it holds in every state.
+                    self.fluent_requirements[fact].append(((), ()))
         return outputs
+
+    def add_wild_facts(self, instance: StreamInstance) -> None:
+        """Facts a call certified beyond the stream's :certified ones (wild outputs)."""
+        wild = instance.take_wild_facts()
+        if not wild:
+            return
+        self.saw_wild_facts = True
+        result = StreamResult(instance.name, instance.inputs, (), tuple(wild), wild=True)
+        for fact in wild:
+            for name in fact[1:]:
+                self.object_types.setdefault(name, OBJECT_TYPE)
+            self.add_fact(fact, result)
+
+    def exogenous_context(self, instance: StreamInstance) -> Context | None:
+        """For a stream whose :domain has facts that actions change (PDDLStream's exogenous
+        streams), the context in which what it certifies holds: those facts, instantiated
+        with the instance's inputs. ``None`` for other streams."""
+        external = instance.external
+        if not isinstance(external, Stream) or not external.fluent_domain:
+            return None
+        mapping = dict(zip(external.inputs, instance.inputs, strict=True))
+        return ((), tuple(instantiate_atoms(external.fluent_domain, mapping)))
 
     def search(self, init: Iterable[Fact], objects: Mapping[str, str],
                function_values: Mapping[Fact, float], max_expansions: int | None = None,

@@ -7,6 +7,7 @@ problem as an :class:`~ltamp_cli.errors.InputError` at its source location.
 from __future__ import annotations
 
 from collections.abc import Iterable
+from dataclasses import replace
 
 from ltamp_cli.errors import InputError, SourceLocation
 from ltamp_cli.planner.pddl.syntax import (
@@ -18,6 +19,7 @@ from ltamp_cli.planner.pddl.syntax import (
     ForAllEffect,
     FunctionTerm,
     IncreaseCost,
+    PredicateSignature,
     Problem,
     StreamFile,
     TypedName,
@@ -176,7 +178,7 @@ def check_streams(streams: StreamFile, domain: Domain) -> None:
         if overlap:
             raise InputError(f"{what} uses {sorted(overlap)[0]} as both input and output",
                              stream.location)
-        for atom in stream.domain:
+        for atom in (*stream.domain, *stream.fluent_domain):
             _check_atom(atom, arities, set(stream.inputs), constants, f"the :domain of {what}")
         for atom in stream.certified:
             _check_atom(atom, arities, set(stream.inputs) | set(stream.outputs), constants,
@@ -206,3 +208,92 @@ def check_streams(streams: StreamFile, domain: Domain) -> None:
         for atom in predicate.domain:
             _check_atom(atom, arities, set(predicate.head.args), constants,
                         f"the domain of predicate {predicate.name!r}")
+
+
+def _stream_file_atoms(streams: StreamFile) -> list[Atom]:
+    """Every atom written in a stream file (domains, certified facts, predicate heads)."""
+    atoms: list[Atom] = []
+    for stream in streams.streams:
+        atoms.extend((*stream.domain, *stream.fluent_domain, *stream.certified))
+    for function in streams.functions:
+        atoms.extend(function.domain)
+    for predicate in streams.predicates:
+        atoms.extend((predicate.head, *predicate.domain))
+    return atoms
+
+
+def declare_predicates(domain: Domain, atoms: Iterable[Atom]) -> Domain:
+    """``domain`` plus the predicates of ``atoms`` it does not declare (PDDLStream accepts
+    predicates that appear only in stream files and ``init``); their arity is that of their
+    first use and must be the same everywhere."""
+    known = domain.predicate_map()
+    added: dict[str, PredicateSignature] = {}
+    for atom in atoms:
+        if atom.predicate == EQUALITY or atom.predicate in known:
+            continue
+        first = added.get(atom.predicate)
+        if first is None:
+            parameters = tuple(TypedName(f"?x{i}") for i in range(len(atom.args)))
+            added[atom.predicate] = PredicateSignature(atom.predicate, parameters,
+                                                       atom.location)
+        elif first.arity != len(atom.args):
+            raise InputError(
+                f"predicate {atom.predicate!r} takes {first.arity} argument(s) where it is "
+                f"first used ({first.location}), got {len(atom.args)}", atom.location)
+    if not added:
+        return domain
+    return replace(domain, predicates=(*domain.predicates, *added.values()))
+
+
+def fluent_predicates(domain: Domain) -> frozenset[str]:
+    """Predicates whose facts actions change (any add or delete effect) and derived ones."""
+    changed = {atom.predicate for action in domain.actions
+               for atom, _ in effect_atoms(action.effect)}
+    return frozenset(changed | domain.derived_predicates())
+
+
+def _split_static(atoms: tuple[Atom, ...], fluent: frozenset[str]
+                  ) -> tuple[tuple[Atom, ...], tuple[Atom, ...]]:
+    """(atoms that enumerate the inputs, atoms of fluent predicates). Inputs are enumerated
+    from the static atoms plus those fluent atoms needed to cover an input that no static
+    atom mentions (matched against the facts known so far, as without this split)."""
+    static = [a for a in atoms if a.predicate not in fluent]
+    changing = tuple(a for a in atoms if a.predicate in fluent)
+    covered = {arg for atom in static for arg in atom.args}
+    for atom in changing:
+        if any(is_variable(arg) and arg not in covered for arg in atom.args):
+            static.append(atom)
+            covered.update(atom.args)
+    return tuple(static), changing
+
+
+def prepare_streams(streams: StreamFile, domain: Domain) -> tuple[Domain, StreamFile]:
+    """Read a stream file as PDDLStream does, then check the domain and the stream file.
+
+    * predicates used only in the stream file (and ``init``) are declared in the domain,
+      whose actions may use them;
+    * ``:function`` declarations the domain does not declare in ``:functions`` are dropped
+      (no action can use them; PDDLStream ignores them too);
+    * :domain facts of predicates that actions change (PDDLStream's exogenous streams) go
+      to ``Stream.fluent_domain``: what the stream certifies holds only in states where
+      those facts hold. Inputs are enumerated from the other :domain facts (and from such a
+      fact only where it alone mentions an input). In a ``:function`` or ``:predicate``
+      domain such facts are dropped unless needed for an input (the actions that use the
+      value check them).
+    """
+    domain = declare_predicates(domain, _stream_file_atoms(streams))
+    check_domain(domain)
+    fluent = fluent_predicates(domain)
+    declared_functions = {signature.name for signature in domain.functions}
+    prepared_streams = []
+    for stream in streams.streams:
+        static, changing = _split_static(stream.domain, fluent)
+        prepared_streams.append(replace(stream, domain=static, fluent_domain=changing))
+    functions = [replace(function, domain=_split_static(function.domain, fluent)[0])
+                 for function in streams.functions if function.name in declared_functions]
+    predicates = [replace(predicate, domain=_split_static(predicate.domain, fluent)[0])
+                  for predicate in streams.predicates]
+    prepared = replace(streams, streams=tuple(prepared_streams), functions=tuple(functions),
+                       predicates=tuple(predicates))
+    check_streams(prepared, domain)
+    return domain, prepared

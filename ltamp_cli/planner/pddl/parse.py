@@ -420,14 +420,32 @@ def _parse_stream(node: SList) -> Stream:
         if ":outputs" in sections else ()
     domain = _conjunction_atoms(sections[":domain"][0], f"the :domain of {name!r}") \
         if ":domain" in sections else ()
-    if ":certified" not in sections:
-        raise InputError(f"stream {name!r} has no :certified facts", node.location)
-    certified = _conjunction_atoms(sections[":certified"][0], f"the :certified of {name!r}")
+    # No :certified: a stream whose calls certify only wild facts (PDDLStream accepts it).
+    certified = _conjunction_atoms(sections[":certified"][0], f"the :certified of {name!r}") \
+        if ":certified" in sections else ()
     fluents: tuple[str, ...] = ()
+    fluents_location = node.location
     if ":fluents" in sections:
         fluent_node = _expect_list(sections[":fluents"][0], f"the :fluents of {name!r}")
         fluents = tuple(_expect_name(item, "a fluent predicate") for item in fluent_node.items)
-    return Stream(name, inputs, domain, outputs, certified, fluents, node.location)
+        fluents_location = sections[":fluents"][1]
+    return Stream(name, inputs, domain, outputs, certified, fluents, node.location,
+                  fluents_location=fluents_location)
+
+
+def _parse_rule(node: SList, index: int) -> Stream:
+    """``(:rule :inputs (?x ...) :domain (...) :certified (...))``: an always-true eager test
+    named ``:rule{index}`` (a name no stream file can declare)."""
+    name = f":rule{index}"
+    sections = _keyword_sections(node.items[1:], (":inputs", ":domain", ":certified"), "a rule")
+    inputs = _variable_list(sections[":inputs"][0], "the inputs of a rule") \
+        if ":inputs" in sections else ()
+    domain = _conjunction_atoms(sections[":domain"][0], "the :domain of a rule") \
+        if ":domain" in sections else ()
+    if ":certified" not in sections:
+        raise InputError("a rule has no :certified facts", node.location)
+    certified = _conjunction_atoms(sections[":certified"][0], "the :certified of a rule")
+    return Stream(name, inputs, domain, (), certified, (), node.location, is_rule=True)
 
 
 def _parse_external(node: SList, kind: str) -> StreamFunction | ExternalPredicate:
@@ -470,6 +488,8 @@ def parse_stream_file(text: str, path: str | Path) -> StreamFile:
         key = section.head()
         if key == ":stream":
             streams.append(_parse_stream(section))
+        elif key == ":rule":
+            streams.append(_parse_rule(section, sum(s.is_rule for s in streams)))
         elif key == ":function":
             function = _parse_external(section, ":function")
             assert isinstance(function, StreamFunction)
@@ -480,7 +500,8 @@ def parse_stream_file(text: str, path: str | Path) -> StreamFile:
             predicates.append(predicate)
         else:
             raise InputError(
-                f"unknown stream-file section {key!r}: expected :stream, :function or :predicate",
+                f"unknown stream-file section {key!r}: expected :stream, :rule, :function or "
+                ":predicate",
                 section.location,
             )
     return StreamFile(name, tuple(streams), tuple(functions), tuple(predicates), root.location)

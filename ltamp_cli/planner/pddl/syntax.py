@@ -212,7 +212,14 @@ class Problem:
 
 @dataclass(frozen=True)
 class Stream:
-    """``(:stream name :inputs :domain :outputs :certified [:fluents])``."""
+    """``(:stream name :inputs :domain :outputs :certified [:fluents])``.
+
+    A ``(:rule :inputs :domain :certified)`` is a stream with ``is_rule`` set: an always-true
+    test that is evaluated eagerly (as PDDLStream compiles rules). ``fluent_domain`` holds the
+    :domain facts that actions change (PDDLStream's exogenous case): inputs are enumerated
+    from the static ``domain`` only, and the certified facts hold only in states where the
+    ``fluent_domain`` facts hold (see :func:`~ltamp_cli.planner.pddl.check.prepare_streams`).
+    """
 
     name: str
     inputs: tuple[str, ...]
@@ -221,6 +228,9 @@ class Stream:
     certified: tuple[Atom, ...]
     fluents: tuple[str, ...] = ()
     location: SourceLocation = _loc()  # noqa: RUF009
+    is_rule: bool = False
+    fluent_domain: tuple[Atom, ...] = ()
+    fluents_location: SourceLocation = _loc()  # noqa: RUF009
 
     @property
     def is_test(self) -> bool:

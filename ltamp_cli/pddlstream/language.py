@@ -1,0 +1,170 @@
+"""PDDLStream's problem and solution types and its formula helpers, as plain tuples.
+
+Formulas are tuples as in PDDLStream: ``("and", f1, f2)``, ``("not", f)``,
+``("exists", ("?x", ...), f)``, a fact ``("AtPose", block, pose)`` whose arguments are
+Python values, and strings starting with ``?`` are variables.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any, NamedTuple
+
+from ltamp_cli.errors import InputError
+from ltamp_cli.planner.streams import WildOutput as PlannerWildOutput
+
+FactTuple = tuple[Any, ...]
+Formula = tuple[Any, ...]
+
+
+class PDDLText(str):
+    """PDDL text that remembers the file it was read from (for ``file:line:col`` errors)."""
+
+    path: str
+
+    def __new__(cls, text: str, path: str) -> PDDLText:
+        made = super().__new__(cls, text)
+        made.path = path
+        return made
+
+
+def read(path: str | Path) -> PDDLText:
+    """The text of a PDDL file (PDDLStream's ``read``), remembering its path."""
+    return PDDLText(Path(path).read_text(), str(path))
+
+
+def get_file_path(file: str, relative: str) -> str:
+    """``relative`` next to the file ``file`` (PDDLStream's ``get_file_path``)."""
+    return str(Path(file).resolve().parent / relative)
+
+
+class PDDLProblem(NamedTuple):
+    """A PDDLStream problem: domain text, constant values, stream text, stream bindings,
+    initial facts and goal formula (tuples of Python values)."""
+
+    domain_pddl: str
+    constant_map: Mapping[str, Any]
+    stream_pddl: str | Sequence[str] | None
+    stream_map: Mapping[str, Callable[..., Any]]
+    init: Iterable[FactTuple]
+    goal: Formula
+
+
+class Action(NamedTuple):
+    """One plan step: the action's name and its arguments' Python values."""
+
+    name: str
+    args: tuple[Any, ...]
+
+
+class Certificate(NamedTuple):
+    """``all_facts``: every fact known at the end; ``preimage_facts``: those the plan
+    relies on. Facts are tuples ``(predicate, value, ...)``."""
+
+    all_facts: list[Fact]
+    preimage_facts: list[Fact]
+
+
+class Solution(NamedTuple):
+    """``plan`` (``None`` when not solved), its ``cost`` (``inf`` when not solved) and its
+    :class:`Certificate`."""
+
+    plan: list[Action] | None
+    cost: float
+    certificate: Certificate
+
+
+def And(*formulas: Any) -> Formula:  # PDDLStream's names: capitalised
+    return ("and", *formulas)
+
+
+def Or(*formulas: Any) -> Formula:
+    return ("or", *formulas)
+
+
+def Not(formula: Any) -> Formula:
+    return ("not", formula)
+
+
+def Imply(condition: Any, consequence: Any) -> Formula:
+    return ("imply", condition, consequence)
+
+
+def Equal(left: Any, right: Any) -> Formula:
+    return ("=", left, right)
+
+
+def Exists(parameters: Sequence[str], formula: Any) -> Formula:
+    """``parameters``: variable names such as ``["?c"]``."""
+    return ("exists", tuple(parameters), formula)
+
+
+def ForAll(parameters: Sequence[str], formula: Any) -> Formula:
+    return ("forall", tuple(parameters), formula)
+
+
+def WildOutput(values: Iterable[Any] = (), facts: Iterable[FactTuple] = (),
+               actions: Iterable[Any] = (), enumerated: bool = False,
+               replan: bool = False) -> PlannerWildOutput:
+    """What one call of a stream yields (PDDLStream's ``WildOutput``): a list of output
+    ``values`` plus ``facts`` it certifies beyond its ``:certified`` ones; ``enumerated``:
+    nothing more for these inputs. ``actions`` are not supported; ``replan`` is ignored."""
+    if list(actions):
+        raise InputError("WildOutput(actions=...) is not supported")
+    return PlannerWildOutput(tuple(tuple(v) for v in values), tuple(tuple(f) for f in facts),
+                             enumerated)
+
+
+def Fact(predicate: str, args: Iterable[Any]) -> Fact:
+    """``(predicate, *args)``."""
+    return (predicate, *args)
+
+
+class PartialInputs(NamedTuple):
+    """PDDLStream's optimistic-output policy for ``StreamInfo(opt_gen_fn=...)``; accepted
+    and ignored (ltamp's optimistic outputs are always placeholders)."""
+
+    inputs: str = ""
+    unique: bool = False
+    test: Callable[..., Any] | None = None
+
+
+def Output(*values: Any) -> tuple[Any, ...]:
+    """One output tuple of a stream (PDDLStream's ``Output``)."""
+    return values
+
+
+WILD = "*"
+# ``stream_map=DEBUG``: every stream yields one new placeholder value per input tuple;
+# ``SHARED_DEBUG``: one placeholder per stream and output, whatever the inputs.
+DEBUG = "debug"
+SHARED_DEBUG = "shared_debug"
+
+
+class PlanConstraints(NamedTuple):
+    """``skeletons``: at most one skeleton, a list of ``(action name, args)`` whose args are
+    values, ``?variables`` or :data:`WILD`; ``exact``: the plan is exactly the skeleton (else
+    other actions may come between). ``hint`` and ``max_cost`` are accepted and ignored."""
+
+    skeletons: Sequence[Sequence[tuple[str, Sequence[Any]]]] | None = None
+    exact: bool = True
+    hint: bool = False
+    max_cost: float = float("inf")
+
+
+def print_solution(solution: Solution) -> None:
+    """Print a solution's plan and cost, one action per line."""
+    plan, cost, _ = solution
+    if plan is None:
+        print("Solved: False")
+        return
+    print(f"Solved: True\nCost: {cost:.3f}\nLength: {len(plan)}")
+    for index, action in enumerate(plan, start=1):
+        print(f"{index}) {action.name} {' '.join(map(str, action.args))}")
+
+
+__all__ = ["DEBUG", "SHARED_DEBUG", "WILD", "Action", "And", "Certificate", "Equal", "Exists",
+           "Fact", "ForAll", "Imply", "Not", "Or", "Output", "PDDLProblem", "PDDLText",
+           "PartialInputs", "PlanConstraints",
+           "Solution", "WildOutput", "get_file_path", "print_solution", "read"]

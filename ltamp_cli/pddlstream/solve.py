@@ -1,0 +1,166 @@
+"""PDDLStream's ``solve``: plan for a :class:`~.language.PDDLProblem` with ltamp's planner."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from ltamp_cli.errors import InputError
+from ltamp_cli.pddlstream.language import (
+    WILD,
+    Action,
+    Certificate,
+    PDDLProblem,
+    PlanConstraints,
+    Solution,
+)
+from ltamp_cli.pddlstream.problem import Info, to_planning_problem
+from ltamp_cli.planner.algorithms.common import ALGORITHMS, PlannerConfig
+from ltamp_cli.planner.api import solve as plan
+from ltamp_cli.planner.objects import value_key as _value_key
+from ltamp_cli.planner.pddl.check import check_domain, check_problem
+from ltamp_cli.planner.pddl.parse import parse_domain, parse_problem
+from ltamp_cli.planner.pddl.syntax import Domain, IncreaseCost
+from ltamp_cli.planner.problem import PlanningProblem
+from ltamp_cli.planner.result import PlanResult
+
+FOCUSED_ALGORITHMS = ("focused", "binding", "adaptive")
+
+
+def solve(problem: PDDLProblem, algorithm: str = "adaptive",
+          constraints: PlanConstraints | None = None,
+          stream_info: Mapping[str, Info] | None = None, max_time: float = math.inf,
+          unit_costs: bool = False, success_cost: float = math.inf, verbose: bool = True,
+          seed: int = 0, search: str = "ff", **ignored: Any) -> Solution:
+    """Solve like PDDLStream's ``solve`` and return ``Solution(plan, cost, certificate)``.
+
+    ``algorithm``: ``adaptive`` (default), ``binding``, ``focused`` or ``incremental``;
+    ``max_time`` in seconds (``inf``: until solved or proven infeasible); ``success_cost``:
+    keep improving the plan until its cost is at most this. Plan steps carry the Python
+    values of their arguments. PDDLStream's other options (``planner``, ``max_skeletons``,
+    ``effort_weight``, ...) are accepted and ignored. Bad input raises
+    :class:`~ltamp_cli.errors.InputError` (one line, ``file:line:col`` for PDDL).
+    """
+    if algorithm not in ALGORITHMS:
+        raise InputError(f"unknown algorithm {algorithm!r}: expected one of "
+                         f"{', '.join(ALGORITHMS)}")
+    planning_problem = to_planning_problem(problem, stream_info)
+    skeleton = skeleton_patterns(constraints, planning_problem)
+    config = PlannerConfig(algorithm=algorithm, max_time=max_time, seed=seed, search=search,
+                           unit_costs=unit_costs, success_cost=success_cost, skeleton=skeleton)
+    result = plan(planning_problem, config)
+    if verbose:
+        print(f"ltamp {algorithm}: {result.status} in {result.time_s:.3f} s"
+              + (f", cost {result.cost:g}" if result.solved else ""))
+    return to_solution(result, unit_costs or not has_action_costs(planning_problem.domain))
+
+
+def has_action_costs(domain: Domain) -> bool:
+    """Whether any action increases ``total-cost`` (else, as in PDDLStream, each costs 1)."""
+    def costs(effect: object) -> bool:
+        if isinstance(effect, IncreaseCost):
+            return True
+        return any(costs(part) for part in getattr(effect, "parts", ())) or (
+            hasattr(effect, "effect") and costs(effect.effect))
+    return any(costs(action.effect) for action in domain.actions)
+
+
+def solve_incremental(problem: PDDLProblem, **options: Any) -> Solution:
+    return solve(problem, algorithm="incremental", **options)
+
+
+def solve_focused(problem: PDDLProblem, **options: Any) -> Solution:
+    return solve(problem, algorithm="focused", **options)
+
+
+def solve_binding(problem: PDDLProblem, **options: Any) -> Solution:
+    return solve(problem, algorithm="binding", **options)
+
+
+def solve_adaptive(problem: PDDLProblem, **options: Any) -> Solution:
+    return solve(problem, algorithm="adaptive", **options)
+
+
+def skeleton_patterns(constraints: PlanConstraints | None, problem: PlanningProblem
+                      ) -> tuple[str, ...]:
+    """A PDDLStream skeleton as the planner's patterns (``?`` for variables and WILD)."""
+    if constraints is None or constraints.skeletons is None:
+        return ()
+    skeletons = list(constraints.skeletons)
+    if len(skeletons) != 1:
+        raise InputError(f"PlanConstraints gives {len(skeletons)} skeletons: ltamp follows "
+                         "exactly one (or none)")
+    by_value = {_value_key(value): name for name, (_, value) in problem.objects.items()}
+    patterns: list[str] = [] if constraints.exact else ["..."]
+    for name, args in skeletons[0]:
+        words = [str(name).lower()]
+        for arg in args:
+            if arg == WILD or (isinstance(arg, str) and arg.startswith("?")):
+                words.append("?")
+            elif _value_key(arg) in by_value:
+                words.append(by_value[_value_key(arg)])
+            else:
+                raise InputError(f"skeleton step ({name} ...): {arg!r:.60} is no object of "
+                                 "the problem; use a '?variable' or WILD")
+        patterns.append(" ".join(words))
+        if not constraints.exact:
+            patterns.append("...")
+    return tuple(patterns)
+
+
+def solve_from_pddl(domain_pddl: str, problem_pddl: str, unit_costs: bool = False,
+                    max_time: float = math.inf, **ignored: Any) -> tuple[list[Action] | None,
+                                                                          float]:
+    """Plan for a PDDL domain and problem (no streams): ``(plan, cost)`` as PDDLStream's
+    ``solve_from_pddl``; arguments are object names."""
+    domain = parse_domain(domain_pddl, getattr(domain_pddl, "path", "domain.pddl"))
+    check_domain(domain)
+    parsed = parse_problem(problem_pddl, getattr(problem_pddl, "path", "problem.pddl"))
+    check_problem(parsed, domain)
+    objects = {o.name: (o.type, None) for o in parsed.objects}
+    for constant in domain.constants:
+        objects.setdefault(constant.name, (constant.type, None))
+    problem = PlanningProblem(parsed.name, getattr(problem_pddl, "path", "problem.pddl"), domain,
+                              None, None, "", {}, objects, parsed.init,
+                              parsed.function_values, parsed.goal)
+    result = plan(problem, PlannerConfig(max_time=max_time, unit_costs=unit_costs))
+    if not result.solved or result.plan is None:
+        return None, math.inf
+    cost = (float(len(result.plan)) if unit_costs or not has_action_costs(domain)
+            else result.cost)
+    return [Action(step.name, step.args) for step in result.plan], cost
+
+
+def get_cost_scale() -> float:
+    """PDDLStream scales costs to integers for Fast Downward; ltamp plans with the costs as
+    they are, so the scale is 1."""
+    return 1.0
+
+
+def create_parser(default_algorithm: str = "adaptive") -> argparse.ArgumentParser:
+    """PDDLStream's command-line parser: ``-a/--algorithm`` and ``-u/--unit``."""
+    parser = argparse.ArgumentParser()
+    parser.add_argument("-a", "--algorithm", default=default_algorithm, choices=ALGORITHMS,
+                        help="the planning algorithm")
+    parser.add_argument("-u", "--unit", action="store_true", help="use unit action costs")
+    return parser
+
+
+def to_solution(result: PlanResult, unit_costs: bool = False) -> Solution:
+    """The planner's result with every object replaced by its Python value (``unit_costs``:
+    the cost is the number of actions)."""
+    def value(name: str) -> Any:
+        return result.objects.get(name, name)
+
+    def fact(names: tuple[str, ...]) -> tuple[Any, ...]:
+        return (names[0], *(value(n) for n in names[1:]))
+
+    certificate = Certificate([fact(f) for f in result.certificate.facts],
+                              [fact(f) for f in result.certificate.preimage])
+    if result.plan is None or not result.solved:
+        return Solution(None, math.inf, certificate)
+    plan_steps = [Action(step.name, tuple(step.values)) for step in result.plan]
+    return Solution(plan_steps, float(len(plan_steps)) if unit_costs else result.cost,
+                    certificate)
