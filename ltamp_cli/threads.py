@@ -19,7 +19,10 @@ import inspect
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from typing import ParamSpec, TypeVar
+from typing import TYPE_CHECKING, ParamSpec, TypeVar
+
+if TYPE_CHECKING:
+    from threadpoolctl import ThreadpoolController
 
 P = ParamSpec("P")
 R = TypeVar("R")
@@ -44,11 +47,10 @@ def limited_threads(limit: int | None = 1) -> Iterator[None]:
         return
     if limit < 1:
         raise ValueError(f"threads: expected a number >= 1 or None, got {limit}")
-    from threadpoolctl import threadpool_limits
-
     torch = sys.modules.get("torch")
     torch_threads = torch.get_num_threads() if torch is not None else None
-    with threadpool_limits(limits=limit):
+    loaded = frozenset(name for name in _POOL_OWNERS if name in sys.modules)
+    with _controller(loaded).limit(limits=limit):
         if torch is not None:
             torch.set_num_threads(limit)
         try:
@@ -56,6 +58,23 @@ def limited_threads(limit: int | None = 1) -> Iterator[None]:
         finally:
             if torch is not None and torch_threads is not None:
                 torch.set_num_threads(torch_threads)
+
+
+#: Packages whose import loads a thread pool (OpenBLAS, OpenMP).
+_POOL_OWNERS = ("numpy", "scipy", "sklearn", "torch")
+
+
+@functools.cache
+def _controller(loaded: frozenset[str]) -> ThreadpoolController:
+    """The thread pools loaded once the packages ``loaded`` were imported. Inspecting the
+    loaded libraries costs ~3 ms and leaves reference cycles per ``threadpool_limits`` call,
+    while a solve of a small problem takes ~20 ms; pools come with these packages' imports, so
+    one inspection per set of imported packages suffices (at most 2**4, never evicted: an
+    evicted controller would be cyclic garbage)."""
+    del loaded  # the cache key
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()
 
 
 def limits_threads(function: Callable[P, R]) -> Callable[P, R]:
