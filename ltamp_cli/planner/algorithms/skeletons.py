@@ -25,6 +25,7 @@ import itertools
 from dataclasses import dataclass, field
 
 from ltamp_cli.planner.algorithms.common import PlannerState, bound_plan
+from ltamp_cli.planner.algorithms.effort import observed_cheap
 from ltamp_cli.planner.algorithms.optimistic import (
     MAX_LOCAL_REPAIRS,
     InstanceKey,
@@ -53,6 +54,18 @@ REAL_SEARCH_EXPANSIONS = 500
 # Kitchen3D pour_blocked budget on 42 GoodPour calls for stale skeletons (timeout at 90 s,
 # where 0.1 plans in ~20 s CPU).
 STEPS_PER_EVALUATION = 0.1
+# Adaptive: a binding step that calls a cheap stream (observed < 0.25 ms CPU per call)
+# counts as this fraction of a step of the sampling share, and such bindings may be retried
+# CHEAP_RETRY_FACTOR times as often before a search. With plain uniform samplers most
+# stream plans fail on a collision that a few more samples fix (tamp2d_uniform_tight: two
+# blocks fit in the goal region for 1 pair of placements in 9), and these retries cost
+# microseconds where a search to raise the retry bound costs tens of milliseconds.
+CHEAP_STEP_COST = 0.05
+CHEAP_RETRY_FACTOR = 10
+# Expansion bound of a speculative search (see solve_with_skeletons): this many times the
+# most a solved optimistic search needed so far, at least SPECULATIVE_MIN_EXPANSIONS.
+SPECULATIVE_FACTOR = 4
+SPECULATIVE_MIN_EXPANSIONS = 100
 
 
 @dataclass(frozen=True)
@@ -186,15 +199,25 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
     last_search_work = 0
     retry_threshold = 0
     facts_at_search = -1
+    solved_expansions = 0  # the most expansions a solved optimistic search needed
     capped_task: frozenset[object] | None = None
     try:
         while not state.timed_out():
             state.iterations += 1
             evaluate_eager(state)
             head = queue.peek()
-            stalled = head is None or head.attempts > retry_threshold
+            stalled = head is None or head.attempts > retry_limit(state, head, retry_threshold,
+                                                                  adaptive)
             learned = len(state.facts.members) != facts_at_search
             if stalled or (adaptive and learned):
+                # Adaptive also searches when sampling taught it new facts although the
+                # queue could go on: a speculative search, bounded by a few times what the
+                # last successful one needed and never raising the budget, the complexity
+                # or the retry bound. With samplers that know nothing of each other
+                # (tamp2d_uniform_tight_4 seed 2) most such tasks have no plan until the
+                # queue has sampled more, and a search that fails explores everything
+                # within its budget: 600, then 1,200 expansions (2 s) each time.
+                speculative = not stalled
                 facts_at_search = len(state.facts.members)
                 evaluation = optimistic_evaluation(state, complexity, placeholders)
                 # The most advanced binding's plan, with what it bound so far, is checked
@@ -206,10 +229,16 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                 # real task with 600, 1,200 and 2,400 expansions while the complexity
                 # grew): the complexity grows until it changes, up to the bound.
                 skip = capped_task if complexity < state.config.max_complexity else None
+                limit = (min(state.search_budget, max(
+                    SPECULATIVE_MIN_EXPANSIONS, SPECULATIVE_FACTOR * solved_expansions))
+                    if speculative else None)
                 discrete = state.search(evaluation.index.members, evaluation.object_types,
-                                        evaluation.function_values,
+                                        evaluation.function_values, limit,
                                         context_blocks=evaluation.context_blocks,
-                                        budgeted=True, guess=guess, skip_if_grounded_as=skip)
+                                        budgeted=not speculative, guess=guess,
+                                        skip_if_grounded_as=skip)
+                if discrete.solved and discrete.outcome is not None:
+                    solved_expansions = max(solved_expansions, discrete.outcome.expanded)
                 if discrete.capped and not discrete.skipped:
                     capped_task = grounding_signature(discrete.grounding)
                 elif not discrete.capped:
@@ -218,6 +247,14 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                                              or not discrete.outcome.guessed):
                     # A followed guess did no search work: keep the previous sampling share.
                     last_search_work = discrete.outcome.evaluated if discrete.outcome else 0
+                if speculative and not discrete.solved:
+                    # Nothing learned about the bounds: go on with the queue, for a share
+                    # of work that grows with what this search cost.
+                    steps = max(1, round(last_search_work * STEPS_PER_EVALUATION))
+                    result = _process(state, queue, adaptive, steps, retry_threshold)
+                    if result is not None:
+                        return result
+                    continue
                 state.diagnose(discrete, evaluation.index.members)
                 if discrete.solved:
                     facts, terms = plan_preimage(discrete)
@@ -255,16 +292,37 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
         return state.result(TIMEOUT, None)
 
 
+def cheap_step(state: PlannerState, binding: Binding) -> bool:
+    """Whether processing ``binding`` next calls a stream whose observed calls are cheap
+    (:func:`.effort.observed_cheap`, CPU time; a finished binding's check is not)."""
+    plan = binding.skeleton.stream_plan
+    if binding.step >= len(plan):
+        return False
+    name = plan[binding.step][0]
+    return observed_cheap(state.history.get(name), state.stream_stats.get(name))
+
+
+def retry_limit(state: PlannerState, binding: Binding, retry_threshold: int,
+                adaptive: bool) -> int:
+    """The most retries (alternative outputs, empty calls) ``binding`` may have made and
+    still be processed before the next search: ``retry_threshold``, or with adaptive
+    :data:`CHEAP_RETRY_FACTOR` times as many when its next call is cheap."""
+    if adaptive and cheap_step(state, binding):
+        return (retry_threshold + 1) * CHEAP_RETRY_FACTOR
+    return retry_threshold
+
+
 def _process(state: PlannerState, queue: BindingQueue, adaptive: bool, steps: int,
              retry_threshold: int) -> PlanResult | None:
-    done = 0
+    done = 0.0
     while len(queue) and not state.timed_out():
         head = queue.peek()
         assert head is not None
         if adaptive and done >= steps:
             return None
-        done += 1
-        if head.attempts > retry_threshold:
+        cheap = adaptive and cheap_step(state, head)
+        done += CHEAP_STEP_COST if cheap else 1.0
+        if head.attempts > retry_limit(state, head, retry_threshold, adaptive):
             return None
         binding = queue.pop()
         children = advance(state, binding)
