@@ -39,7 +39,7 @@ from ltamp_cli.planner.algorithms.optimistic import (
     stream_plan,
 )
 from ltamp_cli.planner.algorithms.preimage import plan_preimage
-from ltamp_cli.planner.pddl.syntax import StreamFunction
+from ltamp_cli.planner.pddl.syntax import Stream, StreamFunction
 from ltamp_cli.planner.result import INFEASIBLE, SOLVED, TIMEOUT, PlanResult
 from ltamp_cli.planner.search.engine import SearchTimeout
 from ltamp_cli.planner.search.ground import Fact
@@ -54,13 +54,17 @@ REAL_SEARCH_EXPANSIONS = 500
 # Kitchen3D pour_blocked budget on 42 GoodPour calls for stale skeletons (timeout at 90 s,
 # where 0.1 plans in ~20 s CPU).
 STEPS_PER_EVALUATION = 0.1
-# Adaptive: a binding step that calls a cheap stream (observed < 0.25 ms CPU per call)
-# counts as this fraction of a step of the sampling share, and such bindings may be retried
-# CHEAP_RETRY_FACTOR times as often before a search. With plain uniform samplers most
-# stream plans fail on a collision that a few more samples fix (tamp2d_uniform_tight: two
-# blocks fit in the goal region for 1 pair of placements in 9), and these retries cost
-# microseconds where a search to raise the retry bound costs tens of milliseconds.
-CHEAP_STEP_COST = 0.05
+# Adaptive: a binding step that calls a cheap stream (observed < 0.25 ms CPU per call) may
+# be retried CHEAP_RETRY_FACTOR times as often before a search. With plain uniform samplers
+# most stream plans fail on a collision that a few more samples fix (tamp2d_uniform_tight:
+# two blocks fit in the goal region for 1 pair of placements in 9): such retries cost
+# microseconds where a search to raise the retry bound costs tens of milliseconds. A cheap
+# step counts as CHEAP_STEP_COST of a step of the sampling share unless it makes a new
+# object: eager streams over new objects and larger tasks to ground cost far more than the
+# call (tamp2d_4blocks, whose motions are eager, went from 0.05 to 0.8 s CPU without that).
+# 0.25 rather than 0.05 (6 seeds, median CPU): tamp2d_4blocks 0.12 -> 0.095 s (1.0: 0.08 s),
+# tamp2d_uniform_tight_8 0.18 -> 0.21 s (1.0: 0.35 s).
+CHEAP_STEP_COST = 0.25
 CHEAP_RETRY_FACTOR = 10
 # Expansion bound of a speculative search (see solve_with_skeletons): this many times the
 # most a solved optimistic search needed so far, at least SPECULATIVE_MIN_EXPANSIONS.
@@ -302,6 +306,20 @@ def cheap_step(state: PlannerState, binding: Binding) -> bool:
     return observed_cheap(state.history.get(name), state.stream_stats.get(name))
 
 
+def _new_output(state: PlannerState, binding: Binding) -> bool:
+    """Whether processing ``binding`` asks a generator for an output it has not made yet: a
+    new object, whose consequences (eager streams over it, a larger task to ground) cost
+    more than the call."""
+    plan = binding.skeleton.stream_plan
+    name, inputs = plan[binding.step]
+    external = state.externals[name]
+    if not isinstance(external, Stream) or external.is_test:
+        return False
+    key = (name, tuple(binding.mapping.get(x, x) for x in inputs))
+    instance = state.instances.get(key)
+    return instance is None or binding.output_index >= len(instance.results)
+
+
 def retry_limit(state: PlannerState, binding: Binding, retry_threshold: int,
                 adaptive: bool) -> int:
     """The most retries (alternative outputs, empty calls) ``binding`` may have made and
@@ -320,7 +338,7 @@ def _process(state: PlannerState, queue: BindingQueue, adaptive: bool, steps: in
         assert head is not None
         if adaptive and done >= steps:
             return None
-        cheap = adaptive and cheap_step(state, head)
+        cheap = adaptive and cheap_step(state, head) and not _new_output(state, head)
         done += CHEAP_STEP_COST if cheap else 1.0
         if head.attempts > retry_limit(state, head, retry_threshold, adaptive):
             return None
