@@ -205,6 +205,7 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
     facts_at_search = -1
     solved_expansions = 0  # the most expansions a solved optimistic search needed
     capped_task: frozenset[object] | None = None
+    sampling = SamplingRound()
     try:
         while not state.timed_out():
             state.iterations += 1
@@ -213,7 +214,11 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
             stalled = head is None or head.attempts > retry_limit(state, head, retry_threshold,
                                                                   adaptive)
             learned = len(state.facts.members) != facts_at_search
-            if stalled or (adaptive and learned):
+            # A speculative search only after a stream plan met a failure since the last
+            # search: while the queue's bindings progress, their skeleton is on track, and a
+            # search of the larger task would mostly find it again (kitchen_fluent: five
+            # optimistic searches of ~1,500 actions, each as costly as the whole sampling).
+            if stalled or (adaptive and learned and sampling.failures):
                 # Adaptive also searches when sampling taught it new facts although the
                 # queue could go on: a speculative search, bounded by a few times what the
                 # last successful one needed and never raising the budget, the complexity
@@ -223,6 +228,7 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                 # within its budget: 600, then 1,200 expansions (2 s) each time.
                 speculative = not stalled
                 facts_at_search = len(state.facts.members)
+                sampling.failures = 0
                 evaluation = optimistic_evaluation(state, complexity, placeholders)
                 # The most advanced binding's plan, with what it bound so far, is checked
                 # first: once sampling made its facts real it is usually still a plan.
@@ -255,7 +261,7 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                     # Nothing learned about the bounds: go on with the queue, for a share
                     # of work that grows with what this search cost.
                     steps = max(1, round(last_search_work * STEPS_PER_EVALUATION))
-                    result = _process(state, queue, adaptive, steps, retry_threshold)
+                    result = _process(state, queue, adaptive, steps, retry_threshold, sampling)
                     if result is not None:
                         return result
                     continue
@@ -288,7 +294,7 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                             and not discrete.capped):
                         return state.result(INFEASIBLE, None)
             steps = max(1, round(last_search_work * STEPS_PER_EVALUATION))
-            result = _process(state, queue, adaptive, steps, retry_threshold)
+            result = _process(state, queue, adaptive, steps, retry_threshold, sampling)
             if result is not None:
                 return result
         return state.result(TIMEOUT, None)
@@ -330,8 +336,15 @@ def retry_limit(state: PlannerState, binding: Binding, retry_threshold: int,
     return retry_threshold
 
 
+@dataclass
+class SamplingRound:
+    """What processing the queue met since the last search."""
+
+    failures: int = 0  # binding steps that failed (a test, an exhausted or empty stream)
+
+
 def _process(state: PlannerState, queue: BindingQueue, adaptive: bool, steps: int,
-             retry_threshold: int) -> PlanResult | None:
+             retry_threshold: int, sampling: SamplingRound) -> PlanResult | None:
     done = 0.0
     while len(queue) and not state.timed_out():
         head = queue.peek()
@@ -344,6 +357,9 @@ def _process(state: PlannerState, queue: BindingQueue, adaptive: bool, steps: in
             return None
         binding = queue.pop()
         children = advance(state, binding)
+        if children is not None and (not children or children == [binding]):
+            sampling.failures += 1  # a dead end, or nothing this call (a local repair and
+            # an ordinary output go on)
         if children is None:
             real = state.search(state.facts.members, state.object_types,
                                 state.function_values, REAL_SEARCH_EXPANSIONS,
