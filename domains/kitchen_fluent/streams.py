@@ -12,14 +12,13 @@ or goes another way).
 
 from __future__ import annotations
 
+import importlib.util
 from collections.abc import Iterator, Mapping, Sequence
+from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 import numpy as np
-
-from ltamp_cli.planner.streams import Binding, StreamInfo
-
-EAGER = StreamInfo(eager=True)
 
 
 def slot_of(conf: str) -> tuple[str, int] | None:
@@ -39,31 +38,27 @@ def swept_slots(start: str, goal: str) -> list[tuple[str, int]]:
     return [(first[0], index) for index in range(low + 1, high)]
 
 
+def _symbolic_kitchen() -> ModuleType:
+    """The plain symbolic kitchen's bindings, whose closed-form streams this kitchen shares
+    (loaded from its file: bindings modules are files, not an installed package)."""
+    path = Path(__file__).resolve().parent.parent / "kitchen_symbolic" / "streams.py"
+    spec = importlib.util.spec_from_file_location("kitchen_symbolic_streams", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str, Any]:
+    """The symbolic kitchen's grasps, kinematics, skill configurations and collision test,
+    with a plain slot sampler and the state-dependent motion stream."""
     slots: dict[str, int] = {str(k): int(v) for k, v in world["slots"].items()}
-    tool_skills: dict[str, list[str]] = {str(k): list(v) for k, v in
-                                         world.get("tool_targets", {}).items()}
     tall: set[str] = set(world.get("tall", []))
 
     def sample_pose(obj: str, region: str) -> Iterator[tuple[str]]:
         # Every slot once, in a seeded random order (knows nothing of other objects).
         for index in rng.permutation(slots.get(region, 0)):
             yield (f"{region}/{int(index)}",)
-
-    def sample_grasp(obj: str) -> tuple[str]:
-        return (f"grasp:{obj}",)
-
-    def inverse_kinematics(obj: str, pose: str, grasp: str) -> tuple[str]:
-        return (f"above:{pose}",)
-
-    def fill_conf(faucet: str, cup: str, grasp: str) -> tuple[str]:
-        return (f"under:{faucet}",)
-
-    def skill_conf(tool: str, grasp: str, target: str, pose: str) -> tuple[str] | None:
-        allowed = tool_skills.get(tool.split(":")[-1])
-        if allowed is not None and target not in allowed:
-            return None  # this tool is not used on that container
-        return (f"above:{pose}",)
 
     def plan_motion(start: str, goal: str, fluents: Sequence[tuple[Any, ...]] = ()
                     ) -> tuple[str] | None:
@@ -78,15 +73,7 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
                     return None  # the carried object would hit a tall one on the way
         return (f"{start}->{goal}" + (f" carrying {held}" if held else ""),)
 
-    def test_cfree(o1: str, p1: str, o2: str, p2: str) -> bool:
-        return p1 != p2
-
-    return {
-        "sample-pose": sample_pose,
-        "sample-grasp": Binding(sample_grasp, EAGER),
-        "inverse-kinematics": Binding(inverse_kinematics, EAGER),
-        "fill-conf": Binding(fill_conf, EAGER),
-        "skill-conf": Binding(skill_conf, EAGER),
-        "plan-motion": plan_motion,  # a :fluents stream: called per state, never eagerly
-        "test-cfree": Binding(test_cfree, EAGER),
-    }
+    streams = dict(_symbolic_kitchen().make_streams(world, rng))
+    streams["sample-pose"] = sample_pose
+    streams["plan-motion"] = plan_motion  # a :fluents stream: called per state, not eagerly
+    return streams
