@@ -70,6 +70,12 @@ CHEAP_RETRY_FACTOR = 10
 # most a solved optimistic search needed so far, at least SPECULATIVE_MIN_EXPANSIONS.
 SPECULATIVE_FACTOR = 4
 SPECULATIVE_MIN_EXPANSIONS = 100
+# After this many speculative searches in a row the next search is a full one, which may
+# raise the bounds: speculative searches may keep finding fresh skeletons (new samples of a
+# pose that always collides, tamp2d_blocked) whose retries would otherwise never stall.
+# tamp2d_blocked with a first search budget of one expansion: 3 -> 2 took 7 -> 3 s CPU;
+# 1 slowed tamp2d_uniform_tight_4 (6 seeds, median CPU 0.066 -> 0.096 s).
+MAX_SPECULATIVE_IN_A_ROW = 2
 
 
 @dataclass(frozen=True)
@@ -206,13 +212,15 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
     solved_expansions = 0  # the most expansions a solved optimistic search needed
     capped_task: frozenset[object] | None = None
     sampling = SamplingRound()
+    speculative_in_a_row = 0
     try:
         while not state.timed_out():
             state.iterations += 1
             evaluate_eager(state)
             head = queue.peek()
-            stalled = head is None or head.attempts > retry_limit(state, head, retry_threshold,
-                                                                  adaptive)
+            stalled = (head is None
+                       or head.attempts > retry_limit(state, head, retry_threshold, adaptive)
+                       or speculative_in_a_row >= MAX_SPECULATIVE_IN_A_ROW)
             learned = len(state.facts.members) != facts_at_search
             # A speculative search only after a stream plan met a failure since the last
             # search: while the queue's bindings progress, their skeleton is on track, and a
@@ -227,6 +235,7 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                 # queue has sampled more, and a search that fails explores everything
                 # within its budget: 600, then 1,200 expansions (2 s) each time.
                 speculative = not stalled
+                speculative_in_a_row = speculative_in_a_row + 1 if speculative else 0
                 facts_at_search = len(state.facts.members)
                 sampling.failures = 0
                 evaluation = optimistic_evaluation(state, complexity, placeholders)
