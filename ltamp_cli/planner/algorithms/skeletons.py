@@ -14,8 +14,10 @@ cheap generator of the later one for its next value at once (local repair, see
   retries (alternative outputs, instances that produced nothing) than the current bound;
 * ``adaptive`` (the default) also shares effort between searching and sampling: after a
   search it processes a number of bindings proportional to the states the search evaluated,
-  then searches again if sampling taught it new facts. A search that finds nothing new
-  raises the retry and complexity bounds.
+  then searches again if sampling taught it new facts and a binding step failed. Such a
+  speculative search is bounded and changes no bound; a full search that finds nothing new
+  raises the retry and complexity bounds. Bindings whose next stream is cheap may be retried
+  more often (plain samplers need several samples where a search costs far more).
 """
 
 from __future__ import annotations
@@ -366,7 +368,8 @@ def _process(state: PlannerState, queue: BindingQueue, adaptive: bool, steps: in
             return None
         binding = queue.pop()
         children = advance(state, binding)
-        if children is not None and (not children or children == [binding]):
+        if children is not None and (not children
+                                     or (len(children) == 1 and children[0] is binding)):
             sampling.failures += 1  # a dead end, or nothing this call (a local repair and
             # an ordinary output go on)
         if children is None:
