@@ -17,9 +17,17 @@ Targets (median wall time, no timeouts, per algorithm): ``kitchen_symbolic`` ≤
 ``tamp2d_4blocks`` ≤ 0.1 s. Printed as PASS/FAIL lines, with a second verdict on median CPU
 time (what a quiet machine's wall time would be); the exit code does not depend on them.
 
+``--suite uniform`` runs the continuous-TAMP suite instead: ``tamp2d_uniform_{tight,blocked}_
+{2,4,6,8}`` (placements drawn uniformly, see ``domains/tamp2d_uniform``) and
+``kitchen_fluent``, 10 seeds, every algorithm, ``max_time`` 60, cold history. Its targets are
+on median CPU seconds of ``adaptive`` with every seed solved: ≤ 0.1 s for 2 blocks, ≤ 0.25 s
+for 8 blocks and for ``kitchen_fluent``. It also writes a PNG of median CPU against the
+number of blocks (``--plot``). In every suite, a run that returned later than
+``max_time + 1 s`` is reported as an OVERRUN line.
+
     OMP_NUM_THREADS=1 .venv/bin/python bench/planner.py [--seeds 5] [--max-time 10]
         [--examples a,b] [--algorithms incremental,focused] [--histories cold,warm]
-        [--repeats 3]
+        [--repeats 3] [--suite examples|uniform] [--plot bench/results/planner_scaling.png]
         [--out bench/results/planner.json]
 """
 
@@ -48,6 +56,22 @@ REPO = Path(__file__).resolve().parent.parent
 EXAMPLES = REPO / "problems" / "examples"
 DEFAULT_OUT = REPO / "bench" / "results" / "planner.json"
 TARGETS_S = {"kitchen_symbolic": 0.2, "tamp2d_4blocks": 0.1}  # median wall seconds
+UNIFORM_LAYOUTS = ("tight", "blocked")
+UNIFORM_BLOCKS = (2, 4, 6, 8)
+# Median CPU seconds of adaptive in the uniform suite (PDDLStream's adaptive: 0.13-0.24 s).
+UNIFORM_TARGETS_S = {
+    **{f"tamp2d_uniform_{layout}_2": 0.1 for layout in UNIFORM_LAYOUTS},
+    **{f"tamp2d_uniform_{layout}_8": 0.25 for layout in UNIFORM_LAYOUTS},
+    "kitchen_fluent": 0.25,
+}
+# A solve may return at most this long after its max_time.
+OVERRUN_TOLERANCE_S = 1.0
+DEFAULT_PLOT = REPO / "bench" / "results" / "planner_scaling.png"
+
+
+def uniform_examples() -> list[str]:
+    return [f"tamp2d_uniform_{layout}_{blocks}" for layout in UNIFORM_LAYOUTS
+            for blocks in UNIFORM_BLOCKS] + ["kitchen_fluent"]
 
 
 HISTORIES = ("cold", "warm")
@@ -155,6 +179,7 @@ def summarise(example: str, algorithm: str, history: str, rows: list[dict[str, A
         "valid": sum(bool(r["valid"]) for r in rows),
         "median_wall_s": statistics.median(walls), "max_wall_s": max(walls),
         "median_cpu_s": statistics.median(r["cpu_s"] for r in rows),
+        "max_cpu_s": max(r["cpu_s"] for r in rows),
         "median_cost": statistics.median(costs) if costs else None,
     }
 
@@ -178,9 +203,69 @@ def check_targets(summary: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return checks
 
 
+def check_uniform_targets(summary: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Uniform-suite verdicts: adaptive solves every seed (valid plans) within the median
+    CPU target of its example."""
+    checks = []
+    for row in summary:
+        limit = UNIFORM_TARGETS_S.get(row["example"])
+        if limit is None or row["algorithm"] != "adaptive":
+            continue
+        complete = row["solved"] == row["runs"] and row["valid"] == row["solved"]
+        checks.append({"example": row["example"], "algorithm": row["algorithm"],
+                       "history": row["history"], "target_median_s": limit,
+                       "median_wall_s": row["median_wall_s"],
+                       "median_cpu_s": row["median_cpu_s"], "timeouts": row["timeouts"],
+                       "passed": complete and row["median_cpu_s"] <= limit,
+                       "passed_cpu": complete and row["median_cpu_s"] <= limit})
+    return checks
+
+
+def overruns(runs: list[dict[str, Any]], max_time: float) -> list[dict[str, Any]]:
+    """Runs whose slowest repeat returned later than ``max_time + 1 s``."""
+    return [r for r in runs if max(r["wall_s_repeats"]) > max_time + OVERRUN_TOLERANCE_S]
+
+
+def plot_scaling(summary: list[dict[str, Any]], path: Path) -> None:
+    """Median CPU seconds against the number of blocks, one line per layout and algorithm
+    (log scale), with the targets as dotted lines."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure, axis = plt.subplots(figsize=(7, 4.5))
+    for layout in UNIFORM_LAYOUTS:
+        for algorithm in sorted({r["algorithm"] for r in summary}):
+            points = [(blocks, row["median_cpu_s"], row["solved"] == row["runs"])
+                      for blocks in UNIFORM_BLOCKS for row in summary
+                      if row["example"] == f"tamp2d_uniform_{layout}_{blocks}"
+                      and row["algorithm"] == algorithm]
+            if not points:
+                continue
+            style = "-" if layout == "tight" else "--"
+            line, = axis.plot([p[0] for p in points], [p[1] for p in points], style,
+                              marker="o", label=f"{algorithm} ({layout})")
+            unsolved = [p for p in points if not p[2]]
+            axis.plot([p[0] for p in unsolved], [p[1] for p in unsolved], "x", ms=12,
+                      color=line.get_color())
+    axis.plot([2, 8], [0.1, 0.25], ":", color="black", label="targets (adaptive)")
+    axis.set_xlabel("blocks")
+    axis.set_ylabel("median CPU s (x: not every seed solved)")
+    axis.set_yscale("log")
+    axis.set_xticks(list(UNIFORM_BLOCKS))
+    axis.set_title("tamp2d_uniform: planner CPU time against problem size")
+    axis.legend(fontsize=7, ncol=2)
+    figure.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=120)
+    plt.close(figure)
+
+
 def print_table(summary: list[dict[str, Any]], out: Any = sys.stdout) -> None:
     header = (f"{'example':<22} {'algorithm':<12} {'history':<7} {'solved':>6} {'t/o':>4} "
-              f"{'inf':>4} {'valid':>5} {'median s':>9} {'max s':>8} {'cpu s':>8} {'cost':>9}")
+              f"{'inf':>4} {'valid':>5} {'median s':>9} {'max s':>8} {'cpu s':>8} {'max cpu':>8} "
+              f"{'cost':>9}")
     print(header, file=out)
     print("-" * len(header), file=out)
     for row in summary:
@@ -189,7 +274,7 @@ def print_table(summary: list[dict[str, Any]], out: Any = sys.stdout) -> None:
               f"{row['solved']:>3}/{row['runs']:<2} "
               f"{row['timeouts']:>4} {row['infeasible']:>4} {row['valid']:>5} "
               f"{row['median_wall_s']:>9.4f} {row['max_wall_s']:>8.3f} "
-              f"{row['median_cpu_s']:>8.4f} {cost:>9}", file=out)
+              f"{row['median_cpu_s']:>8.4f} {row['max_cpu_s']:>8.3f} {cost:>9}", file=out)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -206,14 +291,38 @@ def main(argv: list[str] | None = None) -> int:
                              "earlier run of the domain)")
     parser.add_argument("--repeats", type=int, default=3,
                         help="identical solves per seed; the least time counts (default 3)")
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
+    parser.add_argument("--suite", choices=("examples", "uniform"), default="examples",
+                        help="uniform: the continuous-TAMP suite with 10 seeds, max_time 60, "
+                             "cold history and a scaling plot (options given explicitly "
+                             "still apply)")
+    parser.add_argument("--plot", type=Path, default=DEFAULT_PLOT,
+                        help="uniform suite: where to write the scaling PNG")
+    parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args(argv)
+    if args.suite == "uniform":
+        given = set(argv if argv is not None else sys.argv[1:])
+        if "--seeds" not in given:
+            args.seeds = 10
+        if "--max-time" not in given:
+            args.max_time = 60.0
+        if "--histories" not in given:
+            args.histories = "cold"
+        if "--repeats" not in given:
+            args.repeats = 1
+    if args.out is None:
+        args.out = (DEFAULT_OUT if args.suite == "examples"
+                    else DEFAULT_OUT.with_name("planner_uniform.json"))
     histories = [h for h in args.histories.split(",") if h]
     if not set(histories) <= set(HISTORIES):
         parser.error(f"--histories: expected a subset of {', '.join(HISTORIES)}")
 
-    names = ([n for n in args.examples.split(",") if n] if args.examples
-             else sorted(p.stem for p in EXAMPLES.glob("*.yaml")))
+    if args.examples:
+        names = [n for n in args.examples.split(",") if n]
+    elif args.suite == "uniform":
+        names = uniform_examples()
+    else:
+        names = sorted(p.stem for p in EXAMPLES.glob("*.yaml")
+                       if p.stem not in uniform_examples())
     algorithms = [a for a in args.algorithms.split(",") if a]
     reference_before = machine_reference_s()
     runs: list[dict[str, Any]] = []
@@ -245,7 +354,7 @@ def main(argv: list[str] | None = None) -> int:
     print_table(summary)
     print(f"\nmachine reference workload: {reference['before_s'] * 1000:.1f} ms before the runs, "
           f"{reference['after_s'] * 1000:.1f} ms after (compare runs only at similar values)")
-    checks = check_targets(summary)
+    checks = check_targets(summary) + check_uniform_targets(summary)
     print()
     for check in checks:
         verdict = "PASS" if check["passed"] else "FAIL"
@@ -260,10 +369,19 @@ def main(argv: list[str] | None = None) -> int:
         print(f"INVALID PLAN: {row['example']} / {row['algorithm']} / seed {row['seed']}: "
               f"{'; '.join(row['errors'])}")
 
+    late = overruns(runs, args.max_time)
+    for row in late:
+        print(f"OVERRUN: {row['example']} / {row['algorithm']} / seed {row['seed']}: "
+              f"{max(row['wall_s_repeats']):.2f} s for max_time {args.max_time} s")
+    print(f"{len(late)} run(s) returned later than max_time + {OVERRUN_TOLERANCE_S} s")
+    if args.suite == "uniform":
+        plot_scaling(summary, args.plot)
+        print(f"wrote {args.plot}")
+
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps({
         "benchmark": "planner", "seeds": args.seeds, "repeats": args.repeats,
-        "max_time_s": args.max_time,
+        "max_time_s": args.max_time, "suite": args.suite, "overruns": len(late),
         "machine_reference": reference, "summary": summary, "targets": checks, "runs": runs,
     }, indent=2) + "\n")
     print(f"\nwrote {args.out}")

@@ -10,6 +10,9 @@ import typer
 
 from ltamp_cli.errors import InputError
 
+# Streams listed (slowest first) under "why no plan".
+TIME_SPENT_STREAMS_SHOWN = 5
+
 
 def register(app: typer.Typer) -> None:
     app.command("solve")(solve_command)
@@ -54,6 +57,8 @@ def solve_command(
     from ltamp_cli.planner.problem import load_problem
     from ltamp_cli.threads import use_one_thread
 
+    if max_time is not None and not max_time > 0:  # also NaN
+        raise InputError(f"--max-time: expected a positive number of seconds, got {max_time}")
     loaded = load_problem(problem, domain)
     use_one_thread()  # after loading the bindings: learned streams bring torch and scipy
     options = dict(loaded.planner_options)
@@ -150,6 +155,15 @@ def _print_diagnostics(diagnostics: dict) -> None:  # type: ignore[type-arg]
             print(f"  {label}: {', '.join(diagnostics[key])}")
     for number, skeleton in enumerate(diagnostics.get("last_skeletons") or [], start=1):
         print(f"  skeleton tried #{number}: {' '.join(skeleton)}")
+    if diagnostics.get("stopped_in"):
+        print(f"  stopped while in {diagnostics['stopped_in']}")
+    spent = diagnostics.get("time_spent")
+    if spent:
+        print(f"  time: grounding {spent['grounding_s']:.3f} s, search {spent['search_s']:.3f} s "
+              f"({spent['searches']} searches), streams {spent['streams_s']:.3f} s")
+        for name, stream in list(spent["per_stream"].items())[:TIME_SPENT_STREAMS_SHOWN]:
+            print(f"    {name}: {stream['calls']} calls, {stream['successes']} successes, "
+                  f"{stream['seconds']:.3f} s")
 
 
 def _short(value) -> str:  # type: ignore[no-untyped-def]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import gc
+import math
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -21,9 +22,10 @@ from ltamp_cli.planner.algorithms.incremental import solve_incremental
 from ltamp_cli.planner.algorithms.skeletons import solve_with_skeletons
 from ltamp_cli.planner.pddl.syntax import Stream
 from ltamp_cli.planner.problem import PlanningProblem
-from ltamp_cli.planner.result import INFEASIBLE, TIMEOUT, PlanResult
+from ltamp_cli.planner.result import INFEASIBLE, TIMEOUT, Certificate, PlanResult
 from ltamp_cli.planner.search.engine import SEARCH_ALGORITHMS
 from ltamp_cli.planner.statistics import StreamStatistics
+from ltamp_cli.planner.watchdog import CallTracker, RunningCall, run_until
 from ltamp_cli.threads import limited_threads
 
 COST_EPSILON = 1e-6
@@ -33,6 +35,8 @@ COST_EPSILON = 1e-6
 # kitchen_symbolic and tamp2d_4blocks. Not disabled outright: a long solve with learned
 # samplers could otherwise accumulate cyclic garbage without bound.
 SOLVE_GC_THRESHOLD0 = 50_000
+# Tries at reading an abandoned worker's state while it may still change it.
+ABANDONED_READ_ATTEMPTS = 5
 
 
 class _GcRelaxation:
@@ -83,19 +87,39 @@ def solve(problem: PlanningProblem, config: PlannerConfig | None = None) -> Plan
     With a finite ``config.success_cost`` the planner keeps looking for cheaper plans, reusing
     every sample, until one costs at most that or time runs out (anytime mode); the best plan
     found is returned with the cost of each improvement in ``stats["anytime_costs"]``.
+
+    Returns within ``config.max_time`` seconds plus about half a second whatever the stream
+    bindings do: the planner runs in a worker thread that is abandoned when a binding blocks
+    past the deadline (see :mod:`ltamp_cli.planner.watchdog`); the result is then a timeout
+    whose ``diagnostics["stopped_in"]`` names the stream call.
     """
     config = config or PlannerConfig()
+    check_config(config)
+    start = time.perf_counter()
+    tracker = CallTracker()
+    holder: list[PlannerState] = []
+    refuse_unsupported(problem, config.algorithm)
+    with _relaxed_gc(), limited_threads(config.threads):
+        finished, result = run_until(lambda: _solve(problem, config, start, tracker, holder),
+                                     start + config.max_time, tracker)
+    if finished:
+        assert result is not None
+        return result
+    return _abandoned_result(holder[0] if holder else None, config, start, tracker)
+
+
+def check_config(config: PlannerConfig) -> None:
+    """Reject options the planner cannot run with (:class:`InputError`, one line)."""
     if config.algorithm not in ALGORITHMS:
         raise InputError(f"unknown algorithm {config.algorithm!r}: expected one of "
                          f"{', '.join(ALGORITHMS)}")
     if config.search not in SEARCH_ALGORITHMS:
         raise InputError(f"unknown search {config.search!r}: expected one of "
                          f"{', '.join(SEARCH_ALGORITHMS)}")
-    if config.max_time <= 0:
-        raise InputError(f"max time must be positive, got {config.max_time}")
-    refuse_unsupported(problem, config.algorithm)
-    with _relaxed_gc(), limited_threads(config.threads):
-        return _solve(problem, config)
+    max_time = config.max_time
+    if (isinstance(max_time, bool) or not isinstance(max_time, int | float)
+            or math.isnan(max_time) or max_time <= 0):
+        raise InputError(f"max time: expected a positive number of seconds, got {max_time!r}")
 
 
 def refuse_unsupported(problem: PlanningProblem, algorithm: str) -> None:
@@ -156,16 +180,25 @@ def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
     fallback = initial_state(problem, replace(config, algorithm="incremental",
                                               max_time=remaining))
     fallback.history = statistics.totals
+    fallback.tracker = state.tracker  # the watchdog follows (and may cancel) its calls too
     result = solve_incremental(fallback)
     state.stream_stats = fallback.stream_stats
     result.stats["completed_by"] = f"incremental ({note})"
     return result
 
 
-def _solve(problem: PlanningProblem, config: PlannerConfig) -> PlanResult:
+def _solve(problem: PlanningProblem, config: PlannerConfig, start: float,
+           tracker: CallTracker, holder: list[PlannerState]) -> PlanResult:
     statistics = StreamStatistics.load(config.statistics_dir, problem.domain.name)
-    state = initial_state(problem, config)
+    tracker.running = RunningCall("make_streams", (), time.perf_counter())
+    try:
+        state = initial_state(problem, config)
+    finally:
+        tracker.running = None
+    state.start_time = start
+    state.tracker = tracker
     state.history = statistics.totals
+    holder.append(state)
     run = _algorithm(config.algorithm)
     best = run(state)
     if best.status == INFEASIBLE and _infeasibility_unproven(problem, config, state):
@@ -181,7 +214,34 @@ def _solve(problem: PlanningProblem, config: PlannerConfig) -> PlanResult:
         improvements.append(best.cost)
     if improvements:
         best.stats["anytime_costs"] = improvements
+    if tracker.cancelled:
+        return best  # abandoned: the caller has returned already; persist nothing
     statistics.update(state.stream_stats)
     statistics.save()
     best.stats["stream_history"] = statistics.summary()
     return best
+
+
+def _abandoned_result(state: PlannerState | None, config: PlannerConfig, start: float,
+                      tracker: CallTracker) -> PlanResult:
+    """The timeout result of a solve whose worker did not stop by the deadline, built from
+    what the worker recorded so far (it may still be running: read, never written)."""
+    running = tracker.running
+    now = time.perf_counter()
+    stopped_in = running.describe(now) if running is not None else "the planner"
+    if state is None:
+        return PlanResult(TIMEOUT, None, float("inf"), now - start,
+                          {"algorithm": config.algorithm}, Certificate(),
+                          diagnostics={"stopped_in": stopped_in})
+    for _ in range(ABANDONED_READ_ATTEMPTS):
+        try:
+            result = state.result(TIMEOUT, None)
+            break
+        except RuntimeError:  # a container changed size under the worker: read again
+            continue
+    else:
+        result = PlanResult(TIMEOUT, None, float("inf"), now - start,
+                            {"algorithm": config.algorithm}, Certificate())
+    result.diagnostics["stopped_in"] = stopped_in
+    result.time_s = time.perf_counter() - start
+    return result

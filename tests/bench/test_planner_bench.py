@@ -46,3 +46,23 @@ def test_repeats_that_find_different_plans_are_reported(monkeypatch: pytest.Monk
     row = planner.run_one(problem, "incremental", 0, 10.0, repeats=3)
     assert row["valid"] is False
     assert any("different plans" in error for error in row["errors"])
+
+
+def test_uniform_suite_reports_targets_overruns_and_a_scaling_plot(tmp_path: Path) -> None:
+    out, plot = tmp_path / "uniform.json", tmp_path / "scaling.png"
+    planner.main(["--suite", "uniform", "--examples",
+                  "tamp2d_uniform_blocked_2,tamp2d_uniform_tight_2", "--seeds", "2",
+                  "--algorithms", "adaptive", "--max-time", "30",
+                  "--out", str(out), "--plot", str(plot)])
+    report = json.loads(out.read_text())
+    assert report["suite"] == "uniform" and report["overruns"] == 0
+    assert report["max_time_s"] == 30.0 and report["seeds"] == 2
+    assert {t["example"] for t in report["targets"]} == {"tamp2d_uniform_blocked_2",
+                                                        "tamp2d_uniform_tight_2"}
+    assert all(t["target_median_s"] == 0.1 for t in report["targets"])
+    assert all(row["solved"] == row["valid"] == 2 and row["max_cpu_s"] >= row["median_cpu_s"]
+               for row in report["summary"])
+    assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # The full suite: 2 layouts x 4 sizes and the fluent kitchen, each a shipped problem.
+    names = planner.uniform_examples()
+    assert len(names) == 9 and all((planner.EXAMPLES / f"{n}.yaml").exists() for n in names)

@@ -179,7 +179,7 @@ def test_bad_input_exits_2_with_one_line(make_problem: MakeProblem, domain: str,
 def test_bad_options_exit_2(make_problem: MakeProblem) -> None:
     path = make_problem(LINE_DOMAIN, GOOD_YAML, LINE_STREAMS, LINE_BINDINGS)
     assert_bad_input(ltamp(path, "--algorithm", "astar"), "unknown algorithm 'astar'")
-    assert_bad_input(ltamp(path, "--max-time", "0"), "max time must be positive")
+    assert_bad_input(ltamp(path, "--max-time", "0"), "--max-time: expected a positive number")
     assert_bad_input(ltamp(path.parent / "missing.yaml"), "missing.yaml", "file not found")
 
 

@@ -29,6 +29,7 @@ from ltamp_cli.planner.result import (
     PlanStep,
     StreamResult,
 )
+from ltamp_cli.planner.search.engine import SearchTimeout
 from ltamp_cli.planner.search.ground import (
     Context,
     CostBound,
@@ -45,6 +46,7 @@ from ltamp_cli.planner.streams import (
     StreamStats,
     resolve_bindings,
 )
+from ltamp_cli.planner.watchdog import CallTracker, RunningCall
 
 ALGORITHMS = ("adaptive", "binding", "focused", "incremental")
 MAX_REMEMBERED_SKELETONS = 3
@@ -138,7 +140,11 @@ class PlannerState:
     stream_stats: dict[str, StreamStats] = field(default_factory=dict)
     start_time: float = field(default_factory=time.perf_counter)
     search_time: float = 0.0
+    grounding_time: float = 0.0  # of the searches' tasks (part of search_time)
     sampling_time: float = 0.0
+    # The stream call in progress and whether the caller abandoned this solve (see
+    # :mod:`ltamp_cli.planner.watchdog`).
+    tracker: CallTracker = field(default_factory=CallTracker)
     iterations: int = 0
     searches: int = 0
     last_skeletons: list[list[str]] = field(default_factory=list)
@@ -218,7 +224,7 @@ class PlannerState:
         return self.start_time + self.config.max_time
 
     def timed_out(self) -> bool:
-        return time.perf_counter() > self.deadline
+        return time.perf_counter() > self.deadline or self.tracker.cancelled
 
     def add_fact(self, fact: Fact, producer: StreamResult | None = None) -> bool:
         added = self.facts.add(fact)
@@ -245,8 +251,11 @@ class PlannerState:
 
     def call(self, instance: StreamInstance) -> list[tuple[str, ...]]:
         """Call an instance once and record what it certified. Returns new output tuples."""
+        if self.timed_out():
+            raise SearchTimeout  # an abandoned solve calls nothing more
         start = time.perf_counter()
         stats = self.stream_stats.setdefault(instance.name, StreamStats())
+        self.tracker.running = RunningCall(instance.name, instance.inputs, start)
         try:
             outputs = instance.call(self.objects, stats)
         except InputError:
@@ -254,6 +263,7 @@ class PlannerState:
         except Exception as error:
             raise StreamError(instance, error) from error
         finally:
+            self.tracker.running = None
             self.sampling_time += time.perf_counter() - start
         self.add_wild_facts(instance)
         external = instance.external
@@ -333,6 +343,7 @@ class PlannerState:
                 context_blocks, guess, skip_if_grounded_as)
         finally:
             self.search_time += time.perf_counter() - start
+        self.grounding_time += result.ground_time_s
         if budgeted and result.capped and not result.skipped:
             self.search_budget *= 2
         return result
@@ -390,6 +401,7 @@ class PlannerState:
                     n for n, s in stats_calls.items()
                     if s is not None and s.calls > 0 and s.successes == 0),
                 "last_skeletons": self.last_skeletons,
+                "time_spent": self.time_spent(),
             }
         else:
             diagnostics = {}
@@ -397,7 +409,9 @@ class PlannerState:
             "algorithm": self.config.algorithm,
             "iterations": self.iterations,
             "searches": self.searches,
+            # Seconds in discrete searches, of which grounding their tasks; in stream calls.
             "search_time_s": round(self.search_time, 6),
+            "grounding_time_s": round(self.grounding_time, 6),
             "sampling_time_s": round(self.sampling_time, 6),
             "facts": len(self.facts.members),
             "streams": {name: s.as_dict() for name, s in sorted(self.stream_stats.items())},
@@ -406,6 +420,21 @@ class PlannerState:
                           certificate, {n: self.objects.value(n) for n in self.objects.names()},
                           diagnostics)
 
+
+    def time_spent(self) -> dict[str, object]:
+        """Where the solve's time went (seconds), to tell why it failed: grounding the
+        searches' tasks, searching them, calling streams (per stream: calls, successes,
+        seconds, slowest first), and the number of searches."""
+        streams = sorted(self.stream_stats.items(), key=lambda item: -item[1].time_s)
+        return {
+            "total_s": round(time.perf_counter() - self.start_time, 6),
+            "grounding_s": round(self.grounding_time, 6),
+            "search_s": round(self.search_time - self.grounding_time, 6),
+            "streams_s": round(self.sampling_time, 6),
+            "searches": self.searches,
+            "per_stream": {name: {"calls": s.calls, "successes": s.successes,
+                                  "seconds": round(s.time_s, 6)} for name, s in streams},
+        }
 
     def supporting_results(self, needed: Iterable[Fact]) -> list[StreamResult]:
         """Stream results behind ``needed`` facts, closed under the results' own domain facts

@@ -23,6 +23,7 @@ from ltamp_cli.planner.pddl.syntax import (
     Stream,
     StreamFunction,
 )
+from ltamp_cli.planner.search.clock import check_deadline
 from ltamp_cli.planner.search.ground import Context, CostBound, Fact, FactIndex
 from ltamp_cli.planner.search.solve import DiscreteResult
 from ltamp_cli.planner.streams import StreamInstance
@@ -76,6 +77,7 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
     while True:
         before = index.sizes()
         for external in state.externals.values():
+            check_deadline(state.deadline)
             if since is None:
                 candidates = state.open_real_bindings(external)
             else:

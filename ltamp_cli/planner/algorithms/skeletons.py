@@ -14,8 +14,10 @@ cheap generator of the later one for its next value at once (local repair, see
   retries (alternative outputs, instances that produced nothing) than the current bound;
 * ``adaptive`` (the default) also shares effort between searching and sampling: after a
   search it processes a number of bindings proportional to the states the search evaluated,
-  then searches again if sampling taught it new facts. A search that finds nothing new
-  raises the retry and complexity bounds.
+  then searches again if sampling taught it new facts and a binding step failed. Such a
+  speculative search is bounded and changes no bound; a full search that finds nothing new
+  raises the retry and complexity bounds. Bindings whose next stream is cheap may be retried
+  more often (plain samplers need several samples where a search costs far more).
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ import itertools
 from dataclasses import dataclass, field
 
 from ltamp_cli.planner.algorithms.common import PlannerState, bound_plan
+from ltamp_cli.planner.algorithms.effort import observed_cheap
 from ltamp_cli.planner.algorithms.optimistic import (
     MAX_LOCAL_REPAIRS,
     InstanceKey,
@@ -38,7 +41,7 @@ from ltamp_cli.planner.algorithms.optimistic import (
     stream_plan,
 )
 from ltamp_cli.planner.algorithms.preimage import plan_preimage
-from ltamp_cli.planner.pddl.syntax import StreamFunction
+from ltamp_cli.planner.pddl.syntax import Stream, StreamFunction
 from ltamp_cli.planner.result import INFEASIBLE, SOLVED, TIMEOUT, PlanResult
 from ltamp_cli.planner.search.engine import SearchTimeout
 from ltamp_cli.planner.search.ground import Fact
@@ -53,6 +56,28 @@ REAL_SEARCH_EXPANSIONS = 500
 # Kitchen3D pour_blocked budget on 42 GoodPour calls for stale skeletons (timeout at 90 s,
 # where 0.1 plans in ~20 s CPU).
 STEPS_PER_EVALUATION = 0.1
+# Adaptive: a binding step that calls a cheap stream (observed < 0.25 ms CPU per call) may
+# be retried CHEAP_RETRY_FACTOR times as often before a search. With plain uniform samplers
+# most stream plans fail on a collision that a few more samples fix (tamp2d_uniform_tight:
+# two blocks fit in the goal region for 1 pair of placements in 9): such retries cost
+# microseconds where a search to raise the retry bound costs tens of milliseconds. A cheap
+# step counts as CHEAP_STEP_COST of a step of the sampling share unless it makes a new
+# object: eager streams over new objects and larger tasks to ground cost far more than the
+# call (tamp2d_4blocks, whose motions are eager, went from 0.05 to 0.8 s CPU without that).
+# 0.25 rather than 0.05 (6 seeds, median CPU): tamp2d_4blocks 0.12 -> 0.095 s (1.0: 0.08 s),
+# tamp2d_uniform_tight_8 0.18 -> 0.21 s (1.0: 0.35 s).
+CHEAP_STEP_COST = 0.25
+CHEAP_RETRY_FACTOR = 10
+# Expansion bound of a speculative search (see solve_with_skeletons): this many times the
+# most a solved optimistic search needed so far, at least SPECULATIVE_MIN_EXPANSIONS.
+SPECULATIVE_FACTOR = 4
+SPECULATIVE_MIN_EXPANSIONS = 100
+# After this many speculative searches in a row the next search is a full one, which may
+# raise the bounds: speculative searches may keep finding fresh skeletons (new samples of a
+# pose that always collides, tamp2d_blocked) whose retries would otherwise never stall.
+# tamp2d_blocked with a first search budget of one expansion: 3 -> 2 took 7 -> 3 s CPU;
+# 1 slowed tamp2d_uniform_tight_4 (6 seeds, median CPU 0.066 -> 0.096 s).
+MAX_SPECULATIVE_IN_A_ROW = 2
 
 
 @dataclass(frozen=True)
@@ -186,16 +211,35 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
     last_search_work = 0
     retry_threshold = 0
     facts_at_search = -1
+    solved_expansions = 0  # the most expansions a solved optimistic search needed
     capped_task: frozenset[object] | None = None
+    sampling = SamplingRound()
+    speculative_in_a_row = 0
     try:
         while not state.timed_out():
             state.iterations += 1
             evaluate_eager(state)
             head = queue.peek()
-            stalled = head is None or head.attempts > retry_threshold
+            stalled = (head is None
+                       or head.attempts > retry_limit(state, head, retry_threshold, adaptive)
+                       or speculative_in_a_row >= MAX_SPECULATIVE_IN_A_ROW)
             learned = len(state.facts.members) != facts_at_search
-            if stalled or (adaptive and learned):
+            # A speculative search only after a stream plan met a failure since the last
+            # search: while the queue's bindings progress, their skeleton is on track, and a
+            # search of the larger task would mostly find it again (kitchen_fluent: five
+            # optimistic searches of ~1,500 actions, each as costly as the whole sampling).
+            if stalled or (adaptive and learned and sampling.failures):
+                # Adaptive also searches when sampling taught it new facts although the
+                # queue could go on: a speculative search, bounded by a few times what the
+                # last successful one needed and never raising the budget, the complexity
+                # or the retry bound. With samplers that know nothing of each other
+                # (tamp2d_uniform_tight_4 seed 2) most such tasks have no plan until the
+                # queue has sampled more, and a search that fails explores everything
+                # within its budget: 600, then 1,200 expansions (2 s) each time.
+                speculative = not stalled
+                speculative_in_a_row = speculative_in_a_row + 1 if speculative else 0
                 facts_at_search = len(state.facts.members)
+                sampling.failures = 0
                 evaluation = optimistic_evaluation(state, complexity, placeholders)
                 # The most advanced binding's plan, with what it bound so far, is checked
                 # first: once sampling made its facts real it is usually still a plan.
@@ -206,10 +250,16 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                 # real task with 600, 1,200 and 2,400 expansions while the complexity
                 # grew): the complexity grows until it changes, up to the bound.
                 skip = capped_task if complexity < state.config.max_complexity else None
+                limit = (min(state.search_budget, max(
+                    SPECULATIVE_MIN_EXPANSIONS, SPECULATIVE_FACTOR * solved_expansions))
+                    if speculative else None)
                 discrete = state.search(evaluation.index.members, evaluation.object_types,
-                                        evaluation.function_values,
+                                        evaluation.function_values, limit,
                                         context_blocks=evaluation.context_blocks,
-                                        budgeted=True, guess=guess, skip_if_grounded_as=skip)
+                                        budgeted=not speculative, guess=guess,
+                                        skip_if_grounded_as=skip)
+                if discrete.solved and discrete.outcome is not None:
+                    solved_expansions = max(solved_expansions, discrete.outcome.expanded)
                 if discrete.capped and not discrete.skipped:
                     capped_task = grounding_signature(discrete.grounding)
                 elif not discrete.capped:
@@ -218,6 +268,14 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                                              or not discrete.outcome.guessed):
                     # A followed guess did no search work: keep the previous sampling share.
                     last_search_work = discrete.outcome.evaluated if discrete.outcome else 0
+                if speculative and not discrete.solved:
+                    # Nothing learned about the bounds: go on with the queue, for a share
+                    # of work that grows with what this search cost.
+                    steps = max(1, round(last_search_work * STEPS_PER_EVALUATION))
+                    result = _process(state, queue, adaptive, steps, retry_threshold, sampling)
+                    if result is not None:
+                        return result
+                    continue
                 state.diagnose(discrete, evaluation.index.members)
                 if discrete.solved:
                     facts, terms = plan_preimage(discrete)
@@ -247,7 +305,7 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                             and not discrete.capped):
                         return state.result(INFEASIBLE, None)
             steps = max(1, round(last_search_work * STEPS_PER_EVALUATION))
-            result = _process(state, queue, adaptive, steps, retry_threshold)
+            result = _process(state, queue, adaptive, steps, retry_threshold, sampling)
             if result is not None:
                 return result
         return state.result(TIMEOUT, None)
@@ -255,19 +313,65 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
         return state.result(TIMEOUT, None)
 
 
+def cheap_step(state: PlannerState, binding: Binding) -> bool:
+    """Whether processing ``binding`` next calls a stream whose observed calls are cheap
+    (:func:`.effort.observed_cheap`, CPU time; a finished binding's check is not)."""
+    plan = binding.skeleton.stream_plan
+    if binding.step >= len(plan):
+        return False
+    name = plan[binding.step][0]
+    return observed_cheap(state.history.get(name), state.stream_stats.get(name))
+
+
+def _new_output(state: PlannerState, binding: Binding) -> bool:
+    """Whether processing ``binding`` asks a generator for an output it has not made yet: a
+    new object, whose consequences (eager streams over it, a larger task to ground) cost
+    more than the call."""
+    plan = binding.skeleton.stream_plan
+    name, inputs = plan[binding.step]
+    external = state.externals[name]
+    if not isinstance(external, Stream) or external.is_test:
+        return False
+    key = (name, tuple(binding.mapping.get(x, x) for x in inputs))
+    instance = state.instances.get(key)
+    return instance is None or binding.output_index >= len(instance.results)
+
+
+def retry_limit(state: PlannerState, binding: Binding, retry_threshold: int,
+                adaptive: bool) -> int:
+    """The most retries (alternative outputs, empty calls) ``binding`` may have made and
+    still be processed before the next search: ``retry_threshold``, or with adaptive
+    :data:`CHEAP_RETRY_FACTOR` times as many when its next call is cheap."""
+    if adaptive and cheap_step(state, binding):
+        return (retry_threshold + 1) * CHEAP_RETRY_FACTOR
+    return retry_threshold
+
+
+@dataclass
+class SamplingRound:
+    """What processing the queue met since the last search."""
+
+    failures: int = 0  # binding steps that failed (a test, an exhausted or empty stream)
+
+
 def _process(state: PlannerState, queue: BindingQueue, adaptive: bool, steps: int,
-             retry_threshold: int) -> PlanResult | None:
-    done = 0
+             retry_threshold: int, sampling: SamplingRound) -> PlanResult | None:
+    done = 0.0
     while len(queue) and not state.timed_out():
         head = queue.peek()
         assert head is not None
         if adaptive and done >= steps:
             return None
-        done += 1
-        if head.attempts > retry_threshold:
+        cheap = adaptive and cheap_step(state, head) and not _new_output(state, head)
+        done += CHEAP_STEP_COST if cheap else 1.0
+        if head.attempts > retry_limit(state, head, retry_threshold, adaptive):
             return None
         binding = queue.pop()
         children = advance(state, binding)
+        if children is not None and (not children
+                                     or (len(children) == 1 and children[0] is binding)):
+            sampling.failures += 1  # a dead end, or nothing this call (a local repair and
+            # an ordinary output go on)
         if children is None:
             real = state.search(state.facts.members, state.object_types,
                                 state.function_values, REAL_SEARCH_EXPANSIONS,

@@ -8,6 +8,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+from ltamp_cli.planner.search.clock import SearchTimeout
 from ltamp_cli.planner.search.heuristic import INFINITY, FFHeuristic
 from ltamp_cli.planner.search.postprocess import (
     bridge_detours,
@@ -33,10 +34,6 @@ class SearchOutcome:
     capped: bool = False
     # The plan is the caller's guess (:func:`follow_plan`): no search ran.
     guessed: bool = False
-
-
-class SearchTimeout(Exception):
-    pass
 
 
 def _reconstruct(parents: dict, state: frozenset[int]) -> tuple[list[int], list[frozenset[int]]]:

@@ -19,6 +19,7 @@ from ltamp_cli.planner.pddl.syntax import (
     Number,
     is_variable,
 )
+from ltamp_cli.planner.search.clock import NO_DEADLINE, check_deadline
 from ltamp_cli.planner.search.normalize import (
     Clause,
     LiftedLiteral,
@@ -370,8 +371,10 @@ def ground_task(
     axioms: Sequence[NormalAxiom],
     init: Iterable[Fact],
     function_values: Mapping[Fact, float],
+    deadline: float = NO_DEADLINE,
 ) -> Grounding:
-    """Instantiate every reachable action and axiom rule."""
+    """Instantiate every reachable action and axiom rule (:class:`.SearchTimeout` once
+    ``time.perf_counter()`` passes ``deadline``)."""
     derived = {axiom.predicate for axiom in axioms}
     fluent = static_predicates(actions, derived)  # predicates that are *not* static
     index = FactIndex()
@@ -394,6 +397,7 @@ def ground_task(
     # per positive literal).
     delta: list[Fact] = []
     for rule in rules:
+        check_deadline(deadline)
         if not rule.positive:  # e.g. a parameterless action with an empty precondition
             _emit(rule, {}, index, init_facts, fluent, function_values, seen, result, delta)
             continue
@@ -403,6 +407,7 @@ def ground_task(
     while delta:
         current, delta = delta, []
         for fact in current:
+            check_deadline(deadline)
             for rule, position in by_predicate.get(fact[0], ()):
                 start = _match(rule.positive[position], fact[1:])
                 if start is None:
@@ -531,7 +536,8 @@ def _context_literals(grounding: Grounding, context: Context
 
 
 def require_fluent_contexts(grounding: Grounding,
-                            requirements: Mapping[Fact, Sequence[Context]]) -> Grounding:
+                            requirements: Mapping[Fact, Sequence[Context]],
+                            deadline: float = NO_DEADLINE) -> Grounding:
     """Make actions that rely on a fluent stream's fact also require the context it was
     computed under (one copy of the action per alternative context)."""
     import itertools
@@ -544,6 +550,7 @@ def require_fluent_contexts(grounding: Grounding,
             actions.append(action)
             continue
         for choice in itertools.product(*needs):
+            check_deadline(deadline)
             positive: list[Fact] = []
             negative: list[Fact] = []
             for context in choice:
@@ -557,7 +564,8 @@ def require_fluent_contexts(grounding: Grounding,
 
 
 def forbid_contexts(grounding: Grounding,
-                    blocks: Mapping[Fact, Sequence[Context]]) -> Grounding:
+                    blocks: Mapping[Fact, Sequence[Context]],
+                    deadline: float = NO_DEADLINE) -> Grounding:
     """Actions relying on an optimistic fact of a ``:fluents`` stream may not be applied in a
     state where a context it already failed in holds again: each failed context becomes a
     derived fact (``%failed-context``) that such actions require to be false."""
@@ -567,6 +575,7 @@ def forbid_contexts(grounding: Grounding,
     axioms = list(grounding.axioms)
     actions: list[GroundAction] = []
     for action in grounding.actions:
+        check_deadline(deadline)
         forbidden: list[Fact] = []
         for fact in action.static_pre:
             for context in blocks.get(fact, ()):

@@ -7,6 +7,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 from ltamp_cli.planner.pddl.syntax import OBJECT_TYPE, Domain, Formula
+from ltamp_cli.planner.search.clock import check_deadline
 from ltamp_cli.planner.search.engine import SearchOutcome, run_search, weighted_astar
 from ltamp_cli.planner.search.ground import (
     Context,
@@ -126,17 +127,19 @@ def plan_discrete(
             facts.add((type_predicate(ancestor), name))
     normalizer = Normalizer(objects_by_type)
     actions = [variant for action in domain.actions for variant in normalizer.action(action)]
+    check_deadline(deadline)
     axioms = [rule for axiom in domain.axioms for rule in normalizer.axiom(axiom)]
+    check_deadline(deadline)
     axioms += normalizer.goal(goal)
     changing = ({effect.predicate for action in actions for effect in action.effects}
                 | {axiom.head.name for axiom in domain.axioms})
     axioms += normalizer.take_auxiliary(
         lambda predicate: predicate not in changing and not predicate.startswith("%"))
-    grounding = ground_task(actions, axioms, facts, function_values)
+    grounding = ground_task(actions, axioms, facts, function_values, deadline)
     if fluent_requirements:
-        grounding = require_fluent_contexts(grounding, fluent_requirements)
+        grounding = require_fluent_contexts(grounding, fluent_requirements, deadline)
     if context_blocks:
-        grounding = forbid_contexts(grounding, context_blocks)
+        grounding = forbid_contexts(grounding, context_blocks, deadline)
     ground_time = time.perf_counter() - start
     if ("%goal",) not in grounding.reachable:
         return DiscreteResult(None, float("inf"), grounding, None, None, ground_time, 0.0)
@@ -148,7 +151,7 @@ def plan_discrete(
     if skeleton:
         grounding, first_step = constrain(grounding, skeleton)
         facts.add(first_step)
-    task = Task(grounding, facts)
+    task = Task(grounding, facts, deadline)
     if cost_bound is not None:
         outcome = weighted_astar(task, deadline, cost_bound=cost_bound)
     else:

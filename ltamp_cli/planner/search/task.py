@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ltamp_cli.errors import InputError
+from ltamp_cli.planner.search.clock import NO_DEADLINE, check_deadline
 from ltamp_cli.planner.search.ground import Fact, GroundAction, GroundAxiom, Grounding
 from ltamp_cli.planner.search.normalize import GOAL_PREDICATE
 
@@ -19,6 +20,8 @@ TRUE_FACT, FALSE_FACT = 0, 1
 # Bytes of state vectors kept per task (one byte per fact and state); the cache is emptied
 # when it would exceed this.
 MAX_CACHED_VECTOR_BYTES = 50_000_000
+# Operators encoded between two deadline checks.
+DEADLINE_STRIDE = 256
 GOAL_FACT: Fact = (GOAL_PREDICATE,)
 
 
@@ -54,12 +57,17 @@ class Operator:
 class Task:
     """Integer-encoded planning task: operators, stratified axioms, initial state, goal."""
 
-    def __init__(self, grounding: Grounding, init: set[Fact]) -> None:
+    def __init__(self, grounding: Grounding, init: set[Fact],
+                 deadline: float = NO_DEADLINE) -> None:
         self.facts: list[Fact] = [("%true",), ("%false",)]
         self.fact_ids: dict[Fact, int] = {}
         derived = set(grounding.derived_predicates) | {GOAL_PREDICATE}
         self.derived_predicates = frozenset(derived)
-        self.operators = [self._operator(a) for a in grounding.actions]
+        self.operators = []
+        for number, action in enumerate(grounding.actions):
+            if number % DEADLINE_STRIDE == 0:
+                check_deadline(deadline)
+            self.operators.append(self._operator(action))
         self.axioms = grounding.axioms
         self.goal = self.fact_id(GOAL_FACT)
         axiom_heads = [self.fact_id(a.head) for a in grounding.axioms]
@@ -71,6 +79,7 @@ class Task:
         for fact, index in self.fact_ids.items():
             self.is_derived[index] = fact[0] in derived
         self._compile_operators()
+        check_deadline(deadline)
         self._compile_axioms(axiom_heads, axiom_pos, axiom_neg)
         self._vectors: dict[frozenset[int], np.ndarray] = {}
 

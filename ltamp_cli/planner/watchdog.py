@@ -1,0 +1,102 @@
+"""The hard time limit of a solve: the planner runs in a worker thread that the caller waits
+for, at most until the deadline plus a grace period.
+
+The planner checks its clock itself (in grounding, axiom compilation, search and stream-plan
+evaluation) and normally stops on time. What it cannot interrupt is a stream binding: a
+generator that sleeps, blocks on I/O or never yields keeps the call from returning. The
+caller's thread therefore waits on the worker with a timeout and, when that runs out,
+*abandons* the worker:
+
+* the worker is told it was cancelled, so as soon as the binding returns (if it ever does)
+  the planner times out at its next clock check, calls no further stream and writes no
+  statistics; its results are discarded;
+* a binding that never returns keeps its (daemon) thread, and whatever CPU it burns, until
+  the process exits — Python cannot kill a thread. Its generator is never resumed again;
+* the caller gets a ``timeout`` result naming the stream call that was running
+  (:class:`CallTracker`) and the statistics gathered so far.
+
+One worker thread per solve (tens of microseconds) rather than one per stream call: cheap
+streams are called thousands of times per solve.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Generic, TypeVar
+
+T = TypeVar("T")
+
+# Seconds the caller waits beyond the deadline before abandoning the worker: the planner's
+# own clock checks normally end it well within this; the rest of the 1 s bound is left for
+# building the result.
+ABANDON_GRACE_S = 0.5
+
+
+@dataclass(frozen=True)
+class RunningCall:
+    """A stream call in progress: the stream's name, its input objects and when it started
+    (``time.perf_counter`` seconds)."""
+
+    stream: str
+    inputs: tuple[str, ...]
+    started: float
+
+    def describe(self, now: float) -> str:
+        return (f"stream {self.stream!r} (inputs {', '.join(self.inputs) or 'none'}) "
+                f"running for {now - self.started:.2f} s")
+
+
+class CallTracker:
+    """Which stream call the worker is in (written by the worker, read by the caller), and
+    whether the caller has abandoned the worker."""
+
+    def __init__(self) -> None:
+        self.running: RunningCall | None = None
+        self._cancelled = threading.Event()
+
+    def cancel(self) -> None:
+        self._cancelled.set()
+
+    @property
+    def cancelled(self) -> bool:
+        return self._cancelled.is_set()
+
+
+@dataclass
+class _Outcome(Generic[T]):
+    value: T | None = None
+    error: BaseException | None = None
+    done: bool = False
+
+
+def run_until(work: Callable[[], T], deadline: float, tracker: CallTracker,
+              name: str = "ltamp-solve") -> tuple[bool, T | None]:
+    """Run ``work()`` in a daemon thread and wait for it until ``deadline`` (a
+    ``time.perf_counter`` value, ``inf`` for no limit) plus :data:`ABANDON_GRACE_S`.
+
+    Returns ``(True, value)`` when it finished (its exception, if any, is re-raised here) or
+    ``(False, None)`` when it was abandoned (``tracker`` is then cancelled).
+    """
+    outcome: _Outcome[T] = _Outcome()
+
+    def target() -> None:
+        try:
+            outcome.value = work()
+        except BaseException as error:  # handed to the caller's thread
+            outcome.error = error
+        finally:
+            outcome.done = True
+
+    worker = threading.Thread(target=target, name=name, daemon=True)
+    worker.start()
+    timeout = deadline + ABANDON_GRACE_S - time.perf_counter()
+    worker.join(None if timeout == float("inf") else max(0.0, timeout))
+    if not outcome.done:
+        tracker.cancel()
+        return False, None
+    if outcome.error is not None:
+        raise outcome.error
+    return True, outcome.value
