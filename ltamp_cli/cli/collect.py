@@ -38,6 +38,9 @@ def collect_command(
             "Needs the ltamp[ray] extra.",
         ),
     ] = None,
+    wait: Annotated[
+        bool, typer.Option("--wait", help="Wait for another writer of --out instead of failing.")
+    ] = False,
 ) -> None:
     """Collect N random trials (uniform control; context from the backend), resumably."""
     from ltamp_cli.trials.collect import CollectJob, collect
@@ -49,5 +52,5 @@ def collect_command(
     if out.exists() and out.is_dir():
         raise InputError(f"--out: {out} is a directory, expected a .jsonl file path")
     job = CollectJob(skill=skill, backend=backend, n=n, seed=seed, valid_only=valid_only)
-    added = collect(job, out, workers=workers, ray_address=ray)
+    added = collect(job, out, workers=workers, ray_address=ray, wait=wait)
     typer.echo(f"{added} new trials; {out} now holds trials 0..{n - 1}", err=True)

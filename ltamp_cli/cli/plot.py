@@ -9,6 +9,7 @@ from typing import Annotated
 import typer
 
 from ltamp_cli.errors import InputError
+from ltamp_cli.seeds import usable_seed
 
 
 def register(app: typer.Typer) -> None:
@@ -99,6 +100,7 @@ def level_set_command(
     if outside:
         raise InputError(f"--context: outside the trained range: {'; '.join(outside)}")
 
+    seed = usable_seed(seed)
     superlevel = build_superlevel_set(model, values, np.random.default_rng(seed), beta=beta,
                                       lam=lam)
     drawn = np.empty((0, spec.control.dim))

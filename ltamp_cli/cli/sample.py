@@ -11,6 +11,7 @@ from typing import Annotated
 import typer
 
 from ltamp_cli.errors import InputError
+from ltamp_cli.seeds import usable_seed
 
 
 def register(app: typer.Typer) -> None:
@@ -104,7 +105,8 @@ def sample_command(
     kernel = load_kernel(kernel_file, spec) if kernel_file is not None else None
 
     start = time.perf_counter()
-    chosen = make_sampler(sampler, model, values, np.random.default_rng(seed), beta=beta,
+    rng = np.random.default_rng(usable_seed(seed))
+    chosen = make_sampler(sampler, model, values, rng, beta=beta,
                           lam=lam, kernel=kernel)
     samples = [control for _, control in zip(range(n), chosen, strict=False)]
     elapsed = time.perf_counter() - start

@@ -19,11 +19,14 @@ def tell_command(
     valid: Annotated[
         bool, typer.Option("--valid/--invalid", help="Whether the trial could be run.")
     ] = True,
+    wait: Annotated[
+        bool, typer.Option("--wait", help="Wait for another writer of DIR instead of failing.")
+    ] = False,
 ) -> None:
     """Record the pending trial's score in DIR/trials.jsonl, refit and save the model."""
     from ltamp_cli.cli.threads import use_one_thread
     from ltamp_cli.learning.ask_tell import tell
 
     use_one_thread()
-    record = tell(directory, score, valid)
+    record = tell(directory, score, valid, wait=wait)
     typer.echo(json.dumps({"model": str(directory), "index": record.index, "score": score}))

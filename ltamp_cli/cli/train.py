@@ -11,6 +11,8 @@ import numpy as np
 import typer
 
 from ltamp_cli.errors import InputError
+from ltamp_cli.seeds import usable_seed
+from ltamp_cli.writer_lock import holds_writer_lock
 
 
 def register(app: typer.Typer) -> None:
@@ -30,16 +32,22 @@ def heldout_from_records(records: list[Any], skill: str) -> Any:
 
 
 def read_records(path: Path, option: str) -> list[Any]:
-    from ltamp_cli.trials.record import TrialDataset
+    from ltamp_cli.trials.record import TrialDataset, without_duplicates
 
     if not path.is_file():
         raise InputError(f"{option}: no such file {path}")
-    records = TrialDataset(path).read()
+    records, repeats = without_duplicates(TrialDataset(path).read())
+    if repeats:
+        typer.echo(f"ltamp: warning: {option}: {path} repeats {repeats} trial record(s) with the "
+                   "same (seed, index); each trial is used once", err=True)
     if not records:
         raise InputError(f"{option}: {path} holds no trial records")
     return records
 
 
+# One writer per model directory: a concurrent `tell` or `train` would otherwise record its
+# trial under the other's model.
+@holds_writer_lock("out", is_directory=True)
 def train_command(
     skill: Annotated[str, typer.Argument(help="Skill to learn (see `ltamp skills`).")],
     out: Annotated[Path, typer.Option("--out", help="Model directory to write (resumes).")],
@@ -68,6 +76,9 @@ def train_command(
     ask: Annotated[
         bool, typer.Option("--ask", help="Propose the next trial (see `ltamp tell`), not run it.")
     ] = False,
+    wait: Annotated[
+        bool, typer.Option("--wait", help="Wait for another writer of --out instead of failing.")
+    ] = False,
 ) -> None:
     """Learn SKILL's success constraint and save the model to --out.
 
@@ -83,6 +94,7 @@ def train_command(
     from ltamp_cli.trials.record import TrialDataset
 
     use_one_thread()
+    seed = usable_seed(seed)
     try:
         config = LearningConfig(
             strategy=strategy, kernel=kernel, budget=budget, init=init, seed=seed

@@ -31,6 +31,7 @@ from ltamp_cli.learning.baselines import RandomModel
 from ltamp_cli.learning.model import SkillModel
 from ltamp_cli.learning.model_dir import METADATA_FILE, load_model, spec_from_json, spec_to_json
 from ltamp_cli.trials.record import TrialDataset, TrialRecord
+from ltamp_cli.writer_lock import exclusive_writer
 
 PENDING_FILE = "pending.json"
 TRIALS_FILE = "trials.jsonl"
@@ -150,12 +151,25 @@ def _read_pending(directory: Path) -> dict[str, Any]:
     return data
 
 
-def tell(directory: str | Path, score: float, valid: bool = True) -> TrialRecord:
+def tell(directory: str | Path, score: float, valid: bool = True, *,
+         wait: bool = False) -> TrialRecord:
     """Record the outcome of the pending trial, refit and save the model, clear the pending.
 
     Raises :class:`InputError` when nothing is pending or ``score`` is not finite.
     """
     directory = Path(directory)
+    if not np.isfinite(score):
+        raise InputError(f"--score: expected a finite number, got {score}")
+    if not directory.is_dir():
+        raise InputError("no pending trial: run `ltamp train SKILL --ask --out DIR` first",
+                         location_in(directory))
+    # The same lock as `ltamp train`: a tell never records its score under a running
+    # trainer's model, and of two tells of one trial the second finds nothing pending.
+    with exclusive_writer(directory, is_directory=True, wait=wait, option="DIR"):
+        return _tell_locked(directory, score, valid)
+
+
+def _tell_locked(directory: Path, score: float, valid: bool) -> TrialRecord:
     pending = _read_pending(directory)
     if not np.isfinite(score):
         raise InputError(f"--score: expected a finite number, got {score}")

@@ -6,6 +6,7 @@ import gc
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import replace
 
 from ltamp_cli.errors import InputError
 from ltamp_cli.planner.algorithms.common import (
@@ -21,6 +22,7 @@ from ltamp_cli.planner.problem import PlanningProblem
 from ltamp_cli.planner.result import PlanResult
 from ltamp_cli.planner.search.engine import SEARCH_ALGORITHMS
 from ltamp_cli.planner.statistics import StreamStatistics
+from ltamp_cli.seeds import usable_seed
 
 COST_EPSILON = 1e-6
 # Generation-0 threshold while a solve runs (CPython's default is 700). Search and grounding
@@ -81,6 +83,9 @@ def solve(problem: PlanningProblem, config: PlannerConfig | None = None) -> Plan
     found is returned with the cost of each improvement in ``stats["anytime_costs"]``.
     """
     config = config or PlannerConfig()
+    if isinstance(config.seed, bool) or not isinstance(config.seed, int):
+        raise InputError(f"seed must be an integer, got {config.seed!r}")
+    config = replace(config, seed=usable_seed(config.seed))
     if config.algorithm not in ALGORITHMS:
         raise InputError(f"unknown algorithm {config.algorithm!r}: expected one of "
                          f"{', '.join(ALGORITHMS)}")
