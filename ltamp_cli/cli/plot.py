@@ -8,6 +8,7 @@ from typing import Annotated
 
 import typer
 
+from ltamp_cli.cli.paths import writable_output_file
 from ltamp_cli.errors import InputError
 from ltamp_cli.seeds import usable_seed
 
@@ -81,6 +82,7 @@ def level_set_command(
     use_one_thread()
     if out.suffix.lower() != ".png":
         raise InputError(f"--out: expected a .png file name, got {str(out)!r}")
+    writable_output_file(out, "--out")
     if samples < 0:
         raise InputError(f"--samples: expected a number >= 0, got {samples}")
     check_confidence_options(lam, beta)
@@ -146,6 +148,7 @@ def curves_command(
 
     if out.suffix.lower() != ".png":
         raise InputError(f"--out: expected a .png file name, got {str(out)!r}")
+    writable_output_file(out, "--out")
     if bool(runs) == (strategies is not None):
         raise InputError("plot curves: give model directories or --strategies, not both "
                          "(and not neither)")

@@ -8,6 +8,7 @@ from typing import Annotated
 
 import typer
 
+from ltamp_cli.cli.paths import writable_output_file
 from ltamp_cli.errors import InputError
 
 
@@ -92,6 +93,8 @@ def solve_command(
         raise InputError(f"{problem}: bad planner options: {error}") from None
     if render is not None and backend is None:
         raise InputError("--render: needs --backend NAME to execute the plan")
+    if render is not None:
+        writable_output_file(render, "--render")
     report = None
     if backend is not None and result.solved:
         from ltamp_cli.backends.execution import execute_plan

@@ -10,6 +10,7 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 
+from ltamp_cli.cli.paths import writable_output_file
 from ltamp_cli.errors import InputError
 from ltamp_cli.seeds import usable_seed
 from ltamp_cli.writer_lock import holds_writer_lock
@@ -105,6 +106,8 @@ def train_command(
         raise InputError(f"--out: {out} exists and is not a directory")
     if eval_every < 0:
         raise InputError(f"--eval-every: expected a number >= 0, got {eval_every}")
+    if curve is not None:
+        writable_output_file(curve, "--curve")
     if curve is not None and eval_every == 0:
         eval_every = max(1, budget // 10)
 

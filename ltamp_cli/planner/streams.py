@@ -25,6 +25,7 @@ Wrap a callable in :class:`Binding` to give per-stream :class:`StreamInfo`.
 from __future__ import annotations
 
 import inspect
+import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -91,6 +92,14 @@ def resolve_bindings(stream_file: StreamFile, provided: Mapping[str, Any], sourc
             bindings[name] = Binding(value)
         else:
             raise InputError(f"the binding of stream {name!r} in {source} is not callable")
+    tests = {s.name for s in stream_file.streams if s.is_test}
+    tests |= {p.name for p in stream_file.predicates}
+    for name in sorted(tests | {f.name for f in stream_file.functions}):
+        function = bindings[name].function
+        if inspect.isgeneratorfunction(function) or inspect.iscoroutinefunction(function):
+            kind = "test" if name in tests else "function"
+            raise InputError(f"the binding of {kind} {name!r} in {source} is a generator: a "
+                             f"{kind} returns its value (return, not yield)")
     return bindings
 
 
@@ -179,9 +188,9 @@ class StreamInstance:
             self.value = self.binding.function(*values)
             self.exhausted = True
             if isinstance(external, StreamFunction):
-                self.value = float(self.value)
+                self.value = _cost_value(self.name, self.value)
             else:
-                self.value = bool(self.value)
+                self.value = _truth_value(self.name, self.value)
             return []
         if self._iterator is None:
             if external.fluents:
@@ -224,6 +233,28 @@ class StreamInstance:
                 objects.intern(value, variable[1:])
                 for value, variable in zip(output, self.external.outputs, strict=True)))
         return outputs
+
+
+def _cost_value(name: str, value: Any) -> float:
+    """A ``:function``'s result as an action cost: a finite number ``>= 0``."""
+    try:
+        cost = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"function {name!r} must return a number (an action cost), "
+                         f"got {value!r:.80}") from None
+    if not math.isfinite(cost) or cost < 0.0:
+        raise InputError(f"function {name!r} returned cost {cost}: action costs must be "
+                         "finite and >= 0")
+    return cost
+
+
+def _truth_value(name: str, value: Any) -> bool:
+    """A test stream's or ``:predicate``'s result; a generator is a mistake, not ``True``."""
+    if inspect.isgenerator(value) or isinstance(value, Iterator | Sequence | Mapping) \
+            or inspect.isawaitable(value):
+        raise InputError(f"test {name!r} must return a bool, got {type(value).__name__} "
+                         "(a test has no outputs: return, don't yield)")
+    return bool(value)
 
 
 def seeded_rng(seed: int | None) -> np.random.Generator:
