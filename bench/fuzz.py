@@ -32,10 +32,9 @@ SUBPROCESS_TIMEOUT_S = 120.0
 
 def run(cases: int, seed: int, out: Path | None = None) -> dict[str, object]:
     sys.path.insert(0, str(REPO / "tests" / "fuzz"))
-    import os
     import tempfile
 
-    from hostile_corpus import CORPUS, run_case, run_subprocess
+    from hostile_corpus import CORPUS, run_case, solve_mutation
     from hypothesis import HealthCheck, Phase, given, settings
     from hypothesis import seed as hypothesis_seed
     from hypothesis import strategies as st
@@ -82,18 +81,9 @@ def run(cases: int, seed: int, out: Path | None = None) -> dict[str, object]:
             @given(data=st.data())
             def case(data: st.DataObject) -> None:
                 target = data.draw(st.sampled_from(PDDL_TARGETS + YAML_TARGETS))
-                path = root / target.file
-                original = path.read_text()
-                path.write_text(data.draw(mutated_text(original)))
-                try:
-                    with tempfile.TemporaryDirectory(dir=root) as workdir:
-                        env = {**os.environ, "PYTHONPATH": str(REPO), "OMP_NUM_THREADS": "1",
-                               "XDG_CACHE_HOME": str(Path(workdir) / "cache")}
-                        outcome, why = run_subprocess(
-                            ["solve", str(root / target.problem), "--max-time", "3"],
-                            Path(workdir), env, SUBPROCESS_TIMEOUT_S, watch=root)
-                finally:
-                    path.write_text(original)
+                text = data.draw(mutated_text((root / target.file).read_text()))
+                outcome, why = solve_mutation(root, target.file, target.problem, text,
+                                              SUBPROCESS_TIMEOUT_S)
                 record("subproc", outcome, target.file, why)
 
             case()

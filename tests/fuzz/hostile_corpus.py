@@ -310,3 +310,22 @@ def run_subprocess(argv: list[str], cwd: Path, env: dict[str, str], timeout: flo
 def _changes(before: dict[str, int], after: dict[str, int]) -> str | None:
     changed = sorted(path for path, stamp in after.items() if before.get(path) != stamp)
     return f"wrote outside its folder: {changed[:3]}" if changed else None
+
+
+def solve_mutation(root: Path, target_file: str, problem: str, text: str,
+                   timeout: float = 120.0) -> tuple[Outcome, str | None]:
+    """Write ``text`` over ``root/target_file``, ``ltamp solve`` ``root/problem`` in a
+    subprocess (own cache, 3 s planning limit, ``timeout`` in all), restore the file."""
+    import tempfile
+
+    path = root / target_file
+    original = path.read_text()
+    path.write_text(text)
+    try:
+        with tempfile.TemporaryDirectory(dir=root) as workdir:
+            env = {**os.environ, "PYTHONPATH": str(REPO), "OMP_NUM_THREADS": "1",
+                   "XDG_CACHE_HOME": str(Path(workdir) / "cache")}
+            return run_subprocess(["solve", str(root / problem), "--max-time", "3"],
+                                  Path(workdir), env, timeout, watch=root)
+    finally:
+        path.write_text(original)

@@ -18,7 +18,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from hostile_corpus import CORPUS, HostileCase, run_case, run_subprocess
+from hostile_corpus import CORPUS, HostileCase, run_case, solve_mutation
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import seed as hypothesis_seed
 from hypothesis import strategies as st
@@ -51,18 +51,8 @@ def test_random_mutations_solved_in_subprocesses(root: Path) -> None:
     @given(data=st.data())
     def case(data: st.DataObject) -> None:
         target = data.draw(st.sampled_from(PDDL_TARGETS + YAML_TARGETS))
-        path = root / target.file
-        original = path.read_text()
-        path.write_text(data.draw(mutated_text(original)))
-        try:
-            with tempfile.TemporaryDirectory(dir=root) as workdir:
-                env = {**os.environ, "PYTHONPATH": str(REPO), "OMP_NUM_THREADS": "1",
-                       "XDG_CACHE_HOME": str(Path(workdir) / "cache")}
-                outcome, why = run_subprocess(
-                    ["solve", str(root / target.problem), "--max-time", "3"], Path(workdir),
-                    env, CASE_TIMEOUT_S)
-        finally:
-            path.write_text(original)
+        text = data.draw(mutated_text((root / target.file).read_text()))
+        outcome, why = solve_mutation(root, target.file, target.problem, text, CASE_TIMEOUT_S)
         if why is not None:
             findings.append((why, target.file, outcome))
 

@@ -73,6 +73,11 @@ def test_a_pickle_in_a_model_directory_is_never_loaded(synthetic, tmp_path):
     assert not marker.exists()
 
 
+def _read_arrays(directory: Path) -> dict[str, np.ndarray]:
+    with np.load(directory / "weights.npz") as weights:
+        return {name: weights[name].copy() for name in weights.files}
+
+
 def _write_arrays(directory: Path, **arrays: np.ndarray) -> None:
     np.savez(directory / "weights.npz", **arrays)
     metadata = json.loads((directory / "model.json").read_text())
@@ -84,8 +89,7 @@ def _write_arrays(directory: Path, **arrays: np.ndarray) -> None:
 def test_hostile_forest_arrays_are_one_input_error(synthetic, tmp_path, hostile):
     model = _fitted(synthetic, "rf-r")
     save_model(model, tmp_path)
-    with np.load(tmp_path / "weights.npz") as weights:
-        arrays = {name: weights[name].copy() for name in weights.files}
+    arrays = _read_arrays(tmp_path)
     if hostile == "nan":
         arrays["value"][3, 0] = np.nan
     elif hostile == "inf":
@@ -108,8 +112,7 @@ def test_hostile_gp_arrays_are_one_input_error(synthetic, tmp_path, hostile):
     x = rng.uniform(-1, 1, size=(12, 3))
     model = LevelSetModel(spec, fit_gp(x, x[:, 0] - 0.1, rng=rng))
     save_model(model, tmp_path)
-    with np.load(tmp_path / "weights.npz") as weights:
-        arrays = {name: weights[name].copy() for name in weights.files}
+    arrays = _read_arrays(tmp_path)
     if hostile == "nan-x":
         arrays["x"][0, 0] = np.nan
     elif hostile == "wrong-length":
