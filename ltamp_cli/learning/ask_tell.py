@@ -19,6 +19,7 @@ import numpy as np
 
 from ltamp_cli.backends.protocol import SkillBackend
 from ltamp_cli.errors import InputError, location_in
+from ltamp_cli.jsondata import read_json_data
 from ltamp_cli.learning.active import (
     ACTIVE_STRATEGIES,
     LearningConfig,
@@ -140,11 +141,11 @@ def _read_pending(directory: Path) -> dict[str, Any]:
             location_in(directory),
         )
     try:
-        data = json.loads(path.read_text())
+        data = read_json_data(path)
         spec_from_json(data["spec"])
         LearningConfig(**data["config"])
         Proposal(**data["proposal"])
-    except (ValueError, KeyError, TypeError) as error:
+    except (ValueError, KeyError, TypeError, AttributeError) as error:
         raise InputError(
             f"corrupt pending trial ({type(error).__name__}: {error})", location_in(path)
         ) from None

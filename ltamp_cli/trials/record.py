@@ -104,7 +104,7 @@ class TrialDataset:
                 if missing:
                     raise KeyError(", ".join(missing))
                 yield TrialRecord.from_dict(data)
-            except (ValueError, KeyError, TypeError) as error:
+            except (ValueError, KeyError, TypeError, RecursionError) as error:
                 raise InputError(
                     f"not a trial record ({type(error).__name__}: {error}); expected one JSON "
                     f"object per line with fields {', '.join(_REQUIRED_FIELDS)}",
