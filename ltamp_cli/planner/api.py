@@ -92,7 +92,7 @@ def solve(problem: PlanningProblem, config: PlannerConfig | None = None) -> Plan
     if config.search not in SEARCH_ALGORITHMS:
         raise InputError(f"unknown search {config.search!r}: expected one of "
                          f"{', '.join(SEARCH_ALGORITHMS)}")
-    if config.max_time <= 0:
+    if not config.max_time > 0:  # also NaN
         raise InputError(f"max time must be positive, got {config.max_time}")
     with _relaxed_gc():
         return _solve(problem, config)

@@ -237,6 +237,33 @@ def _cases() -> list[HostileCase]:
     def _(case: Path, domains: Path) -> list[str]:
         return ["solve", str(_problem(case, domains)), "--seed", "-1", "--max-time", "20"]
 
+    @add("collect --out under a file", contains="--out", in_process=True)
+    def _(case: Path, domains: Path) -> list[str]:
+        (case / "file").write_text("")
+        return ["collect", "moving2d", "--backend", "synthetic", "-n", "2",
+                "--out", str(case / "file" / "t.jsonl")]
+
+    @add("collect --seed -1", expect_code=0, in_process=True)
+    def _(case: Path, domains: Path) -> list[str]:
+        return ["collect", "moving2d", "--backend", "synthetic", "-n", "3", "--seed", "-1",
+                "--out", str(case / "t.jsonl")]
+
+    @add("sample --plot under a file", contains="--plot", in_process=True)
+    def _(case: Path, domains: Path) -> list[str]:
+        (case / "file").write_text("")
+        return ["sample", str(REPO / "models" / "kitchen2d" / "pour"),
+                "--plot", str(case / "file" / "x.png")]
+
+    @add("sample --kernel-file missing", contains="--kernel-file", in_process=True)
+    def _(case: Path, domains: Path) -> list[str]:
+        return ["sample", str(REPO / "models" / "kitchen2d" / "pour"), "--sampler",
+                "diverse-lk", "--kernel-file", str(case / "missing.json")]
+
+    @add("plot level-set --out name over 255 bytes", contains="255", in_process=True)
+    def _(case: Path, domains: Path) -> list[str]:
+        return ["plot", "level-set", str(REPO / "models" / "kitchen2d" / "pour"),
+                "--out", str(case / ("p" * 300 + ".png"))]
+
     for label, mutate in (("pickled weights.npz", _pickled_npz),
                           ("pickled weights.pkl", _pickled_pkl),
                           ("NaN in GP weights", _nan_gp),
