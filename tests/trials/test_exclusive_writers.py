@@ -121,3 +121,22 @@ def test_collect_workers_die_with_their_parent(tmp_path):
     alive = [w for w in workers if Path(f"/proc/{w}").exists()
              and "Z" not in Path(f"/proc/{w}/stat").read_text().split()[2]]
     assert not alive, f"workers {alive} outlived their parent"
+
+
+def test_live_training_refuses_to_resume_from_a_file_with_a_trial_twice(tmp_path):
+    from ltamp_cli.backends import load_backend
+    from ltamp_cli.learning.active import LearningConfig, learn_online
+    from ltamp_cli.trials.record import TrialDataset
+
+    backend = load_backend("synthetic")
+    try:
+        dataset = TrialDataset(tmp_path / "trials.jsonl")
+        config = LearningConfig(strategy="random", budget=3, init=1, seed=0)
+        learn_online(backend, "moving2d", config, dataset)
+        lines = dataset.path.read_text().splitlines()
+        dataset.path.write_text("\n".join([*lines, lines[0]]) + "\n")
+        with pytest.raises(ValueError, match="recorded twice"):
+            learn_online(backend, "moving2d", LearningConfig(strategy="random", budget=5,
+                                                             init=1, seed=0), dataset)
+    finally:
+        backend.close()
