@@ -10,6 +10,7 @@ import typer
 
 from ltamp_cli.cli.paths import writable_output_file
 from ltamp_cli.errors import InputError
+from ltamp_cli.seeds import usable_seed
 
 
 def register(app: typer.Typer) -> None:
@@ -66,7 +67,7 @@ def solve_command(
     if max_time is not None:
         options["max_time"] = max_time
     if seed is not None:
-        options["seed"] = seed
+        options["seed"] = usable_seed(seed)
     if search is not None:
         options["search"] = search
     if unit_costs:
@@ -99,7 +100,7 @@ def solve_command(
     if backend is not None and result.solved:
         from ltamp_cli.backends.execution import execute_plan
 
-        report = execute_plan(backend, loaded, result, config.seed, render)
+        report = execute_plan(backend, loaded, result, usable_seed(config.seed), render)
     if json_output:
         if report is None:
             print(result.to_json())
