@@ -9,6 +9,37 @@ import yaml
 
 from ltamp_cli.errors import InputError, SourceLocation
 
+MAX_YAML_DEPTH = 64
+
+
+def _check_structure(root: yaml.Node | None, path: str) -> None:
+    """Reject nesting deeper than :data:`MAX_YAML_DEPTH` and a key repeated in one mapping
+    (YAML says keys are unique; PyYAML would silently keep the last value)."""
+    stack: list[tuple[yaml.Node, int]] = [(root, 1)] if root is not None else []
+    visited: set[int] = set()  # aliases share nodes: walk each once (no "billion laughs")
+    while stack:
+        node, depth = stack.pop()
+        if id(node) in visited:
+            continue
+        visited.add(id(node))
+        if depth > MAX_YAML_DEPTH:
+            mark = node.start_mark
+            raise InputError(f"invalid YAML: nested deeper than {MAX_YAML_DEPTH} levels",
+                             SourceLocation(path, mark.line + 1, mark.column + 1))
+        if isinstance(node, yaml.MappingNode):
+            seen: set[str] = set()
+            for key, value in node.value:
+                if isinstance(key, yaml.ScalarNode):
+                    if key.value in seen and key.tag != "tag:yaml.org,2002:merge":
+                        mark = key.start_mark
+                        raise InputError(f"duplicate key {key.value!r}",
+                                         SourceLocation(path, mark.line + 1, mark.column + 1))
+                    seen.add(key.value)
+                stack.append((key, depth + 1))
+                stack.append((value, depth + 1))
+        elif isinstance(node, yaml.SequenceNode):
+            stack.extend((item, depth + 1) for item in node.value)
+
 
 class YamlDocument:
     """A parsed YAML document plus the source position of every node."""
@@ -24,7 +55,11 @@ class YamlDocument:
                 raise InputError(f"cannot read file: {error}", SourceLocation(self.path)) from None
         try:
             self.root = yaml.compose(text, Loader=yaml.SafeLoader)
+            _check_structure(self.root, self.path)
             self.data = yaml.load(text, Loader=yaml.SafeLoader)
+        except RecursionError:
+            raise InputError(f"invalid YAML: nested deeper than {MAX_YAML_DEPTH} levels",
+                             SourceLocation(self.path)) from None
         except yaml.MarkedYAMLError as error:
             mark = error.problem_mark or error.context_mark
             line, column = (mark.line + 1, mark.column + 1) if mark else (0, 0)

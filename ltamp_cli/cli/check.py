@@ -42,6 +42,7 @@ def check_problem_file(path: Path, domain_dir: Path | None = None, seed: int = 0
 
     from ltamp_cli.planner.problem import load_problem
     from ltamp_cli.planner.streams import resolve_bindings
+    from ltamp_cli.seeds import usable_seed
 
     loaded = load_problem(path, domain_dir)
     where = SourceLocation(str(path))
@@ -51,10 +52,10 @@ def check_problem_file(path: Path, domain_dir: Path | None = None, seed: int = 0
         if loaded.streams_factory is not None:
             try:
                 provided = loaded.streams_factory(dict(loaded.world),
-                                                  np.random.default_rng(seed))
-            except InputError:
+                                                  np.random.default_rng(usable_seed(seed)))
+            except (InputError, KeyboardInterrupt):
                 raise
-            except Exception as error:  # user code: report, never a traceback
+            except BaseException as error:  # user code (even SystemExit): never a traceback
                 raise InputError(f"make_streams of {loaded.bindings_source!r} failed: "
                                  f"{type(error).__name__}: {error}", where) from None
             if not isinstance(provided, Mapping):

@@ -39,6 +39,9 @@ def collect_command(
         ),
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    wait: Annotated[
+        bool, typer.Option("--wait", help="Wait for another writer of --out instead of failing.")
+    ] = False,
 ) -> None:
     """Collect N random trials (uniform control; context from the backend), resumably."""
     from ltamp_cli.cli.conventions import emit
@@ -51,7 +54,7 @@ def collect_command(
     if out.exists() and out.is_dir():
         raise InputError(f"--out: {out} is a directory, expected a .jsonl file path")
     job = CollectJob(skill=skill, backend=backend, n=n, seed=seed, valid_only=valid_only)
-    added = collect(job, out, workers=workers, ray_address=ray)
+    added = collect(job, out, workers=workers, ray_address=ray, wait=wait)
     if as_json:
         emit({"out": str(out), "added": added, "n": n}, as_json)
     else:

@@ -7,6 +7,7 @@ from typing import Annotated
 
 import typer
 
+from ltamp_cli.cli.paths import writable_output_file
 from ltamp_cli.errors import InputError
 
 
@@ -35,6 +36,7 @@ def import_command(
 
     if out.exists() and not out.is_file():
         raise InputError(f"--out: {out} exists and is not a file")
+    writable_output_file(out, "--out")
     physics = load_backend(backend)
     try:
         specs = physics.skills()

@@ -8,7 +8,9 @@ from typing import Annotated
 import typer
 
 from ltamp_cli.cli.conventions import emit, progress_enabled
+from ltamp_cli.cli.paths import writable_output_file
 from ltamp_cli.errors import InputError
+from ltamp_cli.seeds import usable_seed
 
 
 def register(app: typer.Typer) -> None:
@@ -81,6 +83,7 @@ def level_set_command(
     use_one_thread()
     if out.suffix.lower() != ".png":
         raise InputError(f"--out: expected a .png file name, got {str(out)!r}")
+    writable_output_file(out, "--out")
     if samples < 0:
         raise InputError(f"--samples: expected a number >= 0, got {samples}")
     check_confidence_options(lam, beta)
@@ -100,6 +103,7 @@ def level_set_command(
     if outside:
         raise InputError(f"--context: outside the trained range: {'; '.join(outside)}")
 
+    seed = usable_seed(seed)
     superlevel = build_superlevel_set(model, values, np.random.default_rng(seed), beta=beta,
                                       lam=lam)
     drawn = np.empty((0, spec.control.dim))
@@ -150,6 +154,7 @@ def curves_command(
 
     if out.suffix.lower() != ".png":
         raise InputError(f"--out: expected a .png file name, got {str(out)!r}")
+    writable_output_file(out, "--out")
     if bool(runs) == (strategies is not None):
         raise InputError("plot curves: give model directories or --strategies, not both "
                          "(and not neither)")

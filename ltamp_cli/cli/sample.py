@@ -10,7 +10,9 @@ from typing import Annotated
 
 import typer
 
+from ltamp_cli.cli.paths import existing_input_file, writable_output_file
 from ltamp_cli.errors import InputError
+from ltamp_cli.seeds import usable_seed
 
 
 def register(app: typer.Typer) -> None:
@@ -87,6 +89,10 @@ def sample_command(
     check_confidence_options(lam, beta)
     if plot is not None and plot.suffix.lower() != ".png":
         raise InputError(f"--plot: expected a .png file name, got {str(plot)!r}")
+    if plot is not None:
+        writable_output_file(plot, "--plot")
+    if kernel_file is not None:
+        existing_input_file(kernel_file, "--kernel-file")
     model = load_model(model_dir).model
     if not isinstance(model, LevelSetModel):
         raise InputError(f"{model_dir}: sampling needs a GP model, this one is {model.kind!r}")
@@ -104,7 +110,8 @@ def sample_command(
     kernel = load_kernel(kernel_file, spec) if kernel_file is not None else None
 
     start = time.perf_counter()
-    chosen = make_sampler(sampler, model, values, np.random.default_rng(seed), beta=beta,
+    rng = np.random.default_rng(usable_seed(seed))
+    chosen = make_sampler(sampler, model, values, rng, beta=beta,
                           lam=lam, kernel=kernel)
     samples = [control for _, control in zip(range(n), chosen, strict=False)]
     elapsed = time.perf_counter() - start

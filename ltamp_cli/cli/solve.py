@@ -8,7 +8,9 @@ from typing import Annotated
 
 import typer
 
+from ltamp_cli.cli.paths import writable_output_file
 from ltamp_cli.errors import InputError
+from ltamp_cli.seeds import usable_seed
 
 # Streams listed (slowest first) under "why no plan".
 TIME_SPENT_STREAMS_SHOWN = 5
@@ -73,7 +75,7 @@ def solve_command(
     if max_time is not None:
         options["max_time"] = max_time
     if seed is not None:
-        options["seed"] = seed
+        options["seed"] = usable_seed(seed)
     if search is not None:
         options["search"] = search
     if unit_costs:
@@ -101,13 +103,15 @@ def solve_command(
         raise InputError(f"{problem}: bad planner options: {error}") from None
     if render is not None and backend is None:
         raise InputError("--render: needs --backend NAME to execute the plan")
+    if render is not None:
+        writable_output_file(render, "--render")
     report = None
     if backend is not None and result.solved:
         from ltamp_cli.backends.execution import execute_plan
 
         label = f"executing {len(result.plan or [])} actions on {backend}"
         with progress_line(label + (f", rendering {render}" if render else "")):
-            report = execute_plan(backend, loaded, result, config.seed, render)
+            report = execute_plan(backend, loaded, result, usable_seed(config.seed), render)
     if json_output:
         if report is None:
             print(result.to_json())

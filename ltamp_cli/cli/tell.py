@@ -19,6 +19,9 @@ def tell_command(
         bool, typer.Option("--valid/--invalid", help="Whether the trial could be run.")
     ] = True,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    wait: Annotated[
+        bool, typer.Option("--wait", help="Wait for another writer of DIR instead of failing.")
+    ] = False,
 ) -> None:
     """Record the pending trial's score in DIR/trials.jsonl, refit and save the model."""
     from ltamp_cli.cli.conventions import emit
@@ -26,5 +29,5 @@ def tell_command(
     from ltamp_cli.threads import use_one_thread
 
     use_one_thread()
-    record = tell(directory, score, valid)
+    record = tell(directory, score, valid, wait=wait)
     emit({"model": str(directory), "index": record.index, "score": score}, as_json)

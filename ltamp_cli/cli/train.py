@@ -7,7 +7,10 @@ from typing import Annotated, Any
 
 import typer
 
+from ltamp_cli.cli.paths import writable_output_file
 from ltamp_cli.errors import InputError
+from ltamp_cli.seeds import usable_seed
+from ltamp_cli.writer_lock import holds_writer_lock
 
 
 def register(app: typer.Typer) -> None:
@@ -29,16 +32,22 @@ def heldout_from_records(records: list[Any], skill: str) -> Any:
 
 
 def read_records(path: Path, option: str) -> list[Any]:
-    from ltamp_cli.trials.record import TrialDataset
+    from ltamp_cli.trials.record import TrialDataset, without_duplicates
 
     if not path.is_file():
         raise InputError(f"{option}: no such file {path}")
-    records = TrialDataset(path).read()
+    records, repeats = without_duplicates(TrialDataset(path).read())
+    if repeats:
+        typer.echo(f"ltamp: warning: {option}: {path} repeats {repeats} trial record(s) with the "
+                   "same (seed, index); each trial is used once", err=True)
     if not records:
         raise InputError(f"{option}: {path} holds no trial records")
     return records
 
 
+# One writer per model directory: a concurrent `tell` or `train` would otherwise record its
+# trial under the other's model.
+@holds_writer_lock("out", is_directory=True)
 def train_command(
     skill: Annotated[str, typer.Argument(help="Skill to learn (see `ltamp skills`).")],
     out: Annotated[Path, typer.Option("--out", help="Model directory to write (resumes).")],
@@ -68,6 +77,9 @@ def train_command(
         bool, typer.Option("--ask", help="Propose the next trial (see `ltamp tell`), not run it.")
     ] = False,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    wait: Annotated[
+        bool, typer.Option("--wait", help="Wait for another writer of --out instead of failing.")
+    ] = False,
 ) -> None:
     """Learn SKILL's success constraint and save the model to --out.
 
@@ -84,6 +96,7 @@ def train_command(
     from ltamp_cli.trials.record import TrialDataset
 
     use_one_thread()
+    seed = usable_seed(seed)
     try:
         config = LearningConfig(
             strategy=strategy, kernel=kernel, budget=budget, init=init, seed=seed
@@ -94,6 +107,8 @@ def train_command(
         raise InputError(f"--out: {out} exists and is not a directory")
     if eval_every < 0:
         raise InputError(f"--eval-every: expected a number >= 0, got {eval_every}")
+    if curve is not None:
+        writable_output_file(curve, "--curve")
     if curve is not None and eval_every == 0:
         eval_every = max(1, budget // 10)
 

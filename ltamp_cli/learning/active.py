@@ -197,6 +197,11 @@ def learn_online(
             f"{dataset.path if dataset else ''} holds trials of skill "
             f"{strangers[0].skill!r}, not {skill!r}"
         )
+    indices = [r.index for r in records if r.index >= 0]
+    if len(set(indices)) != len(indices):
+        repeated = next(i for i in indices if indices.count(i) > 1)
+        raise ValueError(f"{dataset.path if dataset else ''}: trial {repeated} is recorded "
+                         "twice (two writers shared it); keep one copy of each trial")
     rng = np.random.default_rng([config.seed, len(records)])
     learner = _Learner(spec, config, rng)
     template = RandomModel(spec, 0.0)  # coordinates and validity only

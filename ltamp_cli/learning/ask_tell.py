@@ -19,6 +19,7 @@ import numpy as np
 
 from ltamp_cli.backends.protocol import SkillBackend
 from ltamp_cli.errors import InputError, location_in
+from ltamp_cli.jsondata import read_json_data
 from ltamp_cli.learning.active import (
     ACTIVE_STRATEGIES,
     LearningConfig,
@@ -31,6 +32,7 @@ from ltamp_cli.learning.baselines import RandomModel
 from ltamp_cli.learning.model import SkillModel
 from ltamp_cli.learning.model_dir import METADATA_FILE, load_model, spec_from_json, spec_to_json
 from ltamp_cli.trials.record import TrialDataset, TrialRecord
+from ltamp_cli.writer_lock import exclusive_writer
 
 PENDING_FILE = "pending.json"
 TRIALS_FILE = "trials.jsonl"
@@ -139,23 +141,36 @@ def _read_pending(directory: Path) -> dict[str, Any]:
             location_in(directory),
         )
     try:
-        data = json.loads(path.read_text())
+        data = read_json_data(path)
         spec_from_json(data["spec"])
         LearningConfig(**data["config"])
         Proposal(**data["proposal"])
-    except (ValueError, KeyError, TypeError) as error:
+    except (ValueError, KeyError, TypeError, AttributeError) as error:
         raise InputError(
             f"corrupt pending trial ({type(error).__name__}: {error})", location_in(path)
         ) from None
     return data
 
 
-def tell(directory: str | Path, score: float, valid: bool = True) -> TrialRecord:
+def tell(directory: str | Path, score: float, valid: bool = True, *,
+         wait: bool = False) -> TrialRecord:
     """Record the outcome of the pending trial, refit and save the model, clear the pending.
 
     Raises :class:`InputError` when nothing is pending or ``score`` is not finite.
     """
     directory = Path(directory)
+    if not np.isfinite(score):
+        raise InputError(f"--score: expected a finite number, got {score}")
+    if not directory.is_dir():
+        raise InputError("no pending trial: run `ltamp train SKILL --ask --out DIR` first",
+                         location_in(directory))
+    # The same lock as `ltamp train`: a tell never records its score under a running
+    # trainer's model, and of two tells of one trial the second finds nothing pending.
+    with exclusive_writer(directory, is_directory=True, wait=wait, option="DIR"):
+        return _tell_locked(directory, score, valid)
+
+
+def _tell_locked(directory: Path, score: float, valid: bool) -> TrialRecord:
     pending = _read_pending(directory)
     if not np.isfinite(score):
         raise InputError(f"--score: expected a finite number, got {score}")

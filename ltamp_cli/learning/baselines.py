@@ -22,6 +22,7 @@ SKLEARN_KINDS = ("nn-c", "nn-r", "rf-c", "rf-r")
 
 
 def _estimator(kind: str, seed: int) -> object:
+    seed %= 2**32  # scikit-learn takes 32-bit seeds
     if kind == "nn-c":
         return MLPClassifier(hidden_layer_sizes=(64, 64), max_iter=2000, random_state=seed)
     if kind == "nn-r":

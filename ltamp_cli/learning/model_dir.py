@@ -10,15 +10,20 @@ Layout of ``DIR/``:
   ``training`` — trial counts and the trials file —, ``beta`` …).
 * ``weights.npz`` — GP: training inputs ``x`` (normalised) and scores ``y``, log
   hyperparameters ``theta``, score scale (no pickle); ``random``: the mean score.
-* ``weights.pkl`` — scikit-learn baselines (pickled estimator: load only trusted files).
+  scikit-learn baselines: the fitted trees or layer weights as plain arrays
+  (:mod:`.estimator_arrays`), their activations under ``estimator`` in ``model.json``.
 * ``trials.jsonl`` — the trials the model was trained on, when the trainer ran them.
+
+A model directory is data, never code: nothing is unpickled (``np.load`` runs with
+``allow_pickle=False``), and every array is checked for dtype, shape and finiteness before use,
+so a crafted directory gives one ``InputError`` line, never a payload or a traceback.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
-import pickle
+import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import UTC, datetime
@@ -30,8 +35,10 @@ import numpy as np
 
 from ltamp_cli.backends.protocol import ParamSpace, SkillSpec
 from ltamp_cli.errors import InputError, location_in
-from ltamp_cli.learning.baselines import RandomModel, SklearnModel
-from ltamp_cli.learning.gp import GaussianProcess
+from ltamp_cli.jsondata import read_json_data
+from ltamp_cli.learning.baselines import SKLEARN_KINDS, RandomModel, SklearnModel
+from ltamp_cli.learning.estimator_arrays import export_estimator, import_estimator
+from ltamp_cli.learning.gp import KERNEL_NAMES, GaussianProcess, n_kernel_params
 from ltamp_cli.learning.model import LevelSetModel, SkillModel
 from ltamp_cli.learning.normalize import joint_space
 
@@ -108,9 +115,12 @@ def save_model(model: SkillModel, directory: str | Path, **metadata: Any) -> Pat
                             lambda handle: np.savez(handle, **model.gp.state()))
     elif isinstance(model, SklearnModel):
         record["constant"] = model.constant
-        weights_file = "weights.pkl"
+        arrays, settings = (export_estimator(model.kind, model.estimator)
+                            if model.estimator is not None else ({}, {}))
+        record["estimator"] = settings if model.estimator is not None else None
+        weights_file = "weights.npz"
         _replace_atomically(directory / weights_file,
-                            lambda handle: pickle.dump(model.estimator, handle))
+                            lambda handle: np.savez(handle, **arrays))
     elif isinstance(model, RandomModel):
         weights_file = "weights.npz"
         _replace_atomically(directory / weights_file,
@@ -143,8 +153,7 @@ def _check_weights(directory: Path, metadata: dict[str, Any], path: Path) -> Non
     expected = metadata.get("weights_sha256")
     if expected is None:  # saved before digests were recorded
         return
-    name = "weights.pkl" if metadata.get("kind") in ("nn-c", "nn-r", "rf-c", "rf-r") \
-        else "weights.npz"
+    name = "weights.npz"
     weights = directory / name
     if not weights.is_file() or _sha256(weights) != expected:
         raise InputError(f"{name} does not match {METADATA_FILE} (a save was interrupted?): "
@@ -152,45 +161,127 @@ def _check_weights(directory: Path, metadata: dict[str, Any], path: Path) -> Non
 
 
 def load_model(directory: str | Path) -> LoadedModel:
-    """Read a model directory written by :func:`save_model`; bad input raises ``InputError``."""
+    """Read a model directory written by :func:`save_model`; bad input raises ``InputError``.
+
+    Data only: the weights are read with ``allow_pickle=False`` and validated (dtype, shape,
+    finite values) before any model is built from them.
+    """
     directory = Path(directory)
     path = directory / METADATA_FILE
     if not path.is_file():
         raise InputError(
             f"no {METADATA_FILE} here: not an ltamp model directory", location_in(directory)
         )
-    try:
-        metadata = json.loads(path.read_text())
-    except ValueError as error:
-        raise InputError(f"invalid JSON: {error}", location_in(path)) from None
+    metadata = read_json_data(path)
     if not isinstance(metadata, dict) or metadata.get("format") != FORMAT:
         raise InputError(f"not an ltamp model (expected format {FORMAT!r})", location_in(path))
     if metadata.get("version") != VERSION:
         raise InputError(
             f"unsupported model version {metadata.get('version')!r}", location_in(path)
         )
+    if (directory / "weights.pkl").exists() and not (directory / "weights.npz").exists():
+        raise InputError("weights.pkl is a pickle, which ltamp no longer loads (it can run "
+                         "code): train the model again to write weights.npz", location_in(path))
     _check_weights(directory, metadata, path)
     try:
-        spec = spec_from_json(metadata["skill"])
+        spec = _checked_spec(metadata["skill"])
         kind = metadata["kind"]
+        weights = _read_arrays(directory / "weights.npz")
+        dim = spec.context.dim + spec.control.dim
         if kind == "gp":
-            with np.load(directory / "weights.npz") as weights:
-                state = {name: weights[name] for name in weights.files}
-            mean_mode = metadata["hyperparameters"].get("mean_mode", "constant")
-            model: SkillModel = LevelSetModel(
-                spec, GaussianProcess.from_state(metadata["kernel"], mean_mode, state)
-            )
-        elif kind in ("nn-c", "nn-r", "rf-c", "rf-r"):
-            with (directory / "weights.pkl").open("rb") as handle:
-                estimator = pickle.load(handle)
-            model = SklearnModel(spec, kind, estimator, float(metadata.get("constant", 0.0)))
+            model: SkillModel = LevelSetModel(spec, _gaussian_process(metadata, weights, dim))
+        elif kind in SKLEARN_KINDS:
+            settings = metadata.get("estimator")
+            constant = _finite_number(metadata.get("constant", 0.0), "constant")
+            if settings is None:
+                model = SklearnModel(spec, kind, None, constant)
+            else:
+                if not isinstance(settings, dict):
+                    raise ValueError("'estimator' must be an object")
+                model = SklearnModel(spec, kind, import_estimator(kind, weights, settings, dim),
+                                     constant)
         elif kind == "random":
-            with np.load(directory / "weights.npz") as weights:
-                model = RandomModel(spec, float(weights["mean_score"]))
+            model = RandomModel(spec, _finite_number(_scalar(weights, "mean_score"),
+                                                     "mean_score"))
         else:
             raise InputError(f"unknown model kind {kind!r}", location_in(path))
-    except (KeyError, TypeError, ValueError, OSError) as error:
+    except (KeyError, TypeError, ValueError, AttributeError, OSError, EOFError,
+            zipfile.BadZipFile, RuntimeError) as error:
         raise InputError(
-            f"incomplete model directory ({type(error).__name__}: {error})", location_in(path)
+            f"incomplete or invalid model directory ({type(error).__name__}: {error})",
+            location_in(path),
         ) from None
     return LoadedModel(model, metadata)
+
+
+def _read_arrays(path: Path) -> dict[str, np.ndarray]:
+    """Every array of the ``.npz`` at ``path``, refusing pickled (object) arrays."""
+    with np.load(path, allow_pickle=False) as weights:
+        arrays = {name: weights[name] for name in weights.files}
+    for name, array in arrays.items():
+        if array.dtype.hasobject or not (np.issubdtype(array.dtype, np.number)
+                                         or array.dtype == bool):
+            raise ValueError(f"array {name!r} has dtype {array.dtype}, expected numbers")
+    return arrays
+
+
+def _finite_number(value: Any, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float | np.number) \
+            or not np.isfinite(value):
+        raise ValueError(f"{name!r} must be a finite number, not {value!r}")
+    return float(value)
+
+
+def _scalar(arrays: dict[str, np.ndarray], name: str) -> float:
+    if name not in arrays or arrays[name].shape != ():
+        raise ValueError(f"array {name!r} must be a scalar")
+    return float(arrays[name])
+
+
+def _checked_spec(data: Any) -> SkillSpec:
+    """The skill of ``model.json``: names and finite ``low <= high`` bounds of equal length."""
+    if not isinstance(data, dict):
+        raise ValueError("'skill' must be an object")
+    for part in ("context", "control"):
+        space = data.get(part)
+        if not isinstance(space, dict) or not all(
+                isinstance(space.get(key), list) for key in ("names", "lows", "highs")):
+            raise ValueError(f"skill {part!r} must hold lists 'names', 'lows' and 'highs'")
+        lows = [_finite_number(v, f"{part} low") for v in space["lows"]]
+        highs = [_finite_number(v, f"{part} high") for v in space["highs"]]
+        if not len(space["names"]) == len(lows) == len(highs) or any(
+                low > high for low, high in zip(lows, highs, strict=True)):
+            raise ValueError(f"skill {part!r}: names, lows and highs must have equal lengths "
+                             "and lows <= highs")
+    return spec_from_json(data)
+
+
+def _gaussian_process(metadata: dict[str, Any], arrays: dict[str, np.ndarray],
+                      dim: int) -> GaussianProcess:
+    """The GP of ``weights.npz``: ``x (n, dim)``, ``y (n,)``, ``theta`` finite."""
+    kernel = metadata["kernel"]
+    if kernel not in KERNEL_NAMES:
+        raise ValueError(f"unknown kernel {kernel!r}")
+    mean_mode = metadata["hyperparameters"].get("mean_mode", "constant")
+    if not isinstance(mean_mode, str):
+        raise ValueError("'mean_mode' must be a string")
+    for name in ("x", "y", "theta", "y_scale"):
+        if name not in arrays:
+            raise ValueError(f"missing array {name!r}")
+        if not np.issubdtype(arrays[name].dtype, np.number):
+            raise ValueError(f"array {name!r} must hold numbers")
+        if not np.all(np.isfinite(arrays[name])):
+            raise ValueError(f"array {name!r} holds NaN or infinite values")
+    x, y, theta = arrays["x"], arrays["y"], arrays["theta"]
+    if x.ndim != 2 or x.shape[1] != dim or y.shape != (len(x),):
+        raise ValueError(f"arrays x {x.shape} and y {y.shape} must be (n, {dim}) and (n,)")
+    expected = n_kernel_params(kernel, dim) + 3
+    if theta.shape != (expected,):
+        raise ValueError(f"array 'theta' has shape {theta.shape}, expected ({expected},)")
+    if np.any(np.abs(theta[:-1]) > 50.0):
+        raise ValueError("array 'theta' holds log hyperparameters beyond +-50")
+    if arrays["y_scale"].shape != () or not float(arrays["y_scale"]) > 0.0:
+        raise ValueError("'y_scale' must be a positive scalar")
+    state = dict(arrays)
+    state.setdefault("nll", np.array(float("nan")))
+    return GaussianProcess.from_state(kernel, mean_mode, state)

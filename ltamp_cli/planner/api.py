@@ -26,6 +26,7 @@ from ltamp_cli.planner.result import INFEASIBLE, TIMEOUT, Certificate, PlanResul
 from ltamp_cli.planner.search.engine import SEARCH_ALGORITHMS
 from ltamp_cli.planner.statistics import StreamStatistics
 from ltamp_cli.planner.watchdog import CallTracker, RunningCall, run_until
+from ltamp_cli.seeds import usable_seed
 from ltamp_cli.threads import limited_threads
 
 COST_EPSILON = 1e-6
@@ -94,6 +95,9 @@ def solve(problem: PlanningProblem, config: PlannerConfig | None = None) -> Plan
     whose ``diagnostics["stopped_in"]`` names the stream call.
     """
     config = config or PlannerConfig()
+    if isinstance(config.seed, bool) or not isinstance(config.seed, int):
+        raise InputError(f"seed must be an integer, got {config.seed!r}")
+    config = replace(config, seed=usable_seed(config.seed))
     check_config(config)
     start = time.perf_counter()
     tracker = CallTracker()

@@ -78,7 +78,22 @@ class PlanningProblem:
     raw: Mapping[str, Any] = field(default_factory=dict)
 
 
+def _path_error(path: Path, what: str, where: SourceLocation) -> InputError | None:
+    """Why ``path`` cannot be used (too long a name, not a folder, ...), if it cannot."""
+    try:
+        path.stat()
+    except FileNotFoundError:
+        return None
+    except (OSError, ValueError) as error:  # ENAMETOOLONG, ELOOP, a NUL byte ...
+        reason = getattr(error, "strerror", None) or str(error)
+        return InputError(f"{what} {str(path)[:120]!r}: {reason}", where)
+    return None
+
+
 def load_domain(folder: Path, where: SourceLocation) -> tuple[Domain, StreamFile | None]:
+    problem = _path_error(folder, "domain folder", where)
+    if problem is not None:
+        raise problem
     if not folder.is_dir():
         raise InputError(f"domain folder {str(folder)!r} does not exist", where)
     domain_path = folder / "domain.pddl"
@@ -97,6 +112,9 @@ def load_streams_factory(spec: str, base: Path, where: SourceLocation
                          ) -> Callable[..., Mapping[str, Any]]:
     """Import the bindings (a ``.py`` file or a module) and return its ``make_streams``."""
     if spec.endswith(".py"):
+        problem = _path_error(base / spec, "bindings file", where)
+        if problem is not None:
+            raise problem
         path = (base / spec).resolve()
         if not path.exists():
             raise InputError(f"bindings file {spec!r} not found", where)
@@ -110,7 +128,10 @@ def load_streams_factory(spec: str, base: Path, where: SourceLocation
             sys.modules[module_name] = module
             try:
                 loader_spec.loader.exec_module(module)
-            except Exception as error:
+            except KeyboardInterrupt:
+                del sys.modules[module_name]
+                raise
+            except BaseException as error:  # user code, even SystemExit: one line
                 del sys.modules[module_name]
                 raise InputError(f"bindings file {spec!r} failed to import: "
                                  f"{type(error).__name__}: {error}"
@@ -118,7 +139,9 @@ def load_streams_factory(spec: str, base: Path, where: SourceLocation
     else:
         try:
             module = importlib.import_module(spec)
-        except Exception as error:
+        except KeyboardInterrupt:
+            raise
+        except BaseException as error:  # user code, even SystemExit: one line
             raise InputError(f"bindings module {spec!r} failed to import: "
                              f"{type(error).__name__}: {error}"
                              f"{_install_hint(error)}", where) from None
@@ -157,6 +180,8 @@ def _locating_world_errors(factory: Callable[..., Mapping[str, Any]], doc: YamlD
     def make_streams(world: Mapping[str, Any], rng: Any) -> Mapping[str, Any]:
         try:
             return factory(world, rng)
+        except KeyboardInterrupt:
+            raise
         except InputError as error:
             if error.location is not None or not error.message.startswith("world"):
                 raise

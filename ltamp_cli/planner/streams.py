@@ -25,6 +25,7 @@ Wrap a callable in :class:`Binding` to give per-stream :class:`StreamInfo`.
 from __future__ import annotations
 
 import inspect
+import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -126,6 +127,13 @@ def resolve_bindings(stream_file: StreamFile, provided: Mapping[str, Any], sourc
         else:
             raise InputError(f"the binding of {kind} {name!r} in {source} is not callable",
                              external.location)
+        returns_value = not isinstance(external, Stream) or external.is_test
+        function = bindings[name].function
+        if returns_value and (inspect.isgeneratorfunction(function)
+                              or inspect.iscoroutinefunction(function)):
+            what = "function" if isinstance(external, StreamFunction) else "test"
+            raise InputError(f"the binding of {kind} {name!r} in {source} is a generator: a "
+                             f"{what} returns its value (return, not yield)", external.location)
         if isinstance(external, Stream) and not external.certified:
             # It certifies only what its calls yield (wild facts), which no optimistic plan
             # can anticipate: call it as soon as its inputs exist, like PDDLStream's
@@ -245,9 +253,9 @@ class StreamInstance:
                 self.value = bool(self.value.values)
             self.exhausted = True
             if isinstance(external, StreamFunction):
-                self.value = float(self.value)
+                self.value = _cost_value(self.name, self.value)
             else:
-                self.value = bool(self.value)
+                self.value = _truth_value(self.name, self.value)
             return []
         if self._iterator is None:
             if external.fluents:
@@ -320,6 +328,28 @@ def _object_name(value: Any, objects: ObjectTable) -> str:
     if isinstance(value, str) and value in objects and objects.value(value) == value:
         return value
     return objects.intern(value)
+
+
+def _cost_value(name: str, value: Any) -> float:
+    """A ``:function``'s result as an action cost: a finite number ``>= 0``."""
+    try:
+        cost = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"function {name!r} must return a number (an action cost), "
+                         f"got {value!r:.80}") from None
+    if not math.isfinite(cost) or cost < 0.0:
+        raise InputError(f"function {name!r} returned cost {cost}: action costs must be "
+                         "finite and >= 0")
+    return cost
+
+
+def _truth_value(name: str, value: Any) -> bool:
+    """A test stream's or ``:predicate``'s result; a generator is a mistake, not ``True``."""
+    if inspect.isgenerator(value) or isinstance(value, Iterator | Sequence | Mapping) \
+            or inspect.isawaitable(value):
+        raise InputError(f"test {name!r} must return a bool, got {type(value).__name__} "
+                         "(a test has no outputs: return, don't yield)")
+    return bool(value)
 
 
 def seeded_rng(seed: int | None) -> np.random.Generator:

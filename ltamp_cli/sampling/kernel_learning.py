@@ -33,6 +33,7 @@ from scipy.linalg import cho_solve, cholesky
 
 from ltamp_cli.backends.protocol import SkillSpec
 from ltamp_cli.errors import InputError, location_in
+from ltamp_cli.jsondata import read_json_data
 
 EPSILON = 0.3
 MIN_INVERSE_LENGTHSCALE = 0.03
@@ -148,10 +149,7 @@ def load_kernel(path: str | Path, spec: SkillSpec) -> DiversityKernel:
     path = Path(path)
     if not path.exists():
         return DiversityKernel.unit(spec.control.dim)
-    try:
-        data = json.loads(path.read_text())
-    except ValueError as error:
-        raise InputError(f"invalid JSON: {error}", location_in(path)) from None
+    data = read_json_data(path)
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise InputError(f"not a diversity kernel file (expected format {FORMAT!r})",
                          location_in(path))

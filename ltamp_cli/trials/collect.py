@@ -17,14 +17,18 @@ freshly built backend, since a world left mid-trial is not trusted).
 
 from __future__ import annotations
 
+import ctypes
 import json
 import multiprocessing as mp
+import os
 import queue
 import signal
+import sys
+import threading
 import time
 from collections.abc import Iterator, Mapping
 from contextlib import ExitStack
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -35,7 +39,9 @@ from ltamp_cli.backends import load_backend
 from ltamp_cli.backends.protocol import SkillBackend, skill_spec
 from ltamp_cli.backends.sanity import run_trial_safely
 from ltamp_cli.errors import InputError
+from ltamp_cli.seeds import usable_seed
 from ltamp_cli.trials.record import TrialDataset, TrialRecord
+from ltamp_cli.writer_lock import exclusive_writer
 
 VALID_DRAW_BATCH = 256
 VALID_DRAW_ROUNDS = 40
@@ -149,8 +155,8 @@ class TrialRunner:
 
 def pending_indices(dataset: TrialDataset, job: CollectJob) -> list[int]:
     """Indices of ``job`` not yet in ``dataset``; refuses a file from a different job."""
-    done: set[int] = set()
-    for record in dataset.iter_records():
+    done: dict[int, int] = {}
+    for line, record in enumerate(dataset.iter_records(), start=1):
         if record.skill != job.skill or record.backend != job.backend:
             raise InputError(
                 f"{dataset.path}: holds {record.backend}/{record.skill} trials, not "
@@ -161,11 +167,45 @@ def pending_indices(dataset: TrialDataset, job: CollectJob) -> list[int]:
                 f"{dataset.path}: trial {record.index} was collected with a different "
                 "--seed; resume with the original seed or use another --out file"
             )
-        done.add(record.index)
+        if record.index >= 0 and record.index in done:
+            raise InputError(
+                f"{dataset.path}: trial {record.index} (seed {record.seed}) is recorded twice "
+                f"(records {done[record.index]} and {line}): two writers shared this file; keep "
+                "one copy of each trial before resuming"
+            )
+        done[record.index] = line
     return [i for i in range(job.n) if i not in done]
 
 
-def _worker(job: CollectJob, tasks: Any, results: Any) -> None:
+PR_SET_PDEATHSIG = 1
+
+
+def die_with_parent(parent: int) -> None:
+    """End this worker process when ``parent`` (the collecting driver) dies.
+
+    On Linux the kernel sends SIGKILL (``prctl(PR_SET_PDEATHSIG)``); elsewhere a daemon
+    thread polls the parent id. Either way no worker outlives a killed ``collect``.
+    """
+    if sys.platform.startswith("linux"):
+        try:
+            libc = ctypes.CDLL(None, use_errno=True)
+            if libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0) == 0:
+                if os.getppid() != parent:  # the parent died before prctl took effect
+                    os._exit(1)
+                return
+        except (OSError, AttributeError):
+            pass
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="ltamp-parent-watch", daemon=True).start()
+
+
+def _worker(job: CollectJob, tasks: Any, results: Any, parent: int) -> None:
+    die_with_parent(parent)
     # Ctrl-C goes to the whole process group: the parent decides what happens.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     runner = TrialRunner(job)
@@ -199,7 +239,7 @@ def _parallel(job: CollectJob, indices: list[int], workers: int) -> Iterator[Tri
     for _ in range(workers):
         tasks.put(None)
     processes = [
-        context.Process(target=_worker, args=(job, tasks, results), daemon=True)
+        context.Process(target=_worker, args=(job, tasks, results, os.getpid()), daemon=True)
         for _ in range(workers)
     ]
     for process in processes:
@@ -231,13 +271,16 @@ def collect(
     workers: int | None = 1,
     progress: bool = True,
     ray_address: str | None = None,
+    wait: bool = False,
 ) -> int:
     """Run the trials of ``job`` missing from ``out``; returns how many were added.
 
     ``workers`` local processes (``None``: 1), or with ``ray_address`` that many Ray actors
     (``"local"`` starts a local Ray cluster; ``None`` workers: every CPU of the cluster).
     Records are appended as they finish (possibly out of index order). Interrupting
-    (Ctrl-C, kill) keeps every trial already appended; run again to resume.
+    (Ctrl-C, kill) keeps every trial already appended; run again to resume. One collection
+    writes ``out`` at a time: another one holding it is an :class:`InputError` (or, with
+    ``wait``, waited for).
     """
     if job.n < 0:
         raise InputError(f"-n must be >= 0, got {job.n}")
@@ -245,6 +288,7 @@ def collect(
         raise InputError(f"--workers must be >= 1, got {workers}")
     if ray_address is not None and not ray_address.strip():
         raise InputError("--ray: expected 'local' or a Ray cluster address, got ''")
+    job = replace(job, seed=usable_seed(job.seed))
     dataset = TrialDataset(out)
     backend_check = load_backend(job.backend, **dict(job.backend_options or {}))
     try:
@@ -253,8 +297,9 @@ def collect(
         raise InputError(str(error).strip("'\"")) from None
     finally:
         backend_check.close()
-    indices = pending_indices(dataset, job)
     with ExitStack() as session:
+        session.enter_context(exclusive_writer(out, is_directory=False, wait=wait))
+        indices = pending_indices(dataset, job)
         stream: Iterator[TrialRecord]
         if ray_address is not None:
             from ltamp_cli.trials.ray_collect import import_ray, ray_session, ray_stream

@@ -92,7 +92,7 @@ def _jsonl_rows(path: Path) -> Iterator[tuple[int, Mapping[str, Any]]]:
                 continue
             try:
                 row = json.loads(text)
-            except ValueError as error:
+            except (ValueError, RecursionError) as error:
                 raise InputError(f"invalid JSON: {error}", location_in(path, line, 1)) from None
             if not isinstance(row, dict):
                 raise InputError(

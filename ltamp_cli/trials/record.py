@@ -104,7 +104,7 @@ class TrialDataset:
                 if missing:
                     raise KeyError(", ".join(missing))
                 yield TrialRecord.from_dict(data)
-            except (ValueError, KeyError, TypeError) as error:
+            except (ValueError, KeyError, TypeError, RecursionError) as error:
                 raise InputError(
                     f"not a trial record ({type(error).__name__}: {error}); expected one JSON "
                     f"object per line with fields {', '.join(_REQUIRED_FIELDS)}",
@@ -147,6 +147,20 @@ class TrialDataset:
 
     def done_indices(self) -> set[int]:
         return {record.index for record in self.iter_records() if record.index >= 0}
+
+
+def without_duplicates(records: Sequence[TrialRecord]) -> tuple[list[TrialRecord], int]:
+    """``records`` keeping the first of each ``(skill, backend, seed, index)`` (index ≥ 0)
+    and how many repeats were dropped (two writers once shared the file)."""
+    seen: set[tuple[str, str, int, int]] = set()
+    kept: list[TrialRecord] = []
+    for record in records:
+        key = (record.skill, record.backend, record.seed, record.index)
+        if record.index >= 0 and key in seen:
+            continue
+        seen.add(key)
+        kept.append(record)
+    return kept, len(records) - len(kept)
 
 
 def records_to_arrays(

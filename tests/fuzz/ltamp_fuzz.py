@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import contextlib
 import io
+import os
+import random
 import re
 import shutil
 import tempfile
@@ -21,6 +23,8 @@ from hypothesis import strategies as st
 from ltamp_cli.cli.app import main
 
 REPO = Path(__file__).resolve().parents[2]
+# New cases every run; a failure names the seed, and LTAMP_FUZZ_SEED=N replays it.
+FUZZ_SEED = int(os.environ.get("LTAMP_FUZZ_SEED", random.SystemRandom().randrange(2**32)))
 EXAMPLES = sorted(p.name for p in (REPO / "problems" / "examples").glob("*.yaml"))
 # Symbols, identifiers and numbers as one token; any other non-space character alone.
 TOKEN = re.compile(r"[\w?:.\-]+|\S")
@@ -182,13 +186,15 @@ def acceptable(outcome: Outcome) -> str | None:
     return None
 
 
-def run_mutated(root: Path, target: Target, text: str, argv_tail: list[str] | None = None
-                ) -> Outcome:
-    """Write ``text`` over ``target.file`` in the sandbox, check its problem, restore."""
+def run_mutated(root: Path, target: Target, text: str, argv_tail: list[str] | None = None,
+                command: str = "check") -> Outcome:
+    """Write ``text`` over ``target.file`` in the sandbox, run ``command`` (``check`` or
+    ``solve``, which then gets a short time limit and no statistics) on its problem, restore."""
     path = root / target.file
     original = path.read_text()
     path.write_text(text, encoding="utf-8")
+    tail = ["--max-time", "0.5", "--no-stats"] if command == "solve" else []
     try:
-        return run_cli(["check", str(root / target.problem), *(argv_tail or [])])
+        return run_cli([command, str(root / target.problem), *tail, *(argv_tail or [])])
     finally:
         path.write_text(original)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import pytest
 
 from ltamp_cli.planner.algorithms.effort import Effort, estimate_effort, order_by_effort
@@ -99,10 +101,11 @@ def test_cheap_decision_uses_cpu_time_persisted_in_the_history(tmp_path) -> None
     """A 20 us sampler preempted on a loaded machine measures milliseconds of wall time; the
     persisted CPU time decides, and histories without it fall back to their wall time."""
     from ltamp_cli.planner.algorithms.effort import observed_cheap
-    from ltamp_cli.planner.statistics import StreamStatistics
+    from ltamp_cli.planner.statistics import StreamStatistics, statistics_file_name
 
+    older_file = {"version": 1, "streams": {"slot": {"calls": 4, "successes": 4, "time_s": 0.02}}}
+    (tmp_path / statistics_file_name("toy")).write_text(json.dumps(older_file))
     statistics = StreamStatistics.load(tmp_path, "toy")
-    statistics.totals["slot"] = {"calls": 4, "successes": 4, "time_s": 0.02}  # older file
     statistics.update({"slot": StreamStats(calls=2, successes=2, outputs=2, time_s=0.01,
                                            cpu_s=4e-5)})
     statistics.save()

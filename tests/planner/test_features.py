@@ -147,7 +147,9 @@ def test_statistics_accumulate_across_runs(tmp_path: Path) -> None:
     more = second.stats["streams"]["sample-pose"]["calls"]
     assert calls > 0 and more > 0
     assert second.stats["stream_history"]["sample-pose"]["calls"] == calls + more
-    saved = json.loads((tmp_path / "tamp2d.json").read_text())
+    from ltamp_cli.planner.statistics import statistics_file_name
+
+    saved = json.loads((tmp_path / statistics_file_name("tamp2d")).read_text())
     assert saved["streams"]["test-cfree"]["calls"] > 0
 
 
@@ -165,7 +167,7 @@ def test_cli_skeleton_success_cost_and_why_no_plan(tmp_path: Path) -> None:
     assert anytime.returncode == 0, anytime.stderr
     data = json.loads(anytime.stdout)
     assert data["cost"] == pytest.approx(min(data["stats"]["anytime_costs"]))
-    assert (tmp_path / "ltamp" / "stream-statistics" / "tamp2d.json").exists()
+    assert list((tmp_path / "ltamp" / "stream-statistics").glob("tamp2d-*.json"))
 
 
 # A robot on a line must get from 0 to 10; a block at 5 is in the way. The motion planner

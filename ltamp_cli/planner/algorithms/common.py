@@ -258,9 +258,9 @@ class PlannerState:
         self.tracker.running = RunningCall(instance.name, instance.inputs, start)
         try:
             outputs = instance.call(self.objects, stats)
-        except InputError:
+        except (InputError, KeyboardInterrupt):
             raise
-        except Exception as error:
+        except BaseException as error:  # user code, even SystemExit: reported on one line
             raise StreamError(instance, error) from error
         finally:
             self.tracker.running = None
@@ -489,7 +489,7 @@ def goal_atoms(problem: PlanningProblem) -> list[Fact]:
 class StreamError(Exception):
     """A stream binding raised: reported with the stream's name and inputs."""
 
-    def __init__(self, instance: StreamInstance, error: Exception) -> None:
+    def __init__(self, instance: StreamInstance, error: BaseException) -> None:
         super().__init__(f"stream {instance.name!r} raised {type(error).__name__}: {error} "
                          f"(inputs {', '.join(instance.inputs)})")
         self.instance = instance
@@ -506,9 +506,9 @@ def initial_state(problem: PlanningProblem, config: PlannerConfig) -> PlannerSta
         rng = np.random.default_rng(config.seed)
         try:
             provided = problem.streams_factory(dict(problem.world), rng)
-        except InputError:
+        except (InputError, KeyboardInterrupt):
             raise
-        except Exception as error:
+        except BaseException as error:  # user code, even SystemExit
             raise InputError(f"make_streams of {problem.bindings_source!r} failed: "
                              f"{type(error).__name__}: {error}") from None
         if not isinstance(provided, Mapping):

@@ -13,12 +13,17 @@ from ltamp_cli.errors import InputError, SourceLocation
 from ltamp_cli.planner.pddl.syntax import (
     EQUALITY,
     OBJECT_TYPE,
+    And,
     Atom,
     Domain,
     Effect,
     ForAllEffect,
+    Formula,
     FunctionTerm,
+    Imply,
     IncreaseCost,
+    Not,
+    Or,
     PredicateSignature,
     Problem,
     StreamFile,
@@ -138,6 +143,50 @@ def check_domain(domain: Domain) -> None:
         for atom in formula_atoms(axiom.body):
             # Free body variables of a derived predicate are implicitly existential.
             _check_atom(atom, arities, None, constants, f"derived predicate {axiom.head.name!r}")
+    _check_stratified(domain)
+
+
+def _signed_atoms(formula: Formula, positive: bool = True) -> list[tuple[Atom, bool]]:
+    """Atoms of ``formula`` with whether each occurs positively (``imply`` negates its
+    condition; ``forall`` counts like ``not exists not``, so its body keeps its sign)."""
+    match formula:
+        case Atom():
+            return [(formula, positive)]
+        case Not(part):
+            return _signed_atoms(part, not positive)
+        case And(parts) | Or(parts):
+            return [item for part in parts for item in _signed_atoms(part, positive)]
+        case Imply(condition, consequence):
+            return _signed_atoms(condition, not positive) + _signed_atoms(consequence, positive)
+        case _Exists(_, body) | _ForAll(_, body):
+            return _signed_atoms(body, positive)
+    raise TypeError(f"not a formula: {formula!r}")
+
+
+def _check_stratified(domain: Domain) -> None:
+    """Derived predicates must not depend negatively on themselves through a cycle (no
+    stratification, so no well-defined meaning): reported here rather than by the planner."""
+    derived = domain.derived_predicates()
+    edges: dict[str, set[str]] = {name: set() for name in derived}
+    negative: list[tuple[str, Atom]] = []
+    for axiom in domain.axioms:
+        for atom, positive in _signed_atoms(axiom.body):
+            if atom.predicate in derived:
+                edges[axiom.head.name].add(atom.predicate)
+                if not positive:
+                    negative.append((axiom.head.name, atom))
+    for head, atom in negative:
+        # a negative edge head -> atom lies on a cycle iff head is reachable from atom
+        reached, frontier = {atom.predicate}, [atom.predicate]
+        while frontier:
+            for successor in edges[frontier.pop()]:
+                if successor not in reached:
+                    reached.add(successor)
+                    frontier.append(successor)
+        if head in reached:
+            raise InputError(
+                f"derived predicate {head!r} depends on its own negation (through "
+                f"{atom.predicate!r}): derived predicates must be stratified", atom.location)
 
 
 def check_problem(problem: Problem, domain: Domain) -> None:
@@ -180,6 +229,7 @@ def check_streams(streams: StreamFile, domain: Domain) -> None:
                              stream.location)
         for atom in (*stream.domain, *stream.fluent_domain):
             _check_atom(atom, arities, set(stream.inputs), constants, f"the :domain of {what}")
+        _check_inputs_covered(stream.inputs, stream.domain, what, stream.location)
         for atom in stream.certified:
             _check_atom(atom, arities, set(stream.inputs) | set(stream.outputs), constants,
                         f"the :certified of {what}")
@@ -201,6 +251,8 @@ def check_streams(streams: StreamFile, domain: Domain) -> None:
         for atom in function.domain:
             _check_atom(atom, arities, set(function.head.args), constants,
                         f"the domain of function {function.name!r}")
+        _check_inputs_covered(function.head.args, function.domain,
+                              f"function {function.name!r}", function.location)
     for predicate in streams.predicates:
         if predicate.name in domain.derived_predicates():
             raise InputError(f"external predicate {predicate.name!r} is also derived",
@@ -208,6 +260,18 @@ def check_streams(streams: StreamFile, domain: Domain) -> None:
         for atom in predicate.domain:
             _check_atom(atom, arities, set(predicate.head.args), constants,
                         f"the domain of predicate {predicate.name!r}")
+        _check_inputs_covered(predicate.head.args, predicate.domain,
+                              f"predicate {predicate.name!r}", predicate.location)
+
+
+def _check_inputs_covered(inputs: Iterable[str], domain_atoms: Iterable[Atom], what: str,
+                          location: SourceLocation) -> None:
+    """Every input must occur in a domain fact: the planner instantiates inputs from them."""
+    covered = {arg for atom in domain_atoms for arg in atom.args}
+    for variable in inputs:
+        if is_variable(variable) and variable not in covered:
+            raise InputError(f"input {variable} of {what} occurs in no fact of its :domain "
+                             "(the planner finds inputs through those facts)", location)
 
 
 def _stream_file_atoms(streams: StreamFile) -> list[Atom]:

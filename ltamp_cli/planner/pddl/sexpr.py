@@ -41,11 +41,17 @@ class SList:
 SExpr = Symbol | SList
 
 
+# Lists nested deeper than this are bad input: the recursive parsers and checkers behind the
+# reader would otherwise run out of stack (real domains nest a dozen levels).
+MAX_DEPTH = 100
+
+
 def read_sexprs(text: str, path: str, line_offset: int = 0, column_offset: int = 0) -> list[SExpr]:
     """Parse every top-level s-expression of ``text``.
 
     ``line_offset``/``column_offset`` shift reported positions, for PDDL embedded in another
     file (e.g. a YAML string). Comments start with ``;`` and run to the end of the line.
+    Nesting deeper than :data:`MAX_DEPTH` is an :class:`InputError`.
     """
     stack: list[tuple[list[SExpr], SourceLocation]] = []
     top: list[SExpr] = []
@@ -71,6 +77,8 @@ def read_sexprs(text: str, path: str, line_offset: int = 0, column_offset: int =
                 index += 1
             continue
         if char == "(":
+            if len(stack) >= MAX_DEPTH:
+                raise InputError(f"lists nested deeper than {MAX_DEPTH} levels", here())
             stack.append(([], here()))
             column += 1
             index += 1
