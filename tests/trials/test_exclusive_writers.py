@@ -57,7 +57,7 @@ def test_resume_rejects_duplicate_trials_and_train_data_reports_them(tmp_path):
                            "--out", "t.jsonl", cwd=tmp_path), "trial 2", "twice")
     trained = _ltamp("train", "moving2d", "--backend", "synthetic", "--data", "t.jsonl",
                      "--strategy", "random", "--budget", "6", "--init", "2", "--out", "m",
-                     cwd=tmp_path)
+                     "--json", cwd=tmp_path)
     assert trained.returncode == 0, trained.stderr
     assert "repeats 1 trial record" in trained.stderr
     assert json.loads(trained.stdout)["n_trials"] == 6
