@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from ltamp_cli.errors import InputError
+
+if TYPE_CHECKING:
+    from ltamp_cli.backends.protocol import SkillSpec
 
 
 def register(app: typer.Typer) -> None:
@@ -83,7 +86,8 @@ def level_set_command(
     if samples < 0:
         raise InputError(f"--samples: expected a number >= 0, got {samples}")
     check_confidence_options(lam, beta)
-    model = load_model(model_dir).model
+    loaded = load_model(model_dir)
+    model = loaded.model
     if not isinstance(model, LevelSetModel):
         raise InputError(f"{model_dir}: level-set plots need a GP model, this one is "
                          f"{model.kind!r}")
@@ -110,10 +114,32 @@ def level_set_command(
     _, train_controls = model.from_unit(model.gp.x_np)
     success = model.gp.y_np > 0.0
     plot_level_set(superlevel, chosen, out, training_controls=train_controls,
-                   training_success=success, samples=drawn)
+                   training_success=success, samples=drawn,
+                   spec=_spec_with_units(spec, loaded.metadata.get("backend")))
     typer.echo(f"{out}: {spec.name} level set over {spec.control.names[chosen[0]]}, "
                f"{spec.control.names[chosen[1]]} (β = {superlevel.beta:.3f}, "
                f"{len(train_controls)} trials, {len(drawn)} samples)")
+
+
+def _spec_with_units(spec: SkillSpec, backend_name: object) -> SkillSpec:
+    """``spec``, or the backend's current spec of the same skill (same parameter names)
+    when only that one names units (models saved before specs had units)."""
+    if spec.context.units or spec.control.units or not isinstance(backend_name, str):
+        return spec
+    from ltamp_cli.backends import load_backend
+
+    try:
+        backend = load_backend(backend_name)
+    except (InputError, ImportError, RuntimeError):
+        return spec  # only labels are at stake: plot without units
+    try:
+        current = backend.skills().get(spec.name)
+    finally:
+        backend.close()
+    if (current is not None and current.context.names == spec.context.names
+            and current.control.names == spec.control.names):
+        return current
+    return spec
 
 
 def curves_command(
