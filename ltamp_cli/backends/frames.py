@@ -114,6 +114,17 @@ def _font(height_px: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
     return ImageFont.load_default(size=height_px)
 
 
+def _caption_font_px(height: int) -> int:
+    return max(11, height // 24)
+
+
+def caption_height(height: int) -> int:
+    """Pixels the caption band of :func:`caption` covers at the bottom of an image
+    ``height`` pixels tall."""
+    size = _caption_font_px(height)
+    return size + 2 * max(3, size // 3)
+
+
 def caption(image: Image.Image, text: str) -> Image.Image:
     """A copy of ``image`` with ``text`` in a dark band along its bottom edge (same size).
 
@@ -124,12 +135,12 @@ def caption(image: Image.Image, text: str) -> Image.Image:
     if not text:
         return out
     width, height = out.size
-    size = max(11, height // 24)
+    size = _caption_font_px(height)
     font = _font(size)
-    pen = ImageDraw.Draw(out, "RGBA")
+    pen = ImageDraw.Draw(out)
     pad = max(3, size // 3)
-    band = size + 2 * pad
-    pen.rectangle([0, height - band, width, height], fill=(20, 20, 30, 190))
+    band = caption_height(height)
+    pen.rectangle([0, height - band, width, height], fill=(25, 25, 35))
     shown = text
     while shown and pen.textlength(shown, font=font) > width - 2 * pad:
         shown = shown[:-2] + "…"
@@ -214,6 +225,7 @@ __all__ = [
     "action_focus",
     "as_image",
     "caption",
+    "caption_height",
     "inset",
     "recording_span",
     "select_frames",

@@ -89,6 +89,7 @@ def solve_command(
         from ltamp_cli.planner.statistics import default_statistics_dir
 
         options["statistics_dir"] = str(default_statistics_dir())
+    timing = _gif_timing(fps, speed, render)  # bad values fail before planning
     try:
         config = PlannerConfig(**options)
         result = solve(loaded, config)
@@ -98,7 +99,6 @@ def solve_command(
         raise InputError(f"{problem}: bad planner options: {error}") from None
     if render is not None and backend is None:
         raise InputError("--render: needs --backend NAME to execute the plan")
-    timing = _gif_timing(fps, speed, render)
     report = None
     if backend is not None and result.solved:
         from ltamp_cli.backends.execution import execute_plan

@@ -16,7 +16,7 @@ from Box2D import b2
 from PIL import Image, ImageDraw, ImageFont
 
 from ltamp_cli.backends.box2d.world import Kitchen
-from ltamp_cli.backends.frames import AnimationInfo, GifTiming, write_animation
+from ltamp_cli.backends.frames import AnimationInfo, GifTiming, caption_height, write_animation
 
 Bounds = tuple[float, float, float, float]
 
@@ -76,15 +76,18 @@ def union(a: Bounds, b: Bounds) -> Bounds:
     return (min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), max(a[3], b[3]))
 
 
-def follow_view(content: Bounds, size_px: tuple[int, int], max_scale: float) -> View:
-    """A window of ``size_px`` (width, height) pixels centred on ``content`` and showing
-    all of it: ``max_scale`` pixels per unit, or fewer when ``content`` would not fit."""
+def follow_view(content: Bounds, size_px: tuple[int, int], max_scale: float,
+                reserve_px: int = 0) -> View:
+    """A window of ``size_px`` (width, height) pixels showing all of ``content``, centred
+    on it above a bottom strip of ``reserve_px`` pixels (where the caption goes):
+    ``max_scale`` pixels per unit, or fewer when ``content`` would not fit."""
     width, height = size_px
+    usable = max(1, height - reserve_px)
     cw, ch = max(content[2] - content[0], 1e-6), max(content[3] - content[1], 1e-6)
-    scale = min(max_scale, width / cw, height / ch)
+    scale = min(max_scale, width / cw, usable / ch)
     cx, cy = (content[0] + content[2]) / 2, (content[1] + content[3]) / 2
-    half_w, half_h = width / scale / 2, height / scale / 2
-    return View((cx - half_w, cy - half_h, cx + half_w, cy + half_h), scale)
+    half_w, half_h = width / scale / 2, usable / scale / 2
+    return View((cx - half_w, cy - half_h - reserve_px / scale, cx + half_w, cy + half_h), scale)
 
 
 def draw(kitchen: Kitchen, view: View, regions: Sequence[Region] = ()) -> Image.Image:
@@ -104,7 +107,9 @@ def draw(kitchen: Kitchen, view: View, regions: Sequence[Region] = ()) -> Image.
         if region.below:
             a, b = (0.0, a[1]), (float(width), float(height))
         pen.rectangle([a, b], fill=(215, 240, 215), outline=(40, 150, 60), width=2)
-        pen.text((max(a[0], 0) + 4, max(a[1], 0) + 3), region.label, fill=(30, 110, 45),
+        # A band's label sits inside it, a box's above it (objects will stand in the box).
+        label_y = a[1] + 3 if region.below else a[1] - font.size - 4
+        pen.text((max(a[0], 0) + 4, max(label_y, 0)), region.label, fill=(30, 110, 45),
                  font=font)
     for body in kitchen.world.bodies:
         data = body.userData or {}
@@ -165,7 +170,7 @@ class FrameRecorder:
             x0, y0, x1, y1 = self.view.bounds
             size = (max(FOLLOW_MIN_PX[0], round((x1 - x0) * self.view.scale)),
                     max(FOLLOW_MIN_PX[1], round((y1 - y0) * self.view.scale)))
-            view = follow_view(content, size, self.view.scale)
+            view = follow_view(content, size, self.view.scale, caption_height(size[1]))
         self.frames.append(draw(kitchen, view, self.regions))
         self.times.append(kitchen.time)
         self.captions.append(self.caption)
