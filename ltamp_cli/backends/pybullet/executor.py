@@ -240,6 +240,7 @@ class Kitchen3DRun:
             self.recorder = ReplayRecorder(
                 self._replay_scene(), self._snapshot, settings.render_every, recorder_camera,
                 seconds_per_step=self.world.config.time_step, follow=True)
+            self.recorder.caption = "initial state"
         self.step_n(self.world.steps_for(settings.settle_s))
         self.initial_counts = self.counts()
 

@@ -66,27 +66,31 @@ def half_extents(camera: Camera) -> tuple[float, float]:
     return ty * camera.width / camera.height, ty
 
 
-def required_distance(camera: Camera, points: np.ndarray, margin: float) -> float:
-    """The smallest distance from ``camera.target`` (its direction kept) at which every
-    point ``(n, 3)`` lies within ``margin`` (0-1] of the image's half-width/height."""
+def required_distance(camera: Camera, points: np.ndarray, margin: float,
+                      min_distance: float = MIN_DISTANCE) -> float:
+    """The smallest distance from ``camera.target`` (its direction kept), at least
+    ``min_distance``, at which every point ``(n, 3)`` lies within ``margin`` (0-1] of the
+    image's half-width/height."""
     right, up, forward = camera_axes(camera.yaw, camera.pitch)
     tx, ty = half_extents(camera)
     q = np.asarray(points, dtype=float).reshape(-1, 3) - np.asarray(camera.target)
     x, y, z = q @ right, q @ up, q @ forward
     return float(max(np.max(np.abs(x) / (tx * margin) - z), np.max(np.abs(y) / (ty * margin) - z),
-                     MIN_DISTANCE))
+                     min_distance))
 
 
-def frame_points(points: np.ndarray, camera: Camera, margin: float = 0.85) -> Camera:
+def frame_points(points: np.ndarray, camera: Camera, margin: float = 0.85,
+                 min_distance: float = MIN_DISTANCE) -> Camera:
     """``camera`` (same direction, size and field of view) moved to show every point
-    ``(n, 3)`` m within ``margin`` of the image's half-width/height, centred on them."""
+    ``(n, 3)`` m within ``margin`` of the image's half-width/height, centred on them, from
+    at least ``min_distance`` m."""
     right, up, forward = camera_axes(camera.yaw, camera.pitch)
     pts = np.asarray(points, dtype=float).reshape(-1, 3)
     coords = pts @ np.stack([right, up, forward], axis=1)  # (n, 3) in camera axes
     middle = (coords.min(axis=0) + coords.max(axis=0)) / 2
     target = right * middle[0] + up * middle[1] + forward * middle[2]
     centred = replace(camera, target=tuple(float(v) for v in target))
-    return replace(centred, distance=required_distance(centred, pts, margin))
+    return replace(centred, distance=required_distance(centred, pts, margin, min_distance))
 
 
 def body_points(client: int, bodies: Sequence[int]) -> np.ndarray:
@@ -163,17 +167,24 @@ def top_view(camera: Camera, points: np.ndarray, scale: float = 0.3) -> Camera:
     ``scale`` times ``camera``'s size, the container's top filling most of it."""
     small = replace(camera, width=max(16, round(camera.width * scale)),
                     height=max(12, round(camera.height * scale)), pitch=-89.0, fov=40.0)
-    return frame_points(points, small, margin=0.95)
+    return frame_points(points, small, margin=0.9, min_distance=0.05)
 
 
 class Director:
     """Films a PyBullet world: follows ``subjects()`` (body ids) with ``camera``'s direction
-    and size, and insets a top view into ``focus`` (body id) when one is set."""
+    and size, and insets a top view into ``focus`` (body id) when one is set.
 
-    def __init__(self, client: int, camera: Camera, subjects: Callable[[], Sequence[int]]):
+    The bodies ``hide_in_inset()`` (the arms: a hand above the cup would fill the top view)
+    are moved far away while the inset is taken and put back after, so use a Director only
+    on a client that is not being simulated (a replay mirror).
+    """
+
+    def __init__(self, client: int, camera: Camera, subjects: Callable[[], Sequence[int]],
+                 hide_in_inset: Callable[[], Sequence[int]] = tuple) -> None:
         self.client = client
         self.follow = FollowCamera(camera)
         self.subjects = subjects
+        self.hide_in_inset = hide_in_inset
 
     def shoot(self, focus: int | None = None, focus_label: str = "") -> np.ndarray:
         """The current picture ``(height, width, 3)`` uint8."""
@@ -181,7 +192,18 @@ class Director:
         image = render_rgb(self.client, camera)
         if focus is None:
             return image
-        small = render_rgb(self.client, top_view(camera, body_points(self.client, [focus])))
+        top = top_view(camera, body_points(self.client, [focus]))
+        hidden = [(body, p.getBasePositionAndOrientation(body, physicsClientId=self.client))
+                  for body in self.hide_in_inset()]
+        for body, _ in hidden:
+            p.resetBasePositionAndOrientation(body, (0.0, 0.0, -50.0), (0.0, 0.0, 0.0, 1.0),
+                                              physicsClientId=self.client)
+        try:
+            small = render_rgb(self.client, top)
+        finally:
+            for body, (position, orientation) in hidden:
+                p.resetBasePositionAndOrientation(body, position, orientation,
+                                                  physicsClientId=self.client)
         label = f"top view: {focus_label}" if focus_label else "top view"
         return np.asarray(inset(as_image(image), as_image(small), label))
 

@@ -123,11 +123,14 @@ class ReplayRenderer:
         except BaseException:
             self.close()
             raise
-        self.director = Director(self.client, self.camera, self._subjects) if follow else None
+        self.director = (Director(self.client, self.camera, self._subjects, self._arms)
+                         if follow else None)
+
+    def _arms(self) -> list[int]:
+        return [arm.body_id for arm in self.kitchen.arms]
 
     def _subjects(self) -> list[int]:
-        return ([arm.body_id for arm in self.kitchen.arms]
-                + [body.body for body in self.objects.values()])
+        return self._arms() + [body.body for body in self.objects.values()]
 
     def _build(self) -> None:
         client = self.client

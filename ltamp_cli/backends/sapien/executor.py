@@ -272,6 +272,7 @@ class SapienKitchen3DRun(Kitchen3DRun):
                 self._replay_scene(), self._snapshot, settings.render_every, self._replay_camera,
                 seconds_per_step=self.world.config.time_step, follow=True,
             )
+            self.recorder.caption = "initial state"
         self.step_n(self.world.steps_for(settings.settle_s))
         self.initial_counts = self.counts()
 
