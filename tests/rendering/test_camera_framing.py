@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from itertools import pairwise
+
 import numpy as np
 import pybullet as p
 import pytest
@@ -60,7 +62,7 @@ def test_the_following_camera_never_loses_the_carried_cup_and_moves_rarely() -> 
         camera = follow.update(points)
         assert np.abs(ndc(camera, points)).max() <= 1.0  # nothing cropped, ever
         cameras.append((camera.target, camera.distance))
-    still = sum(a == b for a, b in zip(cameras, cameras[1:], strict=False))
+    still = sum(a == b for a, b in pairwise(cameras))
     assert still >= len(cameras) // 3  # it holds still while the scene fits
 
 

@@ -11,7 +11,7 @@ import pytest
 from PIL import Image, ImageSequence
 
 from ltamp_cli.backends.box2d.backend import render_trial
-from ltamp_cli.backends.box2d.render import FrameRecorder, View, follow_view
+from ltamp_cli.backends.box2d.render import FrameRecorder, follow_view
 from ltamp_cli.backends.execution import execute_plan
 from ltamp_cli.backends.frames import GifTiming, caption_height
 from ltamp_cli.cli.app import main

@@ -14,9 +14,9 @@ from PIL import Image, ImageSequence
 from ltamp_cli.backends.frames import GifTiming, caption_height
 from ltamp_cli.backends.kitchenware_geometry import VesselDims, vessel_geometry
 from ltamp_cli.backends.pybullet.render import Camera
+from ltamp_cli.backends.pybullet.replay import BeadGroup, ReplayFrame, ReplayRenderer, ReplayScene
 from ltamp_cli.backends.pybullet.robot.arm import PANDA_HOME
 from ltamp_cli.backends.pybullet.robot.scene import TableSpec
-from ltamp_cli.backends.pybullet.replay import BeadGroup, ReplayFrame, ReplayRenderer, ReplayScene
 
 TABLE_Z = TableSpec().height
 #: The executors' camera direction and picture size.
