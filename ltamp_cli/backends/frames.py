@@ -114,32 +114,33 @@ def _font(height_px: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
     return ImageFont.load_default(size=height_px)
 
 
-def _caption_font_px(height: int) -> int:
-    return max(11, height // 24)
+def _caption_font_px(height: int, width: int) -> int:
+    # Readable on wide, flat pictures too (the 2D kitchen is 960 × 288), never huge.
+    return max(11, min(height // 12, max(height // 24, width // 64)))
 
 
-def caption_height(height: int) -> int:
+def caption_height(height: int, width: int = 0) -> int:
     """Pixels the caption band of :func:`caption` covers at the bottom of an image
-    ``height`` pixels tall."""
-    size = _caption_font_px(height)
+    ``width`` × ``height`` pixels."""
+    size = _caption_font_px(height, width)
     return size + 2 * max(3, size // 3)
 
 
 def caption(image: Image.Image, text: str) -> Image.Image:
     """A copy of ``image`` with ``text`` in a dark band along its bottom edge (same size).
 
-    The text size follows the image height (about 1/24 of it, at least 11 px); text too
-    long for one line is cut with an ellipsis.
+    The text size follows the image size (see :func:`caption_height`); text too long for
+    one line is cut with an ellipsis.
     """
     out = image.convert("RGB")
     if not text:
         return out
     width, height = out.size
-    size = _caption_font_px(height)
+    size = _caption_font_px(height, width)
     font = _font(size)
     pen = ImageDraw.Draw(out)
     pad = max(3, size // 3)
-    band = caption_height(height)
+    band = caption_height(height, width)
     pen.rectangle([0, height - band, width, height], fill=(25, 25, 35))
     shown = text
     while shown and pen.textlength(shown, font=font) > width - 2 * pad:

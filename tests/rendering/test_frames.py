@@ -86,7 +86,7 @@ def scene(shift: int) -> Image.Image:
 
 
 def test_captions_mark_the_bottom_band_and_differ_between_actions() -> None:
-    band = caption_height(480)
+    band = caption_height(480, 640)
     first = np.asarray(caption(scene(0), "1/3  pick cup"), dtype=int)
     same = np.asarray(caption(scene(0), "1/3  pick cup"), dtype=int)
     other = np.asarray(caption(scene(0), "2/3  pour cup bowl"), dtype=int)
@@ -110,7 +110,7 @@ def test_write_animation_keeps_size_captions_and_timing(tmp_path: Path) -> None:
     assert duration == info["duration_s"] == pytest.approx(3.0)
     with Image.open(tmp_path / "a.gif") as gif:
         pictures = [np.asarray(f.convert("RGB"), dtype=int) for f in ImageSequence.Iterator(gif)]
-    band = caption_height(480)
+    band = caption_height(480, 640)
     # Frames of one action share the caption band; frames of different actions do not.
     assert np.array_equal(pictures[0][-band:], pictures[14][-band:])
     assert not np.array_equal(pictures[14][-band:], pictures[15][-band:])

@@ -54,7 +54,7 @@ def test_the_push_view_follows_the_block_and_always_shows_the_goal(tmp_path: Pat
     assert not has_colour(recorder.frames[-1], BLOCK)
     # The saved GIF is captioned with the skill and its parameters.
     pictures = gif_frames(tmp_path / "push.gif")
-    band = caption_height(pictures[0][0].shape[0])
+    band = caption_height(*pictures[0][0].shape[:2])
     assert all(np.median(picture[-band:]) < 60 for picture, _ in pictures)
 
 
@@ -90,7 +90,7 @@ def test_an_execution_gif_is_captioned_per_action_and_timed(served: tuple,
     played = sum(ms for _, ms in pictures) / 1000.0
     assert played == pytest.approx(info["duration_s"])
     assert played == pytest.approx((report.details["sim_time_s"] + 1.0) / 3.0, abs=0.5)
-    band = caption_height(pictures[0][0].shape[0])
+    band = caption_height(*pictures[0][0].shape[:2])
     captions = [picture[-band:] for picture, _ in pictures]
     distinct = {c.tobytes() for c in captions}
     # One caption per action seen, plus the initial state and the goal's outcome.

@@ -114,7 +114,7 @@ def test_a_stir_is_captioned_and_seen_from_above(tmp_path: Path) -> None:
     with Image.open(tmp_path / "stir.gif") as gif:
         frames = [np.asarray(f.convert("RGB"), dtype=int) for f in ImageSequence.Iterator(gif)]
     assert frames[0].shape == (480, 640, 3) and info["width"] == 640
-    band = caption_height(480)
+    band = caption_height(480, 640)
     captions = [(f[-band:].mean(axis=-1) > 128).tobytes() for f in frames]  # the text
     assert len(set(captions)) == 3  # initial state, move-holding, stir
     stirring = [f for f, c in zip(frames, captions, strict=True) if c == captions[-1]]

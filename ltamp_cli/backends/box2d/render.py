@@ -170,7 +170,7 @@ class FrameRecorder:
             x0, y0, x1, y1 = self.view.bounds
             size = (max(FOLLOW_MIN_PX[0], round((x1 - x0) * self.view.scale)),
                     max(FOLLOW_MIN_PX[1], round((y1 - y0) * self.view.scale)))
-            view = follow_view(content, size, self.view.scale, caption_height(size[1]))
+            view = follow_view(content, size, self.view.scale, caption_height(size[1], size[0]))
         self.frames.append(draw(kitchen, view, self.regions))
         self.times.append(kitchen.time)
         self.captions.append(self.caption)
