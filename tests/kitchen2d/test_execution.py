@@ -90,10 +90,18 @@ def test_coffee_is_solved_and_executed_with_the_shipped_models(tmp_path: Path) -
     problem = load_problem(COFFEE)
     result = solve(problem, PlannerConfig(max_time=60, seed=1))
     assert result.solved
-    report = execute_plan("box2d", problem, result, 1)
+    gif = tmp_path / "coffee.gif"
+    report = execute_plan("box2d", problem, result, 1, gif)
     assert report.success and report.goal_holds, report.details
     particles = report.details["particles"]
     assert particles["n_particles"] == particles["n_expected"] == particles["n_in_world"]
+    # At the default timing the whole coffee GIF plays in under a minute (frame count ×
+    # frame duration, read from the file), though it simulates minutes.
+    from PIL import Image, ImageSequence
+
+    with Image.open(gif) as frames:
+        played_s = sum(f.info["duration"] for f in ImageSequence.Iterator(frames)) / 1000.0
+    assert report.details["sim_time_s"] > 120.0 and played_s < 60.0
 
 
 def test_learned_streams_yield_controls_that_succeed_in_trials() -> None:
