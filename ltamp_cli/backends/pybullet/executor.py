@@ -681,8 +681,9 @@ class Kitchen3DExecutor:
             plan = plan_result.plan or ()
             kinds = {name: obj.kind for name, obj in spec.objects.items()}
             for index, step in enumerate(plan):
-                run.film(action_caption(index + 1, len(plan), step.name, step.args),
-                         action_focus(step.args, kinds))
+                names = step.args or ()  # a plan made by hand may name no arguments
+                run.film(action_caption(index + 1, len(plan), step.name, names),
+                         action_focus(names, kinds))
                 try:
                     run.run_step(step.name, step.values, step.args)
                     steps.append({"index": index, "action": step.name, "ok": True})
