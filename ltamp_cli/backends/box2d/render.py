@@ -41,6 +41,8 @@ class Region:
 
 #: Static bodies that mark something to show (a push goal): always framed, drawn as a ring.
 MARKERS = frozenset({"goal"})
+#: How far (world units) above a goal box its label floats: above what stands in the box.
+LABEL_RISE = 7.0
 #: Smallest radius (world units) a marker is drawn with, so a point goal stays visible.
 MARKER_RADIUS = 0.5
 
@@ -107,9 +109,14 @@ def draw(kitchen: Kitchen, view: View, regions: Sequence[Region] = ()) -> Image.
         if region.below:
             a, b = (0.0, a[1]), (float(width), float(height))
         pen.rectangle([a, b], fill=(215, 240, 215), outline=(40, 150, 60), width=2)
-        # A band's label sits inside it, a box's above it (objects will stand in the box).
-        label_y = a[1] + 3 if region.below else a[1] - font.size - 4
-        pen.text((max(a[0], 0) + 4, max(label_y, 0)), region.label, fill=(30, 110, 45),
+        if region.below:  # a band's label sits inside it
+            pen.text((4, max(a[1], 0) + 3), region.label, fill=(30, 110, 45), font=font)
+            continue
+        # A box's label floats above what will stand in it, with a line down to the box.
+        middle = (a[0] + b[0]) / 2
+        top = a[1] - LABEL_RISE * s
+        pen.line([(middle, top + font.size + 2), (middle, a[1])], fill=(40, 150, 60), width=1)
+        pen.text((max(middle - 10, 0), max(top, 0)), region.label, fill=(30, 110, 45),
                  font=font)
     for body in kitchen.world.bodies:
         data = body.userData or {}
