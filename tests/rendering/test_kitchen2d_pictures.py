@@ -12,12 +12,8 @@ from PIL import Image, ImageSequence
 
 from ltamp_cli.backends.box2d.backend import render_trial
 from ltamp_cli.backends.box2d.render import FrameRecorder, follow_view
-from ltamp_cli.backends.execution import execute_plan
-from ltamp_cli.backends.frames import GifTiming, caption_height
+from ltamp_cli.backends.frames import caption_height
 from ltamp_cli.cli.app import main
-from ltamp_cli.planner.algorithms.common import PlannerConfig
-from ltamp_cli.planner.api import solve
-from ltamp_cli.planner.problem import load_problem
 
 ROOT = Path(__file__).resolve().parents[2]
 SERVE = ROOT / "problems" / "kitchen2d" / "fill_and_serve.yaml"
@@ -66,36 +62,6 @@ def test_follow_view_keeps_the_pixel_size_and_shows_all_content() -> None:
         assert x0 <= content[0] and content[2] <= x1 and content[3] <= y1
         assert y0 + 40 / view.scale <= content[1] + 1e-9  # above the caption strip
         assert view.scale <= 30.0
-
-
-@pytest.fixture(scope="module")
-def served() -> tuple:
-    problem = load_problem(SERVE)
-    result = solve(problem, PlannerConfig(max_time=30, seed=3))
-    assert result.solved
-    return problem, result
-
-
-def test_an_execution_gif_is_captioned_per_action_and_timed(served: tuple,
-                                                            tmp_path: Path) -> None:
-    problem, result = served
-    timing = GifTiming(fps=5.0, speed=3.0)
-    report = execute_plan("box2d", problem, result, 3, tmp_path / "serve.gif", timing)
-    assert report.success and report.goal_holds
-    pictures = gif_frames(tmp_path / "serve.gif")
-    info = report.details["animation"]
-    # (Pillow merges identical consecutive frames: the file may hold fewer.)
-    assert 0.8 * info["frames"] <= len(pictures) <= info["frames"] and info["speed"] == 3.0
-    # Playing time = simulated time / speed (plus the closing second), from the file.
-    played = sum(ms for _, ms in pictures) / 1000.0
-    assert played == pytest.approx(info["duration_s"])
-    assert played == pytest.approx((report.details["sim_time_s"] + 1.0) / 3.0, abs=0.5)
-    band = caption_height(*pictures[0][0].shape[:2])
-    captions = [picture[-band:] for picture, _ in pictures]
-    distinct = {c.tobytes() for c in captions}
-    # One caption per action seen, plus the initial state and the goal's outcome.
-    assert len(distinct) >= min(len(result.plan), 4)
-    assert not np.array_equal(captions[0], captions[-1])
 
 
 def test_cli_fps_and_speed_need_render_and_sane_values(tmp_path: Path,
