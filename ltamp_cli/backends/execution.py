@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
+from ltamp_cli.backends.frames import GifTiming
 from ltamp_cli.errors import InputError
 from ltamp_cli.extras import missing_module_hint
 
@@ -71,11 +72,14 @@ def execute_plan(
     plan_result: Any,
     seed: int,
     render_path: str | Path | None = None,
+    timing: GifTiming | None = None,
 ) -> ExecutionReport:
-    """Replay ``plan_result`` (a solved plan of ``problem``) on ``backend_name``."""
+    """Replay ``plan_result`` (a solved plan of ``problem``) on ``backend_name``; the GIF
+    at ``render_path`` follows ``timing`` (default: the executor's, see
+    :class:`~ltamp_cli.backends.frames.GifTiming`)."""
     if plan_result.plan is None:
         raise ValueError("execute_plan needs a solved plan")
-    executor = load_executor(backend_name)
+    executor = load_executor(backend_name, **({} if timing is None else {"timing": timing}))
     return executor.execute(problem, plan_result, seed, render_path)
 
 

@@ -27,17 +27,30 @@ import numpy as np
 
 @dataclass(frozen=True)
 class ParamSpace:
-    """Named box-bounded real parameters. ``lows``/``highs`` are in physical units."""
+    """Named box-bounded real parameters. ``lows``/``highs`` are in physical units;
+    ``units`` (optional, one per name, ``""`` for a pure number) names them for plots."""
 
     names: tuple[str, ...]
     lows: tuple[float, ...]
     highs: tuple[float, ...]
+    units: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if not (len(self.names) == len(self.lows) == len(self.highs)):
             raise ValueError("names, lows and highs must have the same length")
         if any(lo > hi for lo, hi in zip(self.lows, self.highs, strict=True)):
             raise ValueError("every low must be <= its high")
+        if self.units and len(self.units) != len(self.names):
+            raise ValueError("units must be empty or one per name")
+
+    def unit(self, index: int) -> str:
+        """The unit of parameter ``index`` (``""`` when none was given)."""
+        return self.units[index] if self.units else ""
+
+    def label(self, index: int) -> str:
+        """``"name [unit]"`` (or ``"name"`` without a unit), for axis labels."""
+        unit = self.unit(index)
+        return f"{self.names[index]} [{unit}]" if unit else self.names[index]
 
     @property
     def dim(self) -> int:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -11,6 +11,9 @@ from ltamp_cli.cli.conventions import emit, progress_enabled
 from ltamp_cli.cli.paths import writable_output_file
 from ltamp_cli.errors import InputError
 from ltamp_cli.seeds import usable_seed
+
+if TYPE_CHECKING:
+    from ltamp_cli.backends.protocol import SkillSpec
 
 
 def register(app: typer.Typer) -> None:
@@ -87,7 +90,8 @@ def level_set_command(
     if samples < 0:
         raise InputError(f"--samples: expected a number >= 0, got {samples}")
     check_confidence_options(lam, beta)
-    model = load_model(model_dir).model
+    loaded = load_model(model_dir)
+    model = loaded.model
     if not isinstance(model, LevelSetModel):
         raise InputError(f"{model_dir}: level-set plots need a GP model, this one is "
                          f"{model.kind!r}")
@@ -115,7 +119,8 @@ def level_set_command(
     _, train_controls = model.from_unit(model.gp.x_np)
     success = model.gp.y_np > 0.0
     plot_level_set(superlevel, chosen, out, training_controls=train_controls,
-                   training_success=success, samples=drawn)
+                   training_success=success, samples=drawn,
+                   spec=_spec_with_units(spec, loaded.metadata.get("backend")))
     summary = {"out": str(out), "skill": spec.name,
                "dims": [spec.control.names[chosen[0]], spec.control.names[chosen[1]]],
                "beta": float(superlevel.beta), "trials": len(train_controls),
@@ -123,6 +128,27 @@ def level_set_command(
     emit(summary, as_json, lambda s: [
         f"{out}: {spec.name} level set over {s['dims'][0]}, {s['dims'][1]} "
         f"(β = {s['beta']:.3f}, {s['trials']} trials, {s['samples']} samples)"])
+
+
+def _spec_with_units(spec: SkillSpec, backend_name: object) -> SkillSpec:
+    """``spec``, or the backend's current spec of the same skill (same parameter names)
+    when only that one names units (models saved before specs had units)."""
+    if spec.context.units or spec.control.units or not isinstance(backend_name, str):
+        return spec
+    from ltamp_cli.backends import load_backend
+
+    try:
+        backend = load_backend(backend_name)
+    except (InputError, ImportError, RuntimeError):
+        return spec  # only labels are at stake: plot without units
+    try:
+        current = backend.skills().get(spec.name)
+    finally:
+        backend.close()
+    if (current is not None and current.context.names == spec.context.names
+            and current.control.names == spec.control.names):
+        return current
+    return spec
 
 
 def curves_command(

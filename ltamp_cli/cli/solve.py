@@ -51,6 +51,12 @@ def solve_command(
         "--backend", help="Execute the plan in this backend's simulator (e.g. box2d).")] = None,
     render: Annotated[Path | None, typer.Option(
         "--render", help="With --backend: write the execution as a GIF.")] = None,
+    fps: Annotated[float | None, typer.Option(
+        "--fps", help="With --render: GIF frames per second (at most 50; default 10).")] = None,
+    speed: Annotated[float | None, typer.Option(
+        "--speed", help="With --render: simulated seconds per GIF second (frames are "
+        "skipped, the physics is unchanged; default: real time, faster when the GIF would "
+        "last over 45 s).")] = None,
 ) -> None:
     """Solve PROBLEM; exit 0 when solved, 1 when infeasible or out of time, 2 on bad input."""
     from ltamp_cli.cli.conventions import progress_line
@@ -93,6 +99,7 @@ def solve_command(
         from ltamp_cli.planner.statistics import default_statistics_dir
 
         options["statistics_dir"] = str(default_statistics_dir())
+    timing = _gif_timing(fps, speed, render)  # bad values fail before planning
     try:
         config = PlannerConfig(**options)
         with progress_line(f"solving {loaded.name}"):
@@ -111,7 +118,8 @@ def solve_command(
 
         label = f"executing {len(result.plan or [])} actions on {backend}"
         with progress_line(label + (f", rendering {render}" if render else "")):
-            report = execute_plan(backend, loaded, result, usable_seed(config.seed), render)
+            report = execute_plan(backend, loaded, result, usable_seed(config.seed), render,
+                                  timing)
     if json_output:
         if report is None:
             print(result.to_json())
@@ -129,6 +137,21 @@ def solve_command(
                   + (f"  ({report.details['error']})" if "error" in report.details else ""))
     if not result.solved or (report is not None and not (report.success and report.goal_holds)):
         raise typer.Exit(1)
+
+
+def _gif_timing(fps: float | None, speed: float | None, render: Path | None):  # type: ignore[no-untyped-def]
+    """The GIF timing of ``--fps``/``--speed`` (``None``: the executor's default)."""
+    if fps is None and speed is None:
+        return None
+    if render is None:
+        raise InputError(f"{'--fps' if fps is not None else '--speed'}: needs --render PATH")
+    from ltamp_cli.backends.frames import MIN_FRAME_MS, GifTiming
+
+    if fps is not None and not 0 < fps <= 1000 / MIN_FRAME_MS:
+        raise InputError(f"--fps: expected a number in (0, {1000 // MIN_FRAME_MS}], got {fps:g}")
+    if speed is not None and not speed > 0:
+        raise InputError(f"--speed: expected a positive number, got {speed:g}")
+    return GifTiming(**({"fps": fps} if fps is not None else {}), speed=speed)
 
 
 def _print_human(result) -> None:  # type: ignore[no-untyped-def]

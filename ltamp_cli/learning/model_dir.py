@@ -48,7 +48,8 @@ METADATA_FILE = "model.json"
 
 
 def space_to_json(space: ParamSpace) -> dict[str, Any]:
-    return {"names": list(space.names), "lows": list(space.lows), "highs": list(space.highs)}
+    data = {"names": list(space.names), "lows": list(space.lows), "highs": list(space.highs)}
+    return {**data, "units": list(space.units)} if space.units else data
 
 
 def space_from_json(data: dict[str, Any]) -> ParamSpace:
@@ -56,6 +57,7 @@ def space_from_json(data: dict[str, Any]) -> ParamSpace:
         tuple(map(str, data["names"])),
         tuple(map(float, data["lows"])),
         tuple(map(float, data["highs"])),
+        tuple(map(str, data.get("units", ()))),
     )
 
 

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ltamp_cli.backends.protocol import SkillSpec
 from ltamp_cli.sampling.superlevel import SuperLevelSet
 
 GRID = 160
@@ -34,6 +35,29 @@ def slice_grid(superlevel: SuperLevelSet, dims: tuple[int, int], size: int = GRI
     return u
 
 
+def default_title(superlevel: SuperLevelSet, dims: tuple[int, int],
+                  spec: SkillSpec | None = None) -> str:
+    """What the picture shows: the skill, its context with units (from ``spec``, default
+    the model's), β, and where the other controls are held (lines of ~70 characters)."""
+    import textwrap
+
+    spec = spec or superlevel.model.spec
+    context = ", ".join(
+        f"{name} = {value:.3g}" + (f" {spec.context.unit(k)}" if spec.context.unit(k) else "")
+        for k, (name, value) in enumerate(zip(spec.context.names,
+                                               np.ravel(superlevel.context), strict=True)))
+    star = (superlevel.to_physical(superlevel.theta_star[None, :])[0]
+            if superlevel.theta_star is not None else None)
+    held = [f"{spec.control.names[k]} = {star[k]:.3g}"
+            + (f" {spec.control.unit(k)}" if spec.control.unit(k) else "")
+            for k in range(superlevel.dim) if k not in dims and star is not None]
+    lines = [f"{spec.name}: predicted level set Â (β = {superlevel.beta:.2f})",
+             *textwrap.wrap(f"context: {context}" if context else "no context", 70)]
+    if held:
+        lines += textwrap.wrap(f"held at θ*: {', '.join(held)}", 70)
+    return "\n".join(lines)
+
+
 def plot_level_set(
     superlevel: SuperLevelSet,
     dims: tuple[int, int],
@@ -42,11 +66,13 @@ def plot_level_set(
     training_success: np.ndarray | None = None,
     samples: np.ndarray | None = None,
     title: str = "",
+    spec: SkillSpec | None = None,
 ) -> Path:
     """Draw ``Â_α`` over control dims ``dims`` and write a PNG to ``path``.
 
     ``training_controls (n, dθ)`` and ``samples (k, dθ)`` are physical controls;
-    ``training_success (n,)`` is bool (score > 0). Returns ``path``.
+    ``training_success (n,)`` is bool (score > 0). Axis labels and the default title take
+    names and units from ``spec`` (default: the model's). Returns ``path``.
     """
     import matplotlib
 
@@ -57,7 +83,6 @@ def plot_level_set(
     if i == j or not (0 <= i < superlevel.dim and 0 <= j < superlevel.dim):
         raise ValueError(f"dims must be two different controls in [0, {superlevel.dim}), "
                          f"got {dims}")
-    names = superlevel.model.spec.control.names
     u = slice_grid(superlevel, dims)
     ratio = superlevel.ratio(u).reshape(GRID, GRID)
     physical = superlevel.to_physical(u)
@@ -85,12 +110,12 @@ def plot_level_set(
                      linewidths=0.5, label="samples", zorder=4)
     axes.set_xlim(float(xs.min()), float(xs.max()))
     axes.set_ylim(float(ys.min()), float(ys.max()))
-    axes.set_xlabel(names[i])
-    axes.set_ylabel(names[j])
+    control = (spec or superlevel.model.spec).control
+    axes.set_xlabel(control.label(i))
+    axes.set_ylabel(control.label(j))
     if axes.get_legend_handles_labels()[0]:
         axes.legend(loc="best", fontsize=8)
-    axes.set_title(title or f"{superlevel.model.spec.name}: Â (β = {superlevel.beta:.2f})",
-                   fontsize=10)
+    axes.set_title(title or default_title(superlevel, dims, spec), fontsize=9)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     figure.tight_layout()

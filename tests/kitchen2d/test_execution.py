@@ -7,8 +7,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from PIL import Image, ImageSequence
 
 from ltamp_cli.backends.execution import ExecutionReport, PlanExecutor, execute_plan, load_executor
+from ltamp_cli.backends.frames import GifTiming, caption_height
 from ltamp_cli.cli.app import main
 from ltamp_cli.errors import InputError
 from ltamp_cli.planner.algorithms.common import PlannerConfig
@@ -63,6 +65,32 @@ def test_goal_is_checked_in_the_world_not_taken_from_the_plan(served: tuple) -> 
     assert report.details["goal"]["(on cup coaster)"]["holds"]
 
 
+def test_an_execution_gif_is_captioned_per_action_and_timed(served: tuple,
+                                                            tmp_path: Path) -> None:
+    """The GIF is captioned per action and plays as fast as asked (``--speed``)."""
+    problem, result = served
+    timing = GifTiming(fps=5.0, speed=3.0)
+    report = execute_plan("box2d", problem, result, 3, tmp_path / "serve.gif", timing)
+    assert report.success and report.goal_holds
+
+    with Image.open(tmp_path / "serve.gif") as gif:
+        pictures = [(np.asarray(f.convert("RGB"), dtype=int), int(f.info["duration"]))
+                    for f in ImageSequence.Iterator(gif)]
+    info = report.details["animation"]
+    # (Pillow merges identical consecutive frames: the file may hold fewer.)
+    assert 0.8 * info["frames"] <= len(pictures) <= info["frames"] and info["speed"] == 3.0
+    # Playing time = simulated time / speed (plus the closing second), from the file.
+    played = sum(ms for _, ms in pictures) / 1000.0
+    assert played == pytest.approx(info["duration_s"])
+    assert played == pytest.approx((report.details["sim_time_s"] + 1.0) / 3.0, abs=0.5)
+    band = caption_height(*pictures[0][0].shape[:2])
+    captions = [picture[-band:] for picture, _ in pictures]
+    distinct = {c.tobytes() for c in captions}
+    # One caption per action seen, plus the initial state and the goal's outcome.
+    assert len(distinct) >= min(len(result.plan), 4)
+    assert not np.array_equal(captions[0], captions[-1])
+
+
 def test_a_wrong_arrangement_makes_the_grasp_fail(served: tuple) -> None:
     problem, result = served
     # Another seed puts the cup elsewhere: the planned grasp closes on nothing.
@@ -90,10 +118,16 @@ def test_coffee_is_solved_and_executed_with_the_shipped_models(tmp_path: Path) -
     problem = load_problem(COFFEE)
     result = solve(problem, PlannerConfig(max_time=60, seed=1))
     assert result.solved
-    report = execute_plan("box2d", problem, result, 1)
+    gif = tmp_path / "coffee.gif"
+    report = execute_plan("box2d", problem, result, 1, gif)
     assert report.success and report.goal_holds, report.details
     particles = report.details["particles"]
     assert particles["n_particles"] == particles["n_expected"] == particles["n_in_world"]
+    # At the default timing the whole coffee GIF plays in under a minute (frame count ×
+    # frame duration, read from the file), though it simulates minutes.
+    with Image.open(gif) as frames:
+        played_s = sum(f.info["duration"] for f in ImageSequence.Iterator(frames)) / 1000.0
+    assert report.details["sim_time_s"] > 120.0 and played_s < 60.0
 
 
 def test_learned_streams_yield_controls_that_succeed_in_trials() -> None:

@@ -12,6 +12,7 @@ from PIL import Image, ImageSequence
 
 pytest.importorskip("sapien")
 
+from ltamp_cli.backends.frames import GifTiming
 from ltamp_cli.backends.pybullet.executor import ExecutionSettings
 from ltamp_cli.backends.pybullet.robot.arm import PANDA_HOME
 from ltamp_cli.backends.pybullet.tamp.values import ArmPath
@@ -57,7 +58,10 @@ def test_a_moving_arm_is_replayed_into_a_gif(
                                     args=None)]
     )
     every = 24
-    report = SapienKitchen3DExecutor(ExecutionSettings(render_every=every)).execute(
+    # Real time at one GIF frame per recorded state (240 Hz / 24 = 10 fps): nothing skipped.
+    executor = SapienKitchen3DExecutor(ExecutionSettings(render_every=every),
+                                       timing=GifTiming(fps=10.0, speed=1.0))
+    report = executor.execute(
         load_problem(POUR_BLOCKED), plan, seed=0, render_path=tmp_path / "out.gif"
     )
     assert report.success, report.details["steps"]
@@ -65,9 +69,10 @@ def test_a_moving_arm_is_replayed_into_a_gif(
     gif = Path(report.details["render"])
     assert gif == tmp_path / "out.gif" and gif.is_file()
     frames, saved = _gif_frames(gif)
-    recorded = math.ceil(report.details["sim_steps"] / every)
+    # The execution's states, then one more second captioned with the goal's outcome.
+    recorded = math.ceil(report.details["sim_steps"] / every) + 240 // every
     assert saved == recorded and 3 <= len(frames) <= recorded
-    assert frames[0].shape == (240, 320, 3)
+    assert frames[0].shape == (480, 640, 3)
     assert all(frame.std() > 10 for frame in frames)  # not blank
     # The arm moved: the last frame differs from the first in a sizeable area, while the
     # settling frames at the start (nothing but beads moving) differ far less.

@@ -12,7 +12,7 @@ import numpy as np
 from PIL import Image
 
 from ltamp_cli.backends.box2d.guard import Box2DGuard
-from ltamp_cli.backends.box2d.render import FrameRecorder, save_frames
+from ltamp_cli.backends.box2d.render import FrameRecorder
 from ltamp_cli.backends.box2d.skills import pour, push, scoop
 from ltamp_cli.backends.box2d.world import Observer
 from ltamp_cli.backends.protocol import SkillSpec, TrialResult, skill_spec
@@ -101,12 +101,19 @@ def render_trial(
 ) -> tuple[TrialResult, list[Image.Image]]:
     """Run one trial while recording frames; save a GIF/PNG to ``path`` if given.
 
-    Returns the trial result (identical to an unrecorded run) and the PIL frames.
+    The view follows what moves (and the goal marker of a push); every frame is captioned
+    with the skill, its context and its control. Returns the trial result (identical to an
+    unrecorded run) and the PIL frames (uncaptioned).
     """
     backend = backend or Kitchen2DBackend()
-    recorder = FrameRecorder(every=every, scale=scale)
+    spec = skill_spec(backend, skill)
+    recorder = FrameRecorder(every=every, scale=scale, follow=True)
+    recorder.caption = f"{skill}  " + "  ".join(
+        f"{name}={float(value):.2f}" for name, value in
+        zip((*spec.context.names, *spec.control.names),
+            (*np.ravel(context), *np.ravel(control)), strict=True))
     result = backend.run_trial(skill, context, control, seed, observer=recorder)
     frames = recorder.frames
     if path is not None and frames:
-        save_frames(frames, path, fps=100.0 / every)
+        recorder.save(path)
     return result, frames

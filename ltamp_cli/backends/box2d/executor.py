@@ -18,7 +18,7 @@ from Box2D import b2
 
 from ltamp_cli.backends.box2d.gripper import body_pose
 from ltamp_cli.backends.box2d.particles import inside_box
-from ltamp_cli.backends.box2d.render import FrameRecorder, View, save_frames
+from ltamp_cli.backends.box2d.render import FrameRecorder, Region, View
 from ltamp_cli.backends.box2d.scene import (
     LiveScene,
     SceneSpec,
@@ -33,6 +33,7 @@ from ltamp_cli.backends.box2d.tamp import (
     empty_hand_path,
 )
 from ltamp_cli.backends.execution import ExecutionReport
+from ltamp_cli.backends.frames import GifTiming, action_caption
 
 SPEED = 14.0
 SLOW = 3.0
@@ -398,6 +399,23 @@ def goal_atoms(formula: Any) -> list[tuple[str, tuple[str, ...]]]:
     raise ActionFailed("only conjunctions of positive facts can be checked physically")
 
 
+def goal_regions(spec: SceneSpec, goal: Any) -> list[Region]:
+    """Where the goal wants objects, to draw: the floor below the table for ``OffTable``,
+    the coaster for ``On ... coaster`` (other facts are seen in the contents)."""
+    lay = spec.layout
+    regions = []
+    for predicate, args in goal_atoms(goal):
+        if predicate == "offtable":
+            regions.append(Region((lay.table_x0 - 4.0, lay.table_top - 3.0, lay.table_x1 + 4.0,
+                                   lay.table_top - 1.0), f"goal: {args[0]} below this line "
+                                  "(off the table)", below=True))
+        elif predicate == "on" and args[1] == "coaster":
+            half = lay.coaster_width / 2
+            regions.append(Region((lay.coaster_x - half, lay.table_top, lay.coaster_x + half,
+                                   lay.table_top + 2.0), f"goal: {args[0]} on the coaster"))
+    return regions
+
+
 def diagnose(steps: Sequence[dict[str, Any]], facts: dict[str, dict[str, Any]],
              error: str) -> list[str]:
     """One line per thing that went wrong: the failed action, then every goal fact that does
@@ -429,9 +447,11 @@ def _value(step: Any, index: int) -> Any:
 class Kitchen2DExecutor:
     """:class:`~ltamp_cli.backends.execution.PlanExecutor` for the kitchen2d domain."""
 
-    def __init__(self, every: int = 20, scale: float = 12.0) -> None:
+    def __init__(self, every: int = 20, scale: float = 12.0,
+                 timing: GifTiming | None = None) -> None:
         self.every = every
         self.scale = scale
+        self.timing = timing or GifTiming()
 
     def execute(self, problem: Any, plan_result: Any, seed: int,
                 render_path: str | Path | None = None) -> ExecutionReport:
@@ -440,15 +460,26 @@ class Kitchen2DExecutor:
         if render_path is not None:
             lay = spec.layout
             bounds = (lay.table_x0 - 2, lay.table_top - 3, lay.table_x1 + 2, lay.faucet_y + 9)
-            if any(item.kind == "block" for item in spec.objects):
-                # A block may be pushed off the table: show where it lands on the floor.
-                bounds = (lay.table_x0 - 10, 0.0, lay.table_x1 + 10, bounds[3])
-            recorder = FrameRecorder(self.every, View(bounds, self.scale))
+            pushes = any(item.kind == "block" for item in spec.objects)
+            if pushes:
+                # A block may be pushed off the table: a 4:3 window, zoomed in up to 3x,
+                # follows the hand and the block down to the floor.
+                half = 12.0
+                middle = (lay.table_x0 + lay.table_x1) / 2
+                bounds = (middle - half, lay.table_top - 9.0, middle + half,
+                          lay.table_top + 9.0)
+            recorder = FrameRecorder(self.every, View(bounds, self.scale * (3 if pushes else 1)),
+                                     follow=pushes, regions=goal_regions(spec, problem.goal))
+        if recorder is not None:
+            recorder.caption = f"0/{len(plan_result.plan)}  initial state"
         run = Kitchen2DRun(spec, seed, recorder)
         steps: list[dict[str, Any]] = []
         success = True
         error = ""
         for number, step in enumerate(plan_result.plan, start=1):
+            if recorder is not None:
+                recorder.caption = action_caption(number, len(plan_result.plan), step.name,
+                                                  step.args)
             try:
                 self._dispatch(run, step)
                 if run.hit:
@@ -475,6 +506,10 @@ class Kitchen2DExecutor:
             facts[f"({predicate} {' '.join(args)})"] = {"holds": holds, **measured}
             goal_holds = goal_holds and holds
         conservation = run.conservation()
+        if recorder is not None:
+            # A last second of frames saying how it ended (after everything was measured).
+            recorder.caption = "goal " + ("holds" if goal_holds else "does not hold")
+            run.scene.kitchen.step(round(1.0 / run.scene.kitchen.config.dt))
         details: dict[str, Any] = {
             "steps": steps,
             "goal": facts,
@@ -486,8 +521,9 @@ class Kitchen2DExecutor:
         if error:
             details["error"] = error
         if recorder is not None and recorder.frames:
-            save_frames(recorder.frames, render_path, fps=100.0 / self.every)  # type: ignore[arg-type]
+            written = recorder.save(render_path, self.timing)  # type: ignore[arg-type]
             details["render"] = str(render_path)
+            details["animation"] = written
         return ExecutionReport(success, bool(goal_holds), details)
 
     def _dispatch(self, run: Kitchen2DRun, step: Any) -> None:

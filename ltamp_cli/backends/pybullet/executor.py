@@ -46,6 +46,7 @@ import numpy as np
 import pybullet as p
 
 from ltamp_cli.backends.execution import ExecutionReport
+from ltamp_cli.backends.frames import GifTiming, action_caption, action_focus
 from ltamp_cli.backends.pybullet.kitchenware import (
     BodyMaterial,
     KitchenwareBody,
@@ -59,7 +60,14 @@ from ltamp_cli.backends.pybullet.particles import (
     count_lost,
     spawn_beads_in,
 )
-from ltamp_cli.backends.pybullet.render import Camera, FrameRecorder
+from ltamp_cli.backends.pybullet.render import Camera
+from ltamp_cli.backends.pybullet.replay import (
+    BeadGroup,
+    ReplayFrame,
+    ReplayRecorder,
+    ReplayScene,
+    bead_rgba,
+)
 from ltamp_cli.backends.pybullet.robot.arm import (
     PANDA_ARM_JOINTS,
     PANDA_FINGER_JOINTS,
@@ -198,8 +206,7 @@ class Kitchen3DRun:
         self.world = PhysicsWorld(WorldConfig())
         self.scene: KitchenScene = build_kitchen_scene(self.world.client, spec.n_arms, spec.table)
         self.table_z = float(self.scene.table.height)
-        self.recorder = (FrameRecorder(self.world.client, settings.render_every, recorder_camera)
-                         if recorder_camera is not None else None)
+        self.recorder: ReplayRecorder | None = None
         self.steps = 0
         self.log: list[dict[str, Any]] = []
         self.bodies: dict[str, KitchenwareBody] = {}
@@ -228,6 +235,12 @@ class Kitchen3DRun:
         self.held: dict[int, tuple[str, Pose]] = {}
         self._init_records()
         self.pinned = {name: self.bodies[name].pose() for name in self._tools()}
+        if recorder_camera is not None:
+            # Record states (cheap) and render only what the GIF keeps, afterwards.
+            self.recorder = ReplayRecorder(
+                self._replay_scene(), self._snapshot, settings.render_every, recorder_camera,
+                seconds_per_step=self.world.config.time_step, follow=True)
+            self.recorder.caption = "initial state"
         self.step_n(self.world.steps_for(settings.settle_s))
         self.initial_counts = self.counts()
 
@@ -240,6 +253,29 @@ class Kitchen3DRun:
             i: arm.get_configuration() for i, arm in enumerate(self.scene.arms)}
         self.spoonfuls: dict[str, int] = {}
         self.stirs: dict[str, list[dict[str, Any]]] = {}
+
+    def _replay_scene(self) -> ReplayScene:
+        """What a replay of this run draws: arms, table, kitchenware and beads."""
+        return ReplayScene(
+            self.spec.n_arms, self.spec.table,
+            {name: body.geometry for name, body in self.bodies.items()},
+            {material: BeadGroup(len(ids), 0.006, bead_rgba(material, index))
+             for index, (material, ids) in enumerate(self.beads.items())})
+
+    def _snapshot(self) -> ReplayFrame:
+        """Every actor's state now (arms, kitchenware poses, bead centres)."""
+        return ReplayFrame(
+            tuple((arm.get_configuration(), arm.finger_opening()) for arm in self.scene.arms),
+            {name: body.pose() for name, body in self.bodies.items()},
+            {material: bead_positions(self.world.client, ids)
+             for material, ids in self.beads.items()})
+
+    def film(self, caption: str, focus: str | None) -> None:
+        """Caption the frames recorded from now on, with a top view into the object named
+        ``focus`` (``None``: no inset)."""
+        if self.recorder is not None:
+            self.recorder.caption = caption
+            self.recorder.focus = focus
 
     def _tools(self) -> list[str]:
         return [n for n, o in self.spec.objects.items() if o.kind in TOOL_KINDS and not o.fixed]
@@ -620,10 +656,12 @@ class Kitchen3DExecutor:
     run_class: type[Kitchen3DRun] = Kitchen3DRun
 
     def __init__(self, settings: ExecutionSettings | None = None,
-                 camera: Camera | None = None) -> None:
+                 camera: Camera | None = None, timing: GifTiming | None = None) -> None:
         self.settings = settings or ExecutionSettings()
+        # The direction and image size; the recorder moves the camera to frame the scene.
         self.camera = camera or Camera(target=(0.0, 0.0, 0.75), distance=1.3, yaw=50.0,
-                                       pitch=-35.0)
+                                       pitch=-30.0, width=640, height=480)
+        self.timing = timing or GifTiming()
 
     def execute(self, problem: Any, plan_result: Any, seed: int,
                 render_path: str | Path | None = None) -> ExecutionReport:
@@ -640,7 +678,12 @@ class Kitchen3DExecutor:
         steps: list[dict[str, Any]] = []
         success = True
         try:
-            for index, step in enumerate(plan_result.plan or ()):
+            plan = plan_result.plan or ()
+            kinds = {name: obj.kind for name, obj in spec.objects.items()}
+            for index, step in enumerate(plan):
+                names = step.args or ()  # a plan made by hand may name no arguments
+                run.film(action_caption(index + 1, len(plan), step.name, names),
+                         action_focus(names, kinds))
                 try:
                     run.run_step(step.name, step.values, step.args)
                     steps.append({"index": index, "action": step.name, "ok": True})
@@ -661,9 +704,11 @@ class Kitchen3DExecutor:
                        "sim_time_s": run.steps * run.world.config.time_step,
                        "initial_counts": run.initial_counts}
             if render_path is not None and run.recorder is not None:
-                from ltamp_cli.backends.pybullet.tamp.animation import save_frames
-
-                details["render"] = str(save_frames(run.recorder.frames, Path(render_path)))
+                run.film("goal " + ("holds" if goal_holds else "does not hold"), None)
+                run.step_n(run.world.steps_for(1.0))  # a last second saying how it ended
+                written = run.recorder.save(Path(render_path), self.timing)
+                details["render"] = written["path"]
+                details["animation"] = written
             return ExecutionReport(success, bool(goal_holds), details)
         finally:
             run.close()

@@ -40,6 +40,13 @@ from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial, KitchenwareBod
 from ltamp_cli.backends.pybullet.kitchenware import create_kitchenware as create_mirror
 from ltamp_cli.backends.pybullet.particles import BeadSpec, count_lost
 from ltamp_cli.backends.pybullet.render import Camera
+from ltamp_cli.backends.pybullet.replay import (
+    BeadGroup,
+    ReplayFrame,
+    ReplayRecorder,
+    ReplayScene,
+    bead_rgba,
+)
 from ltamp_cli.backends.pybullet.robot.arm import (
     PANDA_FINGER_JOINTS,
     PANDA_FINGER_TRAVEL,
@@ -67,7 +74,6 @@ from ltamp_cli.backends.sapien.render import (
     new_render_system,
     probe_render_device,
 )
-from ltamp_cli.backends.sapien.replay import BeadGroup, ReplayFrame, ReplayRecorder, ReplayScene
 from ltamp_cli.backends.sapien.world import (
     SapienWorld,
     SapienWorldConfig,
@@ -82,7 +88,8 @@ from ltamp_cli.backends.sapien.world import (
 PRESHAPE_CLEARANCE_M = 0.003
 
 #: The kitchen seen from the front-right, above the table (metres).
-KITCHEN_VIEW = CameraView(eye=(0.85, -0.85, 1.45), target=(0.0, 0.0, 0.75))
+KITCHEN_VIEW = CameraView(eye=(0.85, -0.85, 1.45), target=(0.0, 0.0, 0.75), width=640,
+                          height=480)
 
 
 def object_material(kind: str, rng: np.random.Generator, fixed: bool) -> BodyMaterial:
@@ -213,7 +220,8 @@ class SapienKitchen3DRun(Kitchen3DRun):
         self.table_z = float(self.scene.table.height)
         self._add_scenery()
         self.recorder = (
-            FrameRecorder(self.world, settings.render_every, KITCHEN_VIEW)  # type: ignore[arg-type]
+            FrameRecorder(self.world, settings.render_every, KITCHEN_VIEW,  # type: ignore[arg-type]
+                          seconds_per_step=self.world.config.time_step)
             if self.world.renders  # type: ignore[attr-defined]
             else None
         )
@@ -261,8 +269,10 @@ class SapienKitchen3DRun(Kitchen3DRun):
         self._grip_widths: dict[int, float] = {}
         if self._replay_camera is not None:
             self.recorder = ReplayRecorder(  # type: ignore[assignment]
-                self._replay_scene(), self._snapshot, settings.render_every, self._replay_camera
+                self._replay_scene(), self._snapshot, settings.render_every, self._replay_camera,
+                seconds_per_step=self.world.config.time_step, follow=True,
             )
+            self.recorder.caption = "initial state"
         self.step_n(self.world.steps_for(settings.settle_s))
         self.initial_counts = self.counts()
 
@@ -295,8 +305,8 @@ class SapienKitchen3DRun(Kitchen3DRun):
             self.scene.table,
             {name: body.geometry for name, body in self.bodies.items()},
             {
-                material: BeadGroup(len(beads), beads.spec.radius, beads.spec.rgba)  # type: ignore[attr-defined]
-                for material, beads in self.beads.items()
+                material: BeadGroup(len(beads), beads.spec.radius, bead_rgba(material, index))  # type: ignore[attr-defined]
+                for index, (material, beads) in enumerate(self.beads.items())
             },
         )
 

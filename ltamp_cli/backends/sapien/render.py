@@ -12,10 +12,12 @@ from __future__ import annotations
 import subprocess
 import sys
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from ltamp_cli.backends.frames import AnimationInfo, GifTiming, write_animation
 from ltamp_cli.backends.sapien.world import SapienWorld, sapien
 
 _PROBE = (
@@ -95,8 +97,8 @@ class CameraView:
 
     eye: tuple[float, float, float] = (0.45, -0.45, 0.4)
     target: tuple[float, float, float] = (0.0, 0.0, 0.08)
-    width: int = 320
-    height: int = 240
+    width: int = 640
+    height: int = 480
     fovy_rad: float = 0.9
 
 
@@ -130,14 +132,22 @@ class FrameRecorder:
     """A step callback that keeps an RGB frame every ``every`` steps.
 
     Skills reset the world (a new scene) before stepping, so the camera is (re)attached to
-    whatever scene the world holds at the first step after a reset.
+    whatever scene the world holds at the first step after a reset. :attr:`caption` (the
+    running action) is kept with every frame, as is the simulated time; :attr:`focus` is
+    accepted for the recorders' common interface (SAPIEN's camera draws no inset).
     """
 
-    def __init__(self, world: SapienWorld, every: int = 8, view: CameraView | None = None):
+    def __init__(self, world: SapienWorld, every: int = 8, view: CameraView | None = None,
+                 *, seconds_per_step: float = 1.0 / 240.0):
         if every < 1:
             raise ValueError("every must be >= 1")
         self.world, self.every, self.view = world, every, view
+        self.seconds_per_step = seconds_per_step
+        self.caption = ""
+        self.focus: str | None = None
         self.frames: list[np.ndarray] = []
+        self.times: list[float] = []
+        self.captions: list[str] = []
         self._camera: SapienCamera | None = None
 
     def __call__(self, step: int) -> None:
@@ -145,6 +155,12 @@ class FrameRecorder:
             self._camera = SapienCamera(self.world, self.view)
         if step % self.every == 0:
             self.frames.append(self._camera.rgb())
+            self.times.append(step * self.seconds_per_step)
+            self.captions.append(self.caption)
+
+    def save(self, path: str | Path, timing: GifTiming | None = None) -> AnimationInfo:
+        """Write the recording (see :func:`~ltamp_cli.backends.frames.write_animation`)."""
+        return write_animation(self.frames, self.times, self.captions, path, timing)
 
 
 __all__ = [

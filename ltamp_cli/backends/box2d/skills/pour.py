@@ -35,11 +35,13 @@ SPEC = SkillSpec(
         ("cup_width", "cup_height", "target_width", "target_height"),
         (3.0, 3.0, 3.0, 3.0),
         (8.0, 5.0, 8.0, 5.0),
+        ("units", "units", "units", "units"),
     ),
     control=ParamSpace(
         ("grasp_ratio", "rel_x", "rel_y", "dangle"),
         (0.0, -10.0, 1.0, math.pi / 2),
         (1.0, 10.0, 10.0, math.pi),
+        ("", "units", "units", "rad"),
     ),
     description="tip a held cup of particles into a target cup; g = exp(2(10x-9.5)) - 1",
 )

@@ -24,9 +24,10 @@ from ltamp_cli.backends.protocol import ParamSpace, SkillSpec, TrialResult
 
 SPEC = SkillSpec(
     name="push",
-    context=ParamSpace(("goal_x", "goal_y"), (-5.0, -5.0), (5.0, 5.0)),
+    context=ParamSpace(("goal_x", "goal_y"), (-5.0, -5.0), (5.0, 5.0), ("units", "units")),
     control=ParamSpace(
-        ("rx", "ry", "angle", "duration"), (-5.0, -5.0, 0.0, 0.0), (5.0, 5.0, 2 * math.pi, 2.0)
+        ("rx", "ry", "angle", "duration"), (-5.0, -5.0, 0.0, 0.0), (5.0, 5.0, 2 * math.pi, 2.0),
+        ("units", "units", "rad", "s"),
     ),
     description="push a block to a goal seen from above; g = 2 - |x - goal|",
 )

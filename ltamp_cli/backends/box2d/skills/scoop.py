@@ -31,11 +31,13 @@ from ltamp_cli.backends.protocol import ParamSpace, SkillSpec, TrialResult
 
 SPEC = SkillSpec(
     name="scoop",
-    context=ParamSpace(("cup_width", "cup_height"), (5.0, 4.0), (10.0, 8.0)),
+    context=ParamSpace(("cup_width", "cup_height"), (5.0, 4.0), (10.0, 8.0),
+                       ("units", "units")),
     control=ParamSpace(
         ("grasp_ratio", "x1", "y1", "x2", "y2", "x3", "y3"),
         (0.0, -1.0, 0.0, -1.0, 0.0, -1.0, 0.0),
         (1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0),
+        ("",) * 7,  # fractions of the grasp range and of the cup's interior
     ),
     description="scoop particles from a cup with a spoon; g = filled fraction - 0.5",
 )
