@@ -151,9 +151,12 @@ def load_cache(path: Path) -> dict[str, dict]:
 
 
 def append_record(path: Path, record: dict) -> None:
-    """Append one record as one line, in one write, flushed to disk."""
-    with path.open("a") as out:
-        out.write(json.dumps(record) + "\n")
+    """Append one record as one line, in one write, flushed to disk (after a newline if a
+    stopped run left a torn last line)."""
+    with path.open("ab+") as out:
+        torn = out.seek(0, os.SEEK_END) > 0 and out.seek(-1, os.SEEK_END) >= 0 and (
+            out.read(1) != b"\n")
+        out.write((("\n" if torn else "") + json.dumps(record) + "\n").encode())
         out.flush()
         os.fsync(out.fileno())
 

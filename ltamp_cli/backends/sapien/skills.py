@@ -33,6 +33,7 @@ from ltamp_cli.backends.skills3d.physics import (
     BodyRole,
     SimBody,
     StepCallback,
+    WorldPhysics,
 )
 
 #: How far (m) a held tool may be from the pose it is asked to hold (float32 poses).
@@ -47,21 +48,11 @@ def _sapien_body(body: SimBody) -> SapienBody:
 
 
 @dataclass(frozen=True, eq=False)
-class SapienTrialPhysics:
+class SapienTrialPhysics(WorldPhysics):
     """The trial physics of a :class:`SapienWorld` (see
     :mod:`ltamp_cli.backends.skills3d.physics` for the contract)."""
 
     world: SapienWorld
-
-    @property
-    def time_step(self) -> float:
-        return self.world.config.time_step
-
-    def reset(self) -> None:
-        self.world.reset()
-
-    def steps_for(self, seconds: float) -> int:
-        return self.world.steps_for(seconds)
 
     def add_body(
         self,
@@ -87,13 +78,11 @@ class SapienTrialPhysics:
         step, with the implied velocity); the last step targets the last pose again."""
         body = _sapien_body(tool)
         last = len(path) - 1
-        for i in range(len(path)):
-            target = min(i + 1, last)
-            body.move_to(path.positions[target], path.quaternions[target])
-            self.world.step()
-            if on_step is not None:
-                on_step(step_offset + i)
-        return len(path)
+
+        def target(i: int) -> None:
+            body.move_to(path.positions[min(i + 1, last)], path.quaternions[min(i + 1, last)])
+
+        return self.run_steps(len(path), target, on_step, step_offset)
 
     def hold(
         self, tool: SimBody, position: np.ndarray, quaternion: np.ndarray, steps: int,
@@ -105,8 +94,4 @@ class SapienTrialPhysics:
         if (np.linalg.norm(here - np.asarray(position)) > HOLD_TOLERANCE_M
                 or abs(float(np.dot(turned, quaternion))) < 1.0 - 1e-6):
             raise ValueError("a SAPIEN tool is held where it is: move it to the pose first")
-        for i in range(steps):
-            self.world.step()
-            if on_step is not None:
-                on_step(step_offset + i)
-        return steps
+        return self.run_steps(steps, None, on_step, step_offset)

@@ -38,6 +38,7 @@ engine-independent and lives here too.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Literal, Protocol
 
 import numpy as np
@@ -110,6 +111,54 @@ class TrialPhysics(Protocol):
     ) -> int: ...
 
 
+class _TimeStepped(Protocol):
+    @property
+    def time_step(self) -> float: ...
+
+
+class SteppedWorld(Protocol):
+    """An engine's world: reset to the table only, stepped, ``config.time_step`` seconds a step."""
+
+    @property
+    def config(self) -> _TimeStepped: ...
+
+    def reset(self) -> None: ...
+
+    def step(self, n: int = 1) -> None: ...
+
+    def steps_for(self, seconds: float) -> int: ...
+
+
+@dataclass(frozen=True, eq=False)
+class WorldPhysics:
+    """What every engine's :class:`TrialPhysics` shares: the world's clock and the stepping
+    loop. An engine adds ``add_body``, ``spawn_beads_in``, ``follow`` and ``hold``."""
+
+    world: SteppedWorld
+
+    @property
+    def time_step(self) -> float:
+        return self.world.config.time_step
+
+    def reset(self) -> None:
+        self.world.reset()
+
+    def steps_for(self, seconds: float) -> int:
+        return self.world.steps_for(seconds)
+
+    def run_steps(self, count: int, before_step: Callable[[int], None] | None,
+                  on_step: StepCallback | None, step_offset: int) -> int:
+        """Step ``count`` times, calling ``before_step(i)`` before and
+        ``on_step(step_offset + i)`` after step ``i``; returns ``count``."""
+        for i in range(count):
+            if before_step is not None:
+                before_step(i)
+            self.world.step()
+            if on_step is not None:
+                on_step(step_offset + i)
+        return count
+
+
 def world_to_object(
     points: np.ndarray, position: np.ndarray, quaternion: np.ndarray
 ) -> np.ndarray:
@@ -129,6 +178,15 @@ def contained_mask(container: SimBody, positions_world: np.ndarray) -> np.ndarra
 
 
 __all__ = [
-    "IDENTITY_QUAT", "BeadSet", "BodyRole", "SimBody", "StepCallback", "TrialPhysics",
-    "contained_mask", "count_lost", "world_to_object",
+    "IDENTITY_QUAT",
+    "BeadSet",
+    "BodyRole",
+    "SimBody",
+    "StepCallback",
+    "SteppedWorld",
+    "TrialPhysics",
+    "WorldPhysics",
+    "contained_mask",
+    "count_lost",
+    "world_to_object",
 ]

@@ -27,6 +27,7 @@ from ltamp_cli.backends.skills3d.physics import (
     BodyRole,
     SimBody,
     StepCallback,
+    WorldPhysics,
 )
 
 
@@ -52,21 +53,11 @@ def _bullet_body(body: SimBody) -> KitchenwareBody:
 
 
 @dataclass(frozen=True, eq=False)
-class BulletTrialPhysics:
+class BulletTrialPhysics(WorldPhysics):
     """The trial physics of a :class:`PhysicsWorld` (see
     :mod:`ltamp_cli.backends.skills3d.physics` for the contract)."""
 
     world: PhysicsWorld
-
-    @property
-    def time_step(self) -> float:
-        return self.world.config.time_step
-
-    def reset(self) -> None:
-        self.world.reset()
-
-    def steps_for(self, seconds: float) -> int:
-        return self.world.steps_for(seconds)
 
     def add_body(
         self,
@@ -98,13 +89,13 @@ class BulletTrialPhysics:
         one step each; it ends at the last pose, at rest."""
         body = _bullet_body(tool)
         linear, angular = velocities(path, self.time_step)
-        for i in range(len(path)):
+
+        def place(i: int) -> None:
             body.set_pose(path.positions[i], path.quaternions[i], linear[i], angular[i])
-            self.world.step()
-            if on_step is not None:
-                on_step(step_offset + i)
+
+        taken = self.run_steps(len(path), place, on_step, step_offset)
         body.set_pose(path.positions[-1], path.quaternions[-1])
-        return len(path)
+        return taken
 
     def hold(
         self, tool: SimBody, position: np.ndarray, quaternion: np.ndarray, steps: int,
@@ -112,10 +103,7 @@ class BulletTrialPhysics:
     ) -> int:
         """Place ``tool`` at rest at the pose before each of ``steps`` steps."""
         body = _bullet_body(tool)
-        for i in range(steps):
-            body.set_pose(position, quaternion)
-            self.world.step()
-            if on_step is not None:
-                on_step(step_offset + i)
+        taken = self.run_steps(steps, lambda _: body.set_pose(position, quaternion), on_step,
+                               step_offset)
         body.set_pose(position, quaternion)
-        return steps
+        return taken
