@@ -14,41 +14,40 @@ import numpy as np
 from ltamp_cli.backends.protocol import SkillSpec, TrialResult, as_batch
 from ltamp_cli.backends.pybullet.guard import bullet_guard
 from ltamp_cli.backends.pybullet.render import Camera, FrameRecorder
-from ltamp_cli.backends.pybullet.skills.common import PathCheck, StepCallback
-from ltamp_cli.backends.pybullet.skills.pour import (
+from ltamp_cli.backends.pybullet.skills.physics import BulletTrialPhysics
+from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig
+from ltamp_cli.backends.sanity import run_guarded
+from ltamp_cli.backends.skills3d.common import PathCheck
+from ltamp_cli.backends.skills3d.physics import StepCallback
+from ltamp_cli.backends.skills3d.pour import (
     POUR_SPEC,
     PourSettings,
     check_pour,
     pour_is_valid,
-    run_pour,
     sample_pour_context,
 )
-from ltamp_cli.backends.pybullet.skills.push import (
+from ltamp_cli.backends.skills3d.push import (
     PUSH_SPEC,
     PushSettings,
     check_push,
     push_is_valid,
-    run_push,
     sample_push_context,
 )
-from ltamp_cli.backends.pybullet.skills.scoop import (
+from ltamp_cli.backends.skills3d.scoop import (
     SCOOP_SPEC,
     ScoopSettings,
     check_scoop,
-    run_scoop,
     sample_scoop_context,
     scoop_is_valid,
 )
-from ltamp_cli.backends.pybullet.skills.stir import (
+from ltamp_cli.backends.skills3d.stir import (
     STIR_SPEC,
     StirSettings,
     check_stir,
-    run_stir,
     sample_stir_context,
     stir_is_valid,
 )
-from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig
-from ltamp_cli.backends.sanity import run_guarded
+from ltamp_cli.backends.skills3d.trials import SkillSettings, run_skill_trial
 
 _SPECS: Mapping[str, SkillSpec] = MappingProxyType(
     {"pour": POUR_SPEC, "scoop": SCOOP_SPEC, "push": PUSH_SPEC, "stir": STIR_SPEC}
@@ -164,6 +163,11 @@ class Kitchen3DBackend:
         result = self._run(skill, context, control, seed, recorder)
         return result, recorder.frames
 
+    def settings_for(self, skill: str) -> SkillSettings:
+        """This backend's simulation settings of ``skill``."""
+        return {"pour": self.pour_settings, "scoop": self.scoop_settings,
+                "push": self.push_settings, "stir": self.stir_settings}[skill]
+
     def _run(
         self,
         skill: str,
@@ -175,17 +179,13 @@ class Kitchen3DBackend:
         context, control, rejected = precheck_trial(self._spec(skill), context, control)
         if rejected is not None:
             return rejected
-        runs: dict[str, tuple[Callable[..., TrialResult], object]] = {
-            "pour": (run_pour, self.pour_settings),
-            "scoop": (run_scoop, self.scoop_settings),
-            "push": (run_push, self.push_settings),
-            "stir": (run_stir, self.stir_settings),
-        }
-        run, settings = runs[skill]
+        physics = BulletTrialPhysics(self.world)
+        settings = self.settings_for(skill)
         # A diverged simulation (NaN, bodies flung away) makes an invalid trial.
         return run_guarded(
             bullet_guard(self.world.client),
-            lambda step: run(self.world, context, control, int(seed), settings, step, check=False),
+            lambda step: run_skill_trial(physics, skill, context, control, int(seed), settings,
+                                         step, check=False),
             on_step,
             self._spec(skill).invalid_score,
         )

@@ -7,16 +7,12 @@ PyBullet backend (``name = "sapien"``); see :mod:`.skills`. One backend owns one
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 
 import numpy as np
 
 from ltamp_cli.backends.protocol import SkillSpec, TrialResult, as_batch
 from ltamp_cli.backends.pybullet.backend import KNOWN_SKILLS, Kitchen3DBackend, precheck_trial
-from ltamp_cli.backends.pybullet.skills.pour import PourSettings
-from ltamp_cli.backends.pybullet.skills.push import PushSettings
-from ltamp_cli.backends.pybullet.skills.scoop import ScoopSettings
-from ltamp_cli.backends.pybullet.skills.stir import StirSettings
 from ltamp_cli.backends.sanity import run_guarded
 from ltamp_cli.backends.sapien.guard import sapien_guard
 from ltamp_cli.backends.sapien.render import (
@@ -27,14 +23,14 @@ from ltamp_cli.backends.sapien.render import (
     probe_render_device,
     require_renderer,
 )
-from ltamp_cli.backends.sapien.skills import (
-    StepCallback,
-    run_pour,
-    run_push,
-    run_scoop,
-    run_stir,
-)
+from ltamp_cli.backends.sapien.skills import SapienTrialPhysics
 from ltamp_cli.backends.sapien.world import SapienWorld, SapienWorldConfig
+from ltamp_cli.backends.skills3d.physics import StepCallback
+from ltamp_cli.backends.skills3d.pour import PourSettings
+from ltamp_cli.backends.skills3d.push import PushSettings
+from ltamp_cli.backends.skills3d.scoop import ScoopSettings
+from ltamp_cli.backends.skills3d.stir import StirSettings
+from ltamp_cli.backends.skills3d.trials import SkillSettings, run_skill_trial
 
 
 class SapienKitchen3DBackend:
@@ -135,6 +131,11 @@ class SapienKitchen3DBackend:
         result = self._run(self._render_world, skill, context, control, seed, recorder)
         return result, recorder.frames
 
+    def settings_for(self, skill: str) -> SkillSettings:
+        """This backend's simulation settings of ``skill``."""
+        return {"pour": self.pour_settings, "scoop": self.scoop_settings,
+                "push": self.push_settings, "stir": self.stir_settings}[skill]
+
     def _run(
         self,
         world: SapienWorld,
@@ -147,17 +148,13 @@ class SapienKitchen3DBackend:
         context, control, rejected = precheck_trial(self._spec(skill), context, control)
         if rejected is not None:
             return rejected
-        runs: dict[str, tuple[Callable[..., TrialResult], object]] = {
-            "pour": (run_pour, self.pour_settings),
-            "scoop": (run_scoop, self.scoop_settings),
-            "push": (run_push, self.push_settings),
-            "stir": (run_stir, self.stir_settings),
-        }
-        run, settings = runs[skill]
+        physics = SapienTrialPhysics(world)
+        settings = self.settings_for(skill)
         # A diverged simulation (NaN, bodies flung away) makes an invalid trial.
         return run_guarded(
             sapien_guard(world),
-            lambda step: run(world, context, control, int(seed), settings, step, check=False),
+            lambda step: run_skill_trial(physics, skill, context, control, int(seed), settings,
+                                         step, check=False),
             on_step,
             self._spec(skill).invalid_score,
         )

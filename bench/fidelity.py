@@ -1,0 +1,296 @@
+"""Fidelity of the fast simulation settings: do they change which controls succeed?
+
+For each comparison row (a skill, a *fast* setting and a *reference* setting) this draws
+``--trials`` (default 200) random inputs: a context from the skill's context distribution
+and a control uniform in its box, redrawn until the pre-check of both settings accepts it.
+Every input runs once under each setting with the same trial seed; a trial's label is
+``valid and score > 0`` (success). The table gives each setting's success rate, the label
+agreement with its 95 % Wilson interval (:func:`scipy.stats.binomtest`), the disagreements
+by direction, the mean CPU seconds per trial of each setting, and whether the agreement
+reaches ``--target`` (default 0.95).
+
+Rows (``--rows``, default all):
+
+* ``2d-pour-reference``: Box2D pour as shipped (200 particles, tilt 1.0 rad/s, 10 s cap)
+  vs the reference implementation's settings (500 particles, 0.1 rad/s, 30 s cap);
+  ``2d-pour-particles`` and ``2d-pour-tilt`` change one of them only.
+* ``3d-<skill>-engine`` (pour, scoop, push, stir): PyBullet vs SAPIEN, both as shipped.
+* ``3d-<skill>-solver``: PyBullet with 5 solver iterations (shipped) vs 50 (the reference
+  implementation's).
+
+Every trial is appended as one JSON line to ``--cache`` (default
+``bench/results/fidelity_trials.jsonl``) as soon as it finishes; a rerun with the same
+arguments reuses the trials already there, so a long run can be stopped and resumed. The
+summary is written to ``--out`` (default ``bench/results/fidelity.json``).
+
+    OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 3d-pour-engine
+    OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 2d-pour-reference --trials 50
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import sys
+import time
+from collections.abc import Callable, Iterator
+from contextlib import ExitStack, contextmanager
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+from scipy.stats import binomtest
+
+from ltamp_cli.backends import SkillBackend, load_backend
+from ltamp_cli.backends.box2d.backend import Kitchen2DBackend
+from ltamp_cli.backends.box2d.skills.pour import PourConfig
+
+RESULTS_DIR = Path(__file__).resolve().parent / "results"
+SKILLS_3D = ("pour", "scoop", "push", "stir")
+#: The Kitchen2D reference implementation's pour (field facts): particles, tilt rad/s, cap s.
+REFERENCE_2D_POUR = {"n_particles": 500, "rotate_speed": 0.1, "max_time": 30.0}
+#: The Kitchen3D reference implementation's PyBullet solver iterations (field facts).
+REFERENCE_SOLVER_ITERATIONS = 50
+#: Controls drawn per context when looking for one that both pre-checks accept.
+CONTROLS_PER_DRAW = 16
+
+
+def _box2d(**pour_changes: float) -> SkillBackend:
+    """The Box2D backend with its pour settings changed (none: as shipped)."""
+    backend = Kitchen2DBackend()
+    backend.config = replace(backend.config, pour=replace(PourConfig(), **pour_changes))
+    return backend
+
+
+#: Setting name -> how to build its backend (built when a row needs it, closed after).
+SETTINGS: dict[str, Callable[[], SkillBackend]] = {
+    "box2d": lambda: load_backend("box2d"),
+    "box2d-reference-pour": lambda: _box2d(**REFERENCE_2D_POUR),
+    "box2d-500-particles": lambda: _box2d(n_particles=500),
+    "box2d-tilt-0.1": lambda: _box2d(rotate_speed=0.1, max_time=30.0),
+    "pybullet": lambda: load_backend("pybullet"),
+    "pybullet-solver-50": lambda: load_backend(
+        "pybullet", solver_iterations=REFERENCE_SOLVER_ITERATIONS
+    ),
+    "sapien": lambda: load_backend("sapien"),
+}
+
+
+@dataclass(frozen=True)
+class Row:
+    """One comparison: ``skill`` under the ``fast`` and the ``reference`` setting."""
+
+    name: str
+    skill: str
+    fast: str
+    reference: str
+
+
+ROWS: tuple[Row, ...] = (
+    Row("2d-pour-reference", "pour", "box2d", "box2d-reference-pour"),
+    Row("2d-pour-particles", "pour", "box2d", "box2d-500-particles"),
+    Row("2d-pour-tilt", "pour", "box2d", "box2d-tilt-0.1"),
+    *(Row(f"3d-{skill}-engine", skill, "pybullet", "sapien") for skill in SKILLS_3D),
+    *(Row(f"3d-{skill}-solver", skill, "pybullet", "pybullet-solver-50") for skill in SKILLS_3D),
+)
+
+
+def is_success(result: dict) -> bool:
+    """The label of a trial record: valid and ``score > 0``."""
+    return bool(result["valid"]) and float(result["score"]) > 0.0
+
+
+def wilson_interval(agree: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
+    """Wilson score interval of a binomial proportion ``agree / n``."""
+    if n == 0:
+        return 0.0, 1.0
+    ci = binomtest(agree, n).proportion_ci(confidence_level=confidence, method="wilson")
+    return float(ci.low), float(ci.high)
+
+
+def draw_inputs(fast: SkillBackend, reference: SkillBackend, skill: str, n: int, seed: int
+                ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``n`` (context ``(d_context,)``, control ``(d_control,)``) pairs whose control both
+    settings' pre-checks accept, drawn with a generator seeded by ``seed``."""
+    rng = np.random.default_rng(seed)
+    spec = fast.skills()[skill]
+    inputs: list[tuple[np.ndarray, np.ndarray]] = []
+    while len(inputs) < n:
+        context = fast.sample_context(skill, rng)
+        # One at a time: a 3D pre-check costs milliseconds per control.
+        for control in spec.control.sample_uniform(rng, CONTROLS_PER_DRAW):
+            if (fast.is_valid(skill, context, control[None])[0]
+                    and reference.is_valid(skill, context, control[None])[0]):
+                inputs.append((context, control))
+                break
+    return inputs
+
+
+def trial_key(setting: str, skill: str, context: np.ndarray, control: np.ndarray,
+              seed: int) -> str:
+    """The cache key of one trial (inputs rounded to 12 digits, so JSON round trips match)."""
+    values = ",".join(f"{v:.12g}" for v in (*context, *control))
+    return f"{setting}|{skill}|{seed}|{values}"
+
+
+def load_cache(path: Path) -> dict[str, dict]:
+    """Trial records already in the JSONL cache, by key (a torn last line is skipped)."""
+    records: dict[str, dict] = {}
+    if not path.exists():
+        return records
+    with path.open() as lines:
+        for line in lines:
+            try:
+                record = json.loads(line)
+            except json.JSONDecodeError:
+                continue
+            records[record["key"]] = record
+    return records
+
+
+def append_record(path: Path, record: dict) -> None:
+    """Append one record as one line, in one write, flushed to disk (after a newline if a
+    stopped run left a torn last line)."""
+    with path.open("ab+") as out:
+        torn = out.seek(0, os.SEEK_END) > 0 and out.seek(-1, os.SEEK_END) >= 0 and (
+            out.read(1) != b"\n")
+        out.write((("\n" if torn else "") + json.dumps(record) + "\n").encode())
+        out.flush()
+        os.fsync(out.fileno())
+
+
+def run_trial(backend: SkillBackend, setting: str, skill: str, context: np.ndarray,
+              control: np.ndarray, seed: int) -> dict:
+    """One trial as a record: score, valid, CPU seconds, or the error that stopped it."""
+    start = time.process_time()
+    try:
+        result = backend.run_trial(skill, context, control, seed)
+    except ValueError as error:  # e.g. the reference's 500 particles do not fit a small cup
+        return {"score": None, "valid": False, "error": str(error),
+                "cpu_s": time.process_time() - start}
+    return {"score": float(result.score), "valid": bool(result.valid), "error": None,
+            "cpu_s": time.process_time() - start}
+
+
+@contextmanager
+def backends(names: tuple[str, ...]) -> Iterator[dict[str, SkillBackend]]:
+    """The named settings' backends, closed on exit."""
+    with ExitStack() as stack:
+        built = {}
+        for name in names:
+            backend = SETTINGS[name]()
+            stack.callback(backend.close)
+            built[name] = backend
+        yield built
+
+
+def run_row(row: Row, n: int, seed: int, cache_path: Path, cache: dict[str, dict],
+            progress: bool) -> dict:
+    """Run (or reuse from the cache) the row's trials and summarise the agreement."""
+    with backends((row.fast, row.reference)) as built:
+        fast, reference = built[row.fast], built[row.reference]
+        inputs = draw_inputs(fast, reference, row.skill, n, seed)
+        pairs = []
+        for index, (context, control) in enumerate(inputs):
+            trial_seed = seed * 100_000 + index
+            pair = []
+            for setting, backend in ((row.fast, fast), (row.reference, reference)):
+                key = trial_key(setting, row.skill, context, control, trial_seed)
+                if key not in cache:
+                    record = {"key": key, "setting": setting, "skill": row.skill,
+                              "seed": trial_seed, "context": context.tolist(),
+                              "control": control.tolist(),
+                              **run_trial(backend, setting, row.skill, context, control,
+                                          trial_seed)}
+                    append_record(cache_path, record)
+                    cache[key] = record
+                pair.append(cache[key])
+            pairs.append(pair)
+            if progress:
+                print(f"\r{row.name}: {index + 1}/{n}", end="", file=sys.stderr, flush=True)
+        if progress:
+            print(file=sys.stderr)
+    return summarise(row, pairs)
+
+
+def summarise(row: Row, pairs: list[list[dict]]) -> dict:
+    """Success rates, agreement with its Wilson interval, disagreements, CPU per trial."""
+    kept = [(f, r) for f, r in pairs if f["error"] is None and r["error"] is None]
+    fast_labels = np.array([is_success(f) for f, _ in kept], dtype=bool)
+    ref_labels = np.array([is_success(r) for _, r in kept], dtype=bool)
+    n = len(kept)
+    agree = int((fast_labels == ref_labels).sum())
+    low, high = wilson_interval(agree, n)
+    return {
+        "row": row.name, "skill": row.skill, "fast": row.fast, "reference": row.reference,
+        "trials": n, "errors": len(pairs) - n,
+        "fast_success": float(fast_labels.mean()) if n else None,
+        "reference_success": float(ref_labels.mean()) if n else None,
+        "agreement": agree / n if n else None, "wilson95": [low, high],
+        "fast_only": int((fast_labels & ~ref_labels).sum()),
+        "reference_only": int((~fast_labels & ref_labels).sum()),
+        "fast_cpu_s": float(np.mean([f["cpu_s"] for f, _ in pairs])) if pairs else None,
+        "reference_cpu_s": float(np.mean([r["cpu_s"] for _, r in pairs])) if pairs else None,
+    }
+
+
+def print_table(summaries: list[dict], target: float) -> None:
+    header = (f"{'row':<20} {'n':>4} {'err':>3} {'fast ok':>7} {'ref ok':>6} {'agree':>6} "
+              f"{'wilson95':>13} {'f-only':>6} {'r-only':>6} {'cpu f':>6} {'cpu r':>6} "
+              f">={target:.2f}")
+    print(header)
+    print("-" * len(header))
+    for s in summaries:
+        if not s["trials"]:
+            print(f"{s['row']:<20} {0:>4} {s['errors']:>3}  (no comparable trials)")
+            continue
+        low, high = s["wilson95"]
+        print(f"{s['row']:<20} {s['trials']:>4} {s['errors']:>3} {s['fast_success']:>7.2f} "
+              f"{s['reference_success']:>6.2f} {s['agreement']:>6.3f} "
+              f"{low:>6.3f}-{high:<6.3f} {s['fast_only']:>6} {s['reference_only']:>6} "
+              f"{s['fast_cpu_s']:>6.2f} {s['reference_cpu_s']:>6.2f} "
+              f"{'yes' if s['agreement'] >= target else 'no'}")
+
+
+def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    names = [row.name for row in ROWS]
+    parser.add_argument("--rows", nargs="+", choices=names, default=names, metavar="ROW",
+                        help=f"comparisons to run (default all): {', '.join(names)}")
+    parser.add_argument("--trials", type=int, default=200, help="inputs per row")
+    parser.add_argument("--seed", type=int, default=0, help="seeds the inputs and trials")
+    parser.add_argument("--target", type=float, default=0.95, help="agreement to reach")
+    parser.add_argument("--cache", type=Path, default=RESULTS_DIR / "fidelity_trials.jsonl")
+    parser.add_argument("--out", type=Path, default=RESULTS_DIR / "fidelity.json")
+    parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    args = parser.parse_args(argv)
+    if args.trials < 1:
+        parser.error("--trials must be at least 1")
+    if not 0.0 < args.target <= 1.0:
+        parser.error("--target must be in (0, 1]")
+    return args
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    args.cache.parent.mkdir(parents=True, exist_ok=True)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    cache = load_cache(args.cache)
+    by_name = {row.name: row for row in ROWS}
+    chosen = [by_name[name] for name in dict.fromkeys(args.rows)]  # in the order given
+    summaries = [run_row(row, args.trials, args.seed, args.cache, cache, not args.quiet)
+                 for row in chosen]
+    print_table(summaries, args.target)
+    report = {"trials": args.trials, "seed": args.seed, "target": args.target,
+              "machine": platform.platform(), "rows": summaries}
+    partial = args.out.with_suffix(".json.tmp")
+    partial.write_text(json.dumps(report, indent=1))
+    partial.replace(args.out)
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

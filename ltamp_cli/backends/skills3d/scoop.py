@@ -1,0 +1,261 @@
+"""Scoop: drag a spoon through the beads in a bowl and lift a spoonful out.
+
+Frames: the bowl's base centre is the world origin; the scoop runs along the world ``y``
+axis. The spoon's frame has its head's base centre at the origin, the head opening ``+z``
+and the handle leaving towards ``+y``. While scooping the spoon is tilted by
+``SCOOP_TILT_RAD`` about ``x`` (opening facing the direction of motion, ``-y``, handle
+up); at the exit it is upright.
+
+Context (4, metres): bowl top diameter, bowl height, bowl base diameter, spoon length.
+
+Control (5):
+
+* ``start_y`` ∈ [0, 0.5], ``end_y`` ∈ [-0.5, 0], ``exit_y`` ∈ [-0.5, 0.5]: fractions of the
+  bowl diameter along ``y``;
+* ``scoop_z`` ∈ [-0.02, 0.02] m: height of the head's lowest point while dragging, relative to
+  ``SCOOP_CLEARANCE_M`` above the bowl's floor;
+* ``exit_z`` ∈ [0, 0.05] m: height of the upright head's bottom above the bowl's rim.
+
+Path: entry (above the start, 4 cm over the rim) → start → end → exit. Controls whose spoon
+path touches the bowl or the table are invalid and not simulated. Score: ``g(x; τ = 0.7)``
+with ``x`` = beads in the spoon's head at the end / the spoon's capacity.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ltamp_cli.backends.kitchenware_geometry import (
+    SpoonDims,
+    VesselDims,
+    spoon_geometry,
+    vessel_geometry,
+)
+from ltamp_cli.backends.protocol import ParamSpace, SkillSpec, TrialResult
+from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial
+from ltamp_cli.backends.pybullet.particles import BeadSpec
+from ltamp_cli.backends.pybullet.paths import PosePath, rotation_about_axis, timed_poses
+from ltamp_cli.backends.skills3d.common import (
+    BOWL_RGBA,
+    PathCheck,
+    SkillTrial,
+    batch_path_validity,
+    check_tool_path,
+    rejection,
+    sample_beads,
+    sample_material,
+)
+from ltamp_cli.backends.skills3d.physics import (
+    StepCallback,
+    TrialPhysics,
+    contained_mask,
+    count_lost,
+)
+from ltamp_cli.backends.skills3d.pour import (
+    BOWL_BASE_RATIO,
+    NOMINAL_BOWL,
+    SCALE_RANGE,
+)
+from ltamp_cli.backends.skills3d.scoring import piecewise_linear_score
+
+SCOOP_TAU = 0.7
+SCOOP_TILT_RAD = math.radians(60.0)
+SCOOP_CLEARANCE_M = 0.02
+ENTRY_HEIGHT_M = 0.04
+PACKING_FRACTION = 0.5
+SPOON_LENGTH_RANGE = (0.16, 0.24)
+#: Nominal bead radius (m) used for the spoon's capacity, so that the capacity depends on
+#: the context only and not on the trial's latent bead size.
+NOMINAL_BEAD_RADIUS_M = 0.006
+
+SCOOP_CONTEXT = ParamSpace(
+    names=("bowl_diameter", "bowl_height", "bowl_base_diameter", "spoon_length"),
+    lows=(0.16, 0.064, 0.08, SPOON_LENGTH_RANGE[0]),
+    highs=(0.25, 0.10, 0.1875, SPOON_LENGTH_RANGE[1]),
+)
+SCOOP_CONTROL = ParamSpace(
+    names=("start_y", "end_y", "exit_y", "scoop_z", "exit_z"),
+    lows=(0.0, -0.5, -0.5, -0.02, 0.0),
+    highs=(0.5, 0.0, 0.5, 0.02, 0.05),
+)
+SCOOP_SPEC = SkillSpec(
+    name="scoop",
+    context=SCOOP_CONTEXT,
+    control=SCOOP_CONTROL,
+    description="drag a spoon through beads in a bowl and lift a spoonful (Kitchen3D)",
+)
+
+
+@dataclass(frozen=True)
+class ScoopSettings:
+    """Timing: settle/hold in seconds, spoon speed m/s and turn rate rad/s; bead count."""
+
+    settle_s: float = 0.5
+    hold_s: float = 0.3
+    speed: float = 0.15
+    angular_speed: float = 1.5
+    bead_count_mean: float = 250.0
+
+
+@dataclass(frozen=True)
+class ScoopContext:
+    """The bowl and the spoon of one scoop context."""
+
+    bowl: VesselDims
+    spoon: SpoonDims
+
+    @staticmethod
+    def from_array(context: np.ndarray) -> ScoopContext:
+        c = np.asarray(context, dtype=float).reshape(-1)
+        if c.shape != (4,):
+            raise ValueError(f"a scoop context has 4 values, got {c.shape[0]}")
+        return ScoopContext(
+            VesselDims(base_diameter=c[2], top_diameter=c[0], height=c[1]), SpoonDims(c[3])
+        )
+
+    def to_array(self) -> np.ndarray:
+        b = self.bowl
+        return np.array([b.top_diameter, b.height, b.base_diameter, self.spoon.length])
+
+
+def sample_scoop_context(rng: np.random.Generator) -> np.ndarray:
+    """A randomly scaled bowl and a spoon length, shape ``(4,)``."""
+    bowl = NOMINAL_BOWL.scaled(rng.uniform(*SCALE_RANGE), rng.uniform(*SCALE_RANGE))
+    base = bowl.top_diameter * rng.uniform(*BOWL_BASE_RATIO)
+    bowl = VesselDims(base, bowl.top_diameter, bowl.height)
+    return ScoopContext(bowl, SpoonDims(rng.uniform(*SPOON_LENGTH_RANGE))).to_array()
+
+
+def spoon_capacity(spoon: SpoonDims, bead_radius: float = NOMINAL_BEAD_RADIUS_M) -> int:
+    """Beads a level spoonful holds: packed cavity volume over one bead's volume."""
+    bead_volume = 4.0 / 3.0 * math.pi * bead_radius**3
+    return max(1, math.floor(PACKING_FRACTION * spoon.head().cavity_volume() / bead_volume))
+
+
+def scoop_path(context: ScoopContext, control: np.ndarray) -> PosePath:
+    """Spoon poses (object frame origin) at entry, start, end and exit, shape ``(4, ·)``."""
+    start_y, end_y, exit_y, scoop_z, exit_z = np.asarray(control, dtype=float)
+    bowl = context.bowl
+    tilted = rotation_about_axis("x", SCOOP_TILT_RAD)
+    upright = rotation_about_axis("x", 0.0)
+    head = spoon_geometry(context.spoon)
+    head_points = np.concatenate(head.pieces[:-1])  # all but the handle
+    c, s = math.cos(SCOOP_TILT_RAD), math.sin(SCOOP_TILT_RAD)
+    lowest_tilted = float((head_points[:, 1] * s + head_points[:, 2] * c).min())
+    drag_z = bowl.thickness + SCOOP_CLEARANCE_M + scoop_z - lowest_tilted
+    entry_z = bowl.height + ENTRY_HEIGHT_M - lowest_tilted
+    d = bowl.top_diameter
+    positions = np.array(
+        [
+            [0.0, start_y * d, entry_z],
+            [0.0, start_y * d, drag_z],
+            [0.0, end_y * d, drag_z],
+            [0.0, exit_y * d, bowl.height + exit_z],
+        ]
+    )
+    return PosePath(positions, np.stack([tilted, tilted, tilted, upright]))
+
+
+def check_scoop(context: np.ndarray, control: np.ndarray) -> PathCheck:
+    """The geometric pre-check of one control, with the reason when it fails."""
+    scene = ScoopContext.from_array(context)
+    control = np.asarray(control, dtype=float).reshape(5)
+    return check_tool_path(spoon_geometry(scene.spoon), scoop_path(scene, control), scene.bowl)
+
+
+def prepare_scoop(context: np.ndarray, control: np.ndarray, check: bool
+                  ) -> SkillTrial[ScoopContext]:
+    """Context ``(4,)`` and control ``(5,)`` parsed, the spoon's path and geometry, and (with
+    ``check``) the pre-check's rejection: the engine-independent start of a scoop trial."""
+    scene = ScoopContext.from_array(context)
+    control = np.asarray(control, dtype=float).reshape(5)
+    path = scoop_path(scene, control)
+    spoon = spoon_geometry(scene.spoon)
+    rejected = rejection(SCOOP_SPEC, check_tool_path(spoon, path, scene.bowl)) if check else None
+    return SkillTrial(scene, control, path, spoon, rejected)
+
+
+def scoop_outcome(scene: ScoopContext, total: int, in_bowl_start: int, in_spoon: int,
+                  lost: int, bead_radius: float, steps: int, dt: float) -> TrialResult:
+    """Score and ``info`` of a simulated scoop (shared with the SAPIEN scoop): ``total``
+    beads, ``in_bowl_start`` of them in the bowl after settling, ``in_spoon`` in the spoon's
+    head at the end, ``lost`` off the table; ``steps`` of ``dt`` s simulated."""
+    capacity = spoon_capacity(scene.spoon)
+    fraction = min(1.0, in_spoon / capacity)
+    info = {
+        "beads_total": total,
+        "beads_in_bowl_start": in_bowl_start,
+        "beads_in_spoon_end": in_spoon,
+        "beads_lost": lost,
+        "spoon_capacity": capacity,
+        "fraction_of_capacity": fraction,
+        "bead_radius_m": bead_radius,
+        "sim_steps": steps,
+        "sim_time_s": steps * dt,
+    }
+    return TrialResult(piecewise_linear_score(fraction, SCOOP_TAU), True, info)
+
+
+def scoop_is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
+    """Geometric pre-check for a batch ``controls (n, 5)``: bool ``(n,)``."""
+    scene = ScoopContext.from_array(context)
+    batch = np.asarray(controls, dtype=float).reshape(-1, 5)
+    return batch_path_validity(spoon_geometry(scene.spoon),
+                               (scoop_path(scene, c) for c in batch), scene.bowl)
+
+
+@dataclass(frozen=True)
+class ScoopLatents:
+    """Per-trial physical randomisation (drawn from the trial seed)."""
+
+    beads: BeadSpec
+    bowl_material: BodyMaterial
+    spoon_material: BodyMaterial
+
+
+def sample_scoop_latents(rng: np.random.Generator, settings: ScoopSettings) -> ScoopLatents:
+    beads = sample_beads(rng, settings.bead_count_mean, 20.0, 200.0, 300.0)
+    bowl = sample_material(rng, BOWL_RGBA)
+    spoon = sample_material(rng, (0.6, 0.6, 0.65, 1.0), mass=(0.05, 0.01, 0.02, 0.08))
+    return ScoopLatents(beads, bowl, spoon)
+
+
+def run_scoop(
+    physics: TrialPhysics,
+    context: np.ndarray,
+    control: np.ndarray,
+    seed: int,
+    settings: ScoopSettings | None = None,
+    on_step: StepCallback | None = None,
+    check: bool = True,
+) -> TrialResult:
+    """Simulate one scoop with ``physics`` (reset first); deterministic given ``seed``. The
+    bowl is fixed and filled; the spoon is a tool."""
+    settings = settings or ScoopSettings()
+    trial = prepare_scoop(context, control, check)
+    if trial.rejected is not None:
+        return trial.rejected
+    path = trial.path
+    rng = np.random.default_rng(seed)
+    latents = sample_scoop_latents(rng, settings)
+    physics.reset()
+    bowl = physics.add_body(vessel_geometry(trial.scene.bowl, "bowl"), latents.bowl_material,
+                            "fixed")
+    spoon = physics.add_body(trial.tool, latents.spoon_material, "tool",
+                             path.positions[0], path.quaternions[0])
+    beads = physics.spawn_beads_in(bowl, latents.beads, rng)
+    steps = physics.hold(spoon, path.positions[0], path.quaternions[0],
+                         physics.steps_for(settings.settle_s), on_step)
+    in_bowl_start = int(contained_mask(bowl, beads.positions()).sum())
+    dt = physics.time_step
+    timed = timed_poses(path, settings.speed, settings.angular_speed, dt)
+    steps += physics.follow(spoon, timed, on_step, steps)
+    steps += physics.hold(spoon, path.positions[-1], path.quaternions[-1],
+                          physics.steps_for(settings.hold_s), on_step, steps)
+    end = beads.positions()
+    return scoop_outcome(trial.scene, len(beads), in_bowl_start,
+                         int(contained_mask(spoon, end).sum()), count_lost(end),
+                         latents.beads.radius, steps, dt)

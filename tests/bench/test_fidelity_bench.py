@@ -1,0 +1,76 @@
+"""bench/fidelity.py: Wilson intervals, the agreement summary, and a small real row that
+resumes from its trial cache."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+from bench import fidelity
+
+
+def _wilson_by_formula(k: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z / (1 + z * z / n) * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    return centre - half, centre + half
+
+
+@pytest.mark.parametrize(("k", "n"), [(190, 200), (200, 200), (3, 7), (0, 5)])
+def test_wilson_interval_is_the_wilson_score_interval(k: int, n: int) -> None:
+    low, high = fidelity.wilson_interval(k, n)
+    expected = _wilson_by_formula(k, n)
+    assert low == pytest.approx(max(expected[0], 0.0), abs=1e-9)
+    assert high == pytest.approx(min(expected[1], 1.0), abs=1e-9)
+
+
+def _record(score: float | None, valid: bool = True, error: str | None = None) -> dict:
+    return {"score": score, "valid": valid, "error": error, "cpu_s": 0.5}
+
+
+def test_summary_counts_labels_disagreements_and_leaves_out_failed_trials() -> None:
+    row = fidelity.Row("r", "pour", "fast", "ref")
+    pairs = [
+        [_record(0.5), _record(0.2)],                 # both succeed
+        [_record(0.5), _record(-0.1)],                # fast only
+        [_record(-1.0), _record(0.3)],                # reference only
+        [_record(0.7, valid=False), _record(-0.2)],   # an invalid trial is a failure
+        [_record(0.4), _record(None, False, "500 particles do not fit")],  # left out
+    ]
+    summary = fidelity.summarise(row, pairs)
+    assert summary["trials"] == 4 and summary["errors"] == 1
+    assert summary["agreement"] == pytest.approx(2 / 4)
+    assert (summary["fast_only"], summary["reference_only"]) == (1, 1)
+    assert summary["fast_success"] == pytest.approx(2 / 4)
+    assert summary["reference_success"] == pytest.approx(2 / 4)
+    assert summary["wilson95"] == pytest.approx(list(fidelity.wilson_interval(2, 4)))
+
+
+def test_a_row_runs_real_trials_and_a_rerun_reuses_them(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    pytest.importorskip("sapien")
+    cache, out = tmp_path / "trials.jsonl", tmp_path / "fidelity.json"
+    args = ["--rows", "3d-push-engine", "--trials", "4", "--cache", str(cache),
+            "--out", str(out), "--quiet"]
+    assert fidelity.main(args) == 0
+    records = [json.loads(line) for line in cache.read_text().splitlines()]
+    assert len(records) == 8 and {r["setting"] for r in records} == {"pybullet", "sapien"}
+    by_input = {}
+    for record in records:
+        by_input.setdefault(record["seed"], {})[record["setting"]] = fidelity.is_success(record)
+    agreement = sum(p["pybullet"] == p["sapien"] for p in by_input.values()) / 4
+    first = json.loads(out.read_text())["rows"][0]
+    assert first["trials"] == 4 and first["agreement"] == pytest.approx(agreement)
+    assert "3d-push-engine" in capsys.readouterr().out
+
+    with cache.open("a") as torn:
+        torn.write('{"key": "half a li')  # a run stopped mid-write
+    assert fidelity.main(args) == 0
+    assert len(cache.read_text().splitlines()) == 9  # nothing was simulated again
+    assert json.loads(out.read_text())["rows"][0] == first
+    fidelity.append_record(cache, {"key": "next"})  # starts on a line of its own
+    assert set(fidelity.load_cache(cache)) == {r["key"] for r in records} | {"next"}
