@@ -49,3 +49,17 @@ def test_the_title_names_the_context_with_units_and_the_held_controls() -> None:
     assert "angle = " in flat and " rad" in flat and "duration = " in flat and " s" in flat
     assert "rx" not in flat.split("held at")[1]  # the drawn controls are not "held"
     assert max(len(line) for line in title.splitlines()) <= 72
+
+
+@pytest.mark.parametrize("backend_name", ["box2d", "pybullet"])
+def test_every_physical_skill_parameter_has_a_unit(backend_name: str) -> None:
+    # Plots label axes and titles with these; a skill added without them would plot bare names.
+    from ltamp_cli.backends import load_backend
+
+    backend = load_backend(backend_name)
+    try:
+        for name, spec in backend.skills().items():
+            for space in (spec.context, spec.control):
+                assert len(space.units) == len(space.names), (backend_name, name, space.names)
+    finally:
+        backend.close()

@@ -74,11 +74,13 @@ POUR_CONTEXT = ParamSpace(
     ),
     lows=(0.16, 0.064, 0.08, 0.064, 0.08, 0.0448),
     highs=(0.25, 0.10, 0.1875, 0.10, 0.125, 0.10),
+    units=("m",) * 6,
 )
 POUR_CONTROL = ParamSpace(
     names=("pitch", "cup_pivot_x", "cup_pivot_z", "bowl_pivot_x", "bowl_pivot_z"),
     lows=(-math.pi, -0.75, -0.75, -0.25, 0.0),
     highs=(-math.pi / 2, 0.75, 0.75, 0.75, 0.15),
+    units=("rad", "× cup diameter", "× cup height", "× bowl diameter", "m"),
 )
 POUR_SPEC = SkillSpec(
     name="pour",

@@ -67,11 +67,13 @@ PUSH_CONTEXT = ParamSpace(
     names=("block_size", "block_mass", "block_friction", "distance"),
     lows=(0.04, 0.1, 0.3, 0.05),
     highs=(0.08, 0.5, 0.8, 0.25),
+    units=("m", "kg", "", "m"),
 )
 PUSH_CONTROL = ParamSpace(
     names=("contact_height", "speed", "lateral_offset", "stop_offset"),
     lows=(0.05, 0.02, -0.5, -0.05),
     highs=(0.95, 0.4, 0.5, 0.05),
+    units=("× block side", "m/s", "× block side", "m"),
 )
 PUSH_SPEC = SkillSpec(
     name="push",

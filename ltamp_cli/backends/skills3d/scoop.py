@@ -75,11 +75,13 @@ SCOOP_CONTEXT = ParamSpace(
     names=("bowl_diameter", "bowl_height", "bowl_base_diameter", "spoon_length"),
     lows=(0.16, 0.064, 0.08, SPOON_LENGTH_RANGE[0]),
     highs=(0.25, 0.10, 0.1875, SPOON_LENGTH_RANGE[1]),
+    units=("m", "m", "m", "m"),
 )
 SCOOP_CONTROL = ParamSpace(
     names=("start_y", "end_y", "exit_y", "scoop_z", "exit_z"),
     lows=(0.0, -0.5, -0.5, -0.02, 0.0),
     highs=(0.5, 0.0, 0.5, 0.02, 0.05),
+    units=("× bowl diameter", "× bowl diameter", "× bowl diameter", "m", "m"),
 )
 SCOOP_SPEC = SkillSpec(
     name="scoop",

@@ -80,11 +80,13 @@ STIR_CONTEXT = ParamSpace(
     names=("cup_diameter", "cup_height", "cup_base_diameter"),
     lows=(0.064, 0.08, 0.0448),
     highs=(0.10, 0.125, 0.10),
+    units=("m", "m", "m"),
 )
 STIR_CONTROL = ParamSpace(
     names=("radius", "tip_height", "revolutions", "speed"),
     lows=(0.0, 0.005, 0.5, 0.02),
     highs=(0.05, 0.12, 3.0, 0.3),
+    units=("m", "m", "turns", "m/s"),
 )
 STIR_SPEC = SkillSpec(
     name="stir",
