@@ -27,8 +27,10 @@ def import_command(
     """Convert recorded trials of SKILL into the trial format, skipping ones already in --out.
 
     Columns: every context and control parameter (see `ltamp skills`), `score`, optional
-    `valid` and `seed`. A backend that defines `score_from_fraction(skill, fraction)` (none
-    of the built-in ones does) also accepts a measured `fraction` column instead of `score`.
+    `valid` and `seed`. Instead of `score`, pour and scoop trials may give the measured
+    `fraction` (particles in the target, spoon filled) and get the skill's score for it (the
+    box2d, pybullet and sapien backends; a plugin backend by defining
+    `score_from_fraction(skill, fraction)`).
     """
     from ltamp_cli.backends import load_backend
     from ltamp_cli.cli.conventions import emit

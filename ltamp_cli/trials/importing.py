@@ -190,7 +190,11 @@ def _score(
             f"field 'fraction': expected a value in [0, 1], got {fraction:g}",
             location_in(where[0], where[1], 1),
         )
-    return float(score_from_fraction(spec.name, fraction))
+    try:
+        return float(score_from_fraction(spec.name, fraction))
+    except ValueError as error:
+        raise InputError(f"field 'fraction': {error}; give a 'score' column instead",
+                         location_in(where[0], where[1], 1)) from None
 
 
 def parse_trials(

@@ -139,6 +139,52 @@ def test_fraction_uses_the_backends_score_function(synthetic, tmp_path):
     assert [r.score for r in records] == pytest.approx([0.3, -0.3])
 
 
+def _fraction_csv(path, spec, fractions) -> None:
+    names = [*spec.context.names, *spec.control.names]
+    middle = [(lo + hi) / 2 for lo, hi in zip((*spec.context.lows, *spec.control.lows),
+                                              (*spec.context.highs, *spec.control.highs),
+                                              strict=True)]
+    rows = [",".join(map(str, [*middle, f])) for f in fractions]
+    path.write_text(",".join([*names, "fraction"]) + "\n" + "\n".join(rows) + "\n")
+
+
+@pytest.mark.parametrize(("backend_name", "skill", "expected"), [
+    # 2D pour: exp(2(10x - 9.5)) - 1, > 0 iff x > 0.95; 2D scoop: x - 0.5.
+    ("box2d", "pour", [np.exp(2 * (10 * x - 9.5)) - 1 for x in (0.2, 0.95, 1.0)]),
+    ("box2d", "scoop", [-0.3, 0.45, 0.5]),
+    # 3D: piecewise linear with tau 0.9 (pour) and 0.7 (scoop).
+    ("pybullet", "pour", [0.2 / 0.9 - 1, 0.05 / 0.1, 1.0]),
+    ("pybullet", "scoop", [0.2 / 0.7 - 1, 0.25 / 0.3, 1.0]),
+])
+def test_built_in_backends_score_measured_fractions(capsys, tmp_path, backend_name, skill,
+                                                    expected):
+    backend = load_backend(backend_name)
+    try:
+        spec = backend.skills()[skill]
+    finally:
+        backend.close()
+    _fraction_csv(tmp_path / "r.csv", spec, (0.2, 0.95, 1.0))
+    code, _, err = run(capsys, "import", str(tmp_path / "r.csv"), "--skill", skill,
+                       "--backend", backend_name, "--out", str(tmp_path / "t.jsonl"))
+    assert code == 0, err
+    scores = [r.score for r in TrialDataset(tmp_path / "t.jsonl").read()]
+    assert scores == pytest.approx(expected)
+
+
+def test_a_fraction_for_a_skill_not_scored_by_one_is_one_line(capsys, tmp_path):
+    backend = load_backend("box2d")
+    try:
+        spec = backend.skills()["push"]
+    finally:
+        backend.close()
+    _fraction_csv(tmp_path / "r.csv", spec, (0.5,))
+    code, out, err = run(capsys, "import", str(tmp_path / "r.csv"), "--skill", "push",
+                         "--backend", "box2d", "--out", str(tmp_path / "t.jsonl"))
+    assert code == 2 and out == ""
+    assert err.strip().count("\n") == 0
+    assert "r.csv:2:1" in err and "not scored from a measured fraction" in err
+
+
 def test_train_data_learns_from_imported_trials(capsys, synthetic, tmp_path):
     from ltamp_cli.learning.metrics import SkillEvaluator
     from ltamp_cli.learning.model_dir import load_model

@@ -59,6 +59,16 @@ class Kitchen2DBackend:
         """Uniform over the paper's context ranges, shape ``(d_context,)``."""
         return skill_spec(self, skill).context.sample_uniform(rng, 1)[0]
 
+    def score_from_fraction(self, skill: str, fraction: float) -> float:
+        """The score of a trial whose measured fraction (particles that reached the target
+        cup for ``pour``, spoon capacity filled for ``scoop``) is ``fraction`` in ``[0, 1]``:
+        recorded trials imported with a ``fraction`` column get the score simulated ones
+        would. ``ValueError`` for a skill not scored from a fraction (push)."""
+        scores = {"pour": pour.score, "scoop": scoop.score}
+        if skill not in scores:
+            raise ValueError(f"skill {skill!r} is not scored from a measured fraction")
+        return float(scores[skill](fraction))
+
     def is_valid(self, skill: str, context: np.ndarray, controls: np.ndarray) -> np.ndarray:
         module, config = self._skill(skill)
         spec = module.SPEC

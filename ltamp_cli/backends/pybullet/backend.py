@@ -47,7 +47,11 @@ from ltamp_cli.backends.skills3d.stir import (
     sample_stir_context,
     stir_is_valid,
 )
-from ltamp_cli.backends.skills3d.trials import SkillSettings, run_skill_trial
+from ltamp_cli.backends.skills3d.trials import (
+    SkillSettings,
+    run_skill_trial,
+    score_from_fraction,
+)
 
 _SPECS: Mapping[str, SkillSpec] = MappingProxyType(
     {"pour": POUR_SPEC, "scoop": SCOOP_SPEC, "push": PUSH_SPEC, "stir": STIR_SPEC}
@@ -123,6 +127,11 @@ class Kitchen3DBackend:
 
     def skills(self) -> Mapping[str, SkillSpec]:
         return _SPECS
+
+    def score_from_fraction(self, skill: str, fraction: float) -> float:
+        """The score of a pour or scoop trial whose measured fraction is ``fraction`` (for
+        recorded trials imported with a ``fraction`` column)."""
+        return score_from_fraction(skill, fraction)
 
     def _spec(self, skill: str) -> SkillSpec:
         if skill not in _SPECS:

@@ -30,7 +30,11 @@ from ltamp_cli.backends.skills3d.pour import PourSettings
 from ltamp_cli.backends.skills3d.push import PushSettings
 from ltamp_cli.backends.skills3d.scoop import ScoopSettings
 from ltamp_cli.backends.skills3d.stir import StirSettings
-from ltamp_cli.backends.skills3d.trials import SkillSettings, run_skill_trial
+from ltamp_cli.backends.skills3d.trials import (
+    SkillSettings,
+    run_skill_trial,
+    score_from_fraction,
+)
 
 
 class SapienKitchen3DBackend:
@@ -82,6 +86,11 @@ class SapienKitchen3DBackend:
 
     def skills(self) -> Mapping[str, SkillSpec]:
         return self._kinematics.skills()
+
+    def score_from_fraction(self, skill: str, fraction: float) -> float:
+        """The score of a pour or scoop trial whose measured fraction is ``fraction`` (for
+        recorded trials imported with a ``fraction`` column)."""
+        return score_from_fraction(skill, fraction)
 
     def _spec(self, skill: str) -> SkillSpec:
         specs = self.skills()

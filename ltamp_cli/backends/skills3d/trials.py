@@ -8,12 +8,25 @@ import numpy as np
 
 from ltamp_cli.backends.protocol import TrialResult
 from ltamp_cli.backends.skills3d.physics import StepCallback, TrialPhysics
-from ltamp_cli.backends.skills3d.pour import PourSettings, run_pour
+from ltamp_cli.backends.skills3d.pour import POUR_TAU, PourSettings, run_pour
 from ltamp_cli.backends.skills3d.push import PushSettings, run_push
-from ltamp_cli.backends.skills3d.scoop import ScoopSettings, run_scoop
+from ltamp_cli.backends.skills3d.scoop import SCOOP_TAU, ScoopSettings, run_scoop
+from ltamp_cli.backends.skills3d.scoring import piecewise_linear_score
 from ltamp_cli.backends.skills3d.stir import StirSettings, run_stir
 
 SkillSettings = PourSettings | ScoopSettings | PushSettings | StirSettings
+
+
+#: Skills scored from a measured fraction (beads in the bowl, spoon filled) and their τ.
+FRACTION_TAUS = {"pour": POUR_TAU, "scoop": SCOOP_TAU}
+
+
+def score_from_fraction(skill: str, fraction: float) -> float:
+    """The score of a ``skill`` trial whose measured fraction is ``fraction`` in ``[0, 1]``
+    (what a simulated trial would score); ``ValueError`` for a skill not scored from one."""
+    if skill not in FRACTION_TAUS:
+        raise ValueError(f"skill {skill!r} is not scored from a measured fraction")
+    return float(piecewise_linear_score(fraction, FRACTION_TAUS[skill]))
 
 
 def run_skill_trial(
