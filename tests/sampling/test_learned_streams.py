@@ -71,12 +71,16 @@ def test_learned_kernel_persists_across_tasks(repo_root, tmp_path, synthetic,
                                               goodregion_model) -> None:
     path = _problem_with_model(repo_root, tmp_path, goodregion_model, "diverse-lk")
     updates = []
-    for seed in range(2):
+    for seed in range(4):
         result = solve(load_problem(path), PlannerConfig(max_time=60, seed=seed))
         assert result.status == "solved"
         updates.append(load_kernel(tmp_path / "kernel.json",
                                    synthetic.skills()["moving2d"]).updates)
-    assert 1 <= updates[0] < updates[1]
+    # Each solve starts from the kernel the earlier ones left and adds its own feedback (a
+    # solve may report no unusable sample): the count never drops and grows past the
+    # first solve's. A kernel learned afresh per solve would restart from zero.
+    assert 1 <= updates[0] < updates[-1]
+    assert updates == sorted(updates)
 
 
 def test_unreachable_region_is_not_solved(repo_root, tmp_path, goodregion_model) -> None:
