@@ -21,6 +21,7 @@ from ltamp_cli.planner.pddl.syntax import (
 )
 from ltamp_cli.planner.search.clock import NO_DEADLINE, check_deadline
 from ltamp_cli.planner.search.normalize import (
+    GOAL_PREDICATE,
     Clause,
     LiftedLiteral,
     NormalAction,
@@ -32,6 +33,7 @@ Fact = tuple[str, ...]  # (predicate, *args)
 # are exactly the given facts (what a :fluents stream was called with).
 Context = tuple[tuple[str, ...], tuple[Fact, ...]]
 OBJECT_TYPE_PREDICATE = f"type:{OBJECT_TYPE}"
+HEAD_POSITION = -1  # key of a rule's join that starts from its head's arguments
 
 
 @dataclass(frozen=True)
@@ -385,6 +387,13 @@ def ground_task(
         index.add(fact)
     rules = [_make_rule(a, a.precondition) for a in actions]
     rules += [_make_rule(a, a.body) for a in axioms]
+    on_demand = _negative_only_predicates(actions, axioms)
+    demanded: dict[str, list[_Rule]] = defaultdict(list)
+    for rule in rules:
+        if isinstance(rule.source, NormalAxiom) and rule.source.predicate in on_demand:
+            demanded[rule.source.predicate].append(rule)
+    rules = [rule for rule in rules if not (isinstance(rule.source, NormalAxiom)
+                                            and rule.source.predicate in on_demand)]
     by_predicate: dict[str, list[tuple[_Rule, int]]] = defaultdict(list)
     for rule in rules:
         for position, literal in enumerate(rule.positive):
@@ -420,6 +429,8 @@ def ground_task(
                 for binding in _run_join(steps, index, start):
                     _emit(rule, binding, index, init_facts, fluent, function_values, seen,
                           result, delta)
+    _ground_on_demand(demanded, index, init_facts, fluent, function_values, seen, result,
+                      deadline)
     result.static_predicates = frozenset(
         {fact[0] for fact in index.members} - fluent
     )
@@ -428,6 +439,71 @@ def ground_task(
     result.actions.sort(key=lambda a: (a.name, a.args, a.pre_pos, a.pre_neg, a.static_pre))
     result.axioms.sort(key=lambda a: (a.head, a.body_pos, a.body_neg, a.static_pos))
     return result
+
+
+def _negative_only_predicates(actions: Sequence[NormalAction], axioms: Sequence[NormalAxiom]
+                              ) -> frozenset[str]:
+    """Derived predicates that no rule body, effect condition or goal uses positively.
+
+    Reachability never depends on them (negative literals do not constrain it), so their
+    axioms are grounded last and only for the instances that grounded rules negate: the
+    ``not aux(?b ?p)`` of a ``forall`` precondition then costs one axiom instance per
+    grounded action instead of one per pair of objects (thousands of optimistic objects
+    in TAMP). The search never reads the other instances.
+    """
+    derived = {axiom.predicate for axiom in axioms} - {GOAL_PREDICATE}
+    used_positively = {lit.predicate for axiom in axioms for lit in axiom.body if lit.positive}
+    for action in actions:
+        used_positively.update(lit.predicate for lit in action.precondition if lit.positive)
+        used_positively.update(lit.predicate for effect in action.effects
+                               for lit in effect.condition if lit.positive)
+    return frozenset(derived - used_positively)
+
+
+def _negated_facts(result: Grounding, start: tuple[int, int], predicates: frozenset[str]
+                   ) -> Iterator[Fact]:
+    """Negated facts of ``predicates`` in the actions and axioms grounded since ``start``
+    (counts of actions, axioms)."""
+    for action in result.actions[start[0]:]:
+        yield from (fact for fact in action.pre_neg if fact[0] in predicates)
+        for effect in action.effects:
+            yield from (fact for fact in effect.condition_neg if fact[0] in predicates)
+    for axiom in result.axioms[start[1]:]:
+        yield from (fact for fact in axiom.body_neg if fact[0] in predicates)
+
+
+def _ground_on_demand(demanded: Mapping[str, list[_Rule]], index: FactIndex, init: set[Fact],
+                      fluent: frozenset[str], function_values: Mapping[Fact, float],
+                      seen: set[tuple[int, tuple[str, ...]]], result: Grounding,
+                      deadline: float) -> None:
+    """Ground the rules of negative-only derived predicates for the heads that grounded
+    rules negate, until no new head is needed (their own bodies may negate others)."""
+    if not demanded:
+        return
+    predicates = frozenset(demanded)
+    done: set[Fact] = set()
+    start = (0, 0)
+    while True:
+        needed = [fact for fact in dict.fromkeys(_negated_facts(result, start, predicates))
+                  if fact not in done]
+        start = (len(result.actions), len(result.axioms))
+        if not needed:
+            return
+        for fact in needed:
+            done.add(fact)
+            check_deadline(deadline)
+            for rule in demanded[fact[0]]:
+                head = LiftedLiteral(fact[0], rule.source.head_args)  # type: ignore[union-attr]
+                binding = _match(head, fact[1:])
+                if binding is None:
+                    continue
+                steps = rule.joins.get(HEAD_POSITION)
+                if steps is None:
+                    steps = _compile_join(rule.positive, set(binding), index)
+                    rule.joins[HEAD_POSITION] = steps
+                for extended in _run_join(steps, index, binding):
+                    _emit(rule, extended, index, init, fluent, function_values, seen, result,
+                          [])
 
 
 @dataclass
