@@ -12,7 +12,8 @@ installed here (pybullet, tkinter viewers, ...) or PDDLStream internals outside 
 API are reported as not loaded, with the reason.
 
     .venv/bin/python bench/pddlstream_examples.py PATH/TO/pddlstream [--max-time 60]
-        [--only continuous_tamp,advanced/wild] [--out bench/results/pddlstream_examples.json]
+        [--only continuous_tamp,advanced/wild] [--example-args '-n 4 -p blocked']
+        [--out bench/results/pddlstream_examples.json]
 
 Without a checkout at PATH it prints why and exits 0 (never part of the tests or CI).
 """
@@ -178,15 +179,16 @@ def module_name(checkout: Path, path: Path) -> str:
     return ".".join(path.relative_to(checkout).with_suffix("").parts)
 
 
-def run_example(checkout: Path, path: Path, recorder: Recorder) -> dict[str, Any]:
-    """Import the example from the checkout and run its ``main()``; summarise its first
-    ``solve``."""
+def run_example(checkout: Path, path: Path, recorder: Recorder,
+                example_args: Sequence[str] = ()) -> dict[str, Any]:
+    """Import the example from the checkout and run its ``main()`` with ``example_args`` as
+    its command line; summarise its first ``solve``."""
     name = module_name(checkout, path)
     row: dict[str, Any] = {"example": str(path.relative_to(checkout / "examples")),
                            "loaded": False, "solved": False}
     recorder.runs = []
     saved_argv = sys.argv
-    sys.argv = [str(path)]
+    sys.argv = [str(path), *example_args]
     output = io.StringIO()
     try:
         with contextlib.redirect_stdout(output):
@@ -217,6 +219,8 @@ def main() -> int:
     parser.add_argument("checkout", type=Path, help="a PDDLStream checkout (git clone)")
     parser.add_argument("--max-time", type=float, default=60.0)
     parser.add_argument("--only", default="", help="comma-separated example paths (prefixes)")
+    parser.add_argument("--example-args", default="",
+                        help="command line given to every example, e.g. '-n 4 -p blocked'")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
     args = parser.parse_args()
     checkout = args.checkout.resolve()
@@ -235,7 +239,7 @@ def main() -> int:
         if only and not any(relative.startswith(prefix) for prefix in only):
             continue
         redirect.unsupported.clear()
-        rows.append(run_example(checkout, path, recorder))
+        rows.append(run_example(checkout, path, recorder, args.example_args.split()))
         row = rows[-1]
         row["unsupported_names"] = sorted(redirect.unsupported)
         print(f"{row['example']:<40} loaded={row['loaded']!s:<5} solved={row['solved']!s:<5} "
