@@ -75,8 +75,9 @@ class PlannerConfig:
     most this or time runs out (``inf``: return the first plan). ``skeleton``: action
     patterns the plan must follow (see :mod:`ltamp_cli.planner.search.skeleton`).
     ``statistics_dir``: where per-domain stream statistics persist across runs (``None``:
-    nowhere). ``eager_cheap_streams``: also evaluate eagerly every stream that earlier calls
-    (persisted or in this run) showed to be cheap (:func:`.effort.observed_cheap`); worth it
+    nowhere). Test streams that earlier calls (persisted or in this run) showed to be cheap
+    (:func:`.effort.observed_cheap`) are always evaluated eagerly; ``eager_cheap_streams``:
+    so is every other stream observed to be cheap; worth it
     for cheap finite samplers (discrete slots), not for continuous samplers that feed
     quadratic eager streams such as motions between all configurations.
     """
@@ -200,14 +201,20 @@ class PlannerState:
                                self.stream_stats.get(name))
 
     def eager(self, name: str) -> bool:
-        """Declared eager or, with ``config.eager_cheap_streams``, observed cheap (not for
-        :fluents streams, whose calls need a state)."""
+        """Declared eager, or observed cheap (not for :fluents streams, whose calls need a
+        state): with ``config.eager_cheap_streams`` any stream, else test streams only.
+
+        A cheap test left optimistic over real values costs a search per value it rejects:
+        on PDDLStream's continuous_tamp (tight), every search planned with one untested pair
+        of sampled poses, whose collision test then failed (one search, 0.1-0.4 s, per
+        rejected pair, until the time ran out); testing every pair costs microseconds."""
         if self.bindings[name].info.eager:
             return True
-        if not self.config.eager_cheap_streams:
-            return False
         external = self.externals[name]
         if isinstance(external, Stream) and external.fluents:
+            return False
+        if not self.config.eager_cheap_streams and not (
+                isinstance(external, Stream) and not external.outputs):
             return False
         return observed_cheap(self.history.get(name), self.stream_stats.get(name))
 
