@@ -244,3 +244,22 @@ def test_fluent_certificates_are_not_reused_in_other_states(make_problem) -> Non
                                 fluent_requirements={("motion", "q0", "t", "q1"):
                                                      [(("atpose",), ())]})
     assert [a.name for a in needs_clear.actions] == ["clear", "move"]
+
+
+def test_fluent_stream_facts_hold_only_in_their_context(make_problem) -> None:  # type: ignore[no-untyped-def]
+    # A :fluents stream's certificate must carry its context alone: it was also recorded as
+    # certified unconditionally, so a motion planned with the hand empty was used while
+    # carrying (kitchen_fluent, once more poses were sampled).
+    from ltamp_cli.planner.algorithms.common import initial_state
+
+    path = make_problem(FLUENT_DOMAIN,
+                        "domain: dom\nbindings: bindings.py\n"
+                        "objects: {q0: 0, q1: 10, b: null, pb: 5}\n"
+                        "init: [\"(Conf q0)\", \"(Conf q1)\", \"(AtConf q0)\", \"(Block b)\"]\n"
+                        "goal: (AtConf q1)\n",
+                        FLUENT_STREAMS, FLUENT_BINDINGS)
+    state = initial_state(load_problem(path), PlannerConfig(algorithm="adaptive"))
+    instance = state.instance("plan-motion", ("q0", "q1"), ())
+    assert state.call(instance)
+    [motion] = [fact for fact in state.facts.members if fact[0] == "motion"]
+    assert state.fluent_requirements[motion] == [(("atpose",), ())]

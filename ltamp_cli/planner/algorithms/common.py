@@ -295,9 +295,10 @@ class PlannerState:
             for fact in facts:
                 added = self.add_fact(fact, result)
                 if isinstance(instance.external, Stream) and instance.external.fluents:
+                    # Holds only in states with the facts the stream was called under.
                     self.fluent_requirements.setdefault(fact, []).append(
                         (instance.external.fluents, instance.fluent_facts))
-                if exogenous is not None and (added or fact in self.fluent_requirements):
+                elif exogenous is not None and (added or fact in self.fluent_requirements):
                     self.fluent_requirements.setdefault(fact, []).append(exogenous)
                 elif exogenous is None and fact in self.fluent_requirements:
                     # Also certified unconditionally now: it holds in every state.
