@@ -214,7 +214,7 @@ class PlannerState:
         if isinstance(external, Stream) and external.fluents:
             return False
         if not self.config.eager_cheap_streams and not (
-                isinstance(external, Stream) and external.is_test):
+                isinstance(external, Stream) and not external.outputs):
             return False
         return observed_cheap(self.history.get(name), self.stream_stats.get(name))
 

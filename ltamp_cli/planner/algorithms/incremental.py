@@ -8,8 +8,6 @@ iteration).
 
 from __future__ import annotations
 
-from collections.abc import Collection
-
 from ltamp_cli.planner.algorithms.common import PlannerState
 from ltamp_cli.planner.algorithms.optimistic import evaluate_eager
 from ltamp_cli.planner.algorithms.preimage import plan_preimage
@@ -48,24 +46,20 @@ def solve_incremental(state: PlannerState) -> PlanResult:
         return state.result(TIMEOUT, None)
 
 
-def sample_all(state: PlannerState, only: Collection[str] | None = None,
-               purpose: str = "incremental") -> bool:
-    """Create every new legal instance, then call each non-exhausted one once; with
-    ``only``, of those externals alone (``purpose`` keeps their enumeration apart)."""
+def sample_all(state: PlannerState) -> bool:
+    """Create every new legal instance, then call each non-exhausted one once."""
     # Streams with :fluents see the initial state here (incremental plans are not
     # interleaved with sampling, so no later state is known when they are called).
     initial = [(atom.predicate, *atom.args) for atom in state.problem.init]
     for external in state.externals.values():
-        if only is not None and external.name not in only:
-            continue
         context = state.fluent_context(external.name, initial)
-        for inputs in state.new_bindings(external, purpose):
+        for inputs in state.new_bindings(external, "incremental"):
             state.instance(external.name, inputs, context)
     before = _sizes(state)
     for instance in list(state.instances.values()):
         if state.timed_out():
             break
-        if not instance.exhausted and (only is None or instance.name in only):
+        if not instance.exhausted:
             state.call(instance)
     return _sizes(state) != before
 

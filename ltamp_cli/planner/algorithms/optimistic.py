@@ -239,9 +239,8 @@ def report_unusable(state: PlannerState, consumed: tuple[str, ...],
 
 
 def probe_unmeasured(state: PlannerState) -> None:
-    """Call once each stream that neither the history nor this run has measured, on its
-    first real input (with ``eager_cheap_streams``, and before adaptive's incremental
-    rounds): one call decides whether it is cheap enough
+    """With ``eager_cheap_streams``, call once each stream that neither the history nor this
+    run has measured, on its first real input: one call decides whether it is cheap enough
     to be eager (:func:`.effort.observed_cheap`) before the first search rather than after a
     search that treated it optimistically (cold kitchen_symbolic: 4 searches -> 1, median
     CPU ~0.19 -> ~0.05 s, as with a warm history). The call's outputs are kept like any

@@ -29,7 +29,6 @@ from dataclasses import dataclass, field
 
 from ltamp_cli.planner.algorithms.common import PlannerState, bound_plan
 from ltamp_cli.planner.algorithms.effort import observed_cheap
-from ltamp_cli.planner.algorithms.incremental import sample_all
 from ltamp_cli.planner.algorithms.optimistic import (
     MAX_LOCAL_REPAIRS,
     InstanceKey,
@@ -365,15 +364,20 @@ class IncrementalShare:
 
 def sample_cheap(state: PlannerState) -> None:
     """One incremental round restricted to the externals (streams, predicates, functions;
-    not :fluents streams) that calls so far showed to be cheap (one never called yet is
-    probed once first, to measure it)."""
+    not :fluents streams) that calls so far showed to be cheap: each of their instances
+    over the real facts is called once (one never called yet is probed once first)."""
     probe_unmeasured(state)
-    cheap = {name for name, external in state.externals.items()
+    cheap = [name for name, external in state.externals.items()
              if not (isinstance(external, Stream) and external.fluents)
-             and observed_cheap(state.history.get(name), state.stream_stats.get(name))}
-    sample_all(state, only=cheap, purpose="cheap-round")
-    if state.timed_out():
-        raise SearchTimeout
+             and observed_cheap(state.history.get(name), state.stream_stats.get(name))]
+    for name in cheap:
+        for inputs in state.new_bindings(state.externals[name], "cheap-round"):
+            state.instance(name, inputs)
+    for instance in list(state.instances.values()):
+        if state.timed_out():
+            raise SearchTimeout
+        if instance.name in cheap and not instance.exhausted:
+            state.call(instance)
 
 
 def cheap_step(state: PlannerState, binding: Binding) -> bool:
