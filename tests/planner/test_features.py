@@ -263,27 +263,3 @@ def test_fluent_stream_facts_hold_only_in_their_context(make_problem) -> None:  
     assert state.call(instance)
     [motion] = [fact for fact in state.facts.members if fact[0] == "motion"]
     assert state.fluent_requirements[motion] == [(("atpose",), ())]
-
-
-def test_incremental_rounds_of_adaptive_find_a_valid_plan(make_problem) -> None:  # type: ignore[no-untyped-def]
-    # Adaptive's interleaved incremental rounds (after INCREMENTAL_AFTER_S of CPU) call the
-    # cheap streams breadth-first and search the real task: here a few rounds reach p >= 4.
-    from ltamp_cli.planner.algorithms.common import initial_state
-    from ltamp_cli.planner.algorithms.optimistic import evaluate_eager
-    from ltamp_cli.planner.algorithms.skeletons import IncrementalShare
-
-    problem = feedback_problem(make_problem)
-    state = initial_state(problem, PlannerConfig(algorithm="adaptive", max_time=30))
-    share = IncrementalShare()
-    assert not share.due(state)  # a solve that just started has no rounds
-    evaluate_eager(state)
-    for instance in list(state.instances.values()):
-        state.call(instance)  # measured: the round only calls streams observed cheap
-    result = None
-    for _ in range(10):
-        result = share.round(state)
-        if result is not None:
-            break
-    assert result is not None and result.solved
-    assert validate_plan(problem, result).valid
-    assert share.seconds > 0

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import heapq
 import itertools
-import time
 from dataclasses import dataclass, field
 
 from ltamp_cli.planner.algorithms.common import PlannerState, bound_plan
@@ -36,7 +35,6 @@ from ltamp_cli.planner.algorithms.optimistic import (
     evaluate_eager,
     fluent_contexts,
     optimistic_evaluation,
-    probe_unmeasured,
     repairable,
     report_unusable,
     sampled_inputs,
@@ -80,17 +78,6 @@ SPECULATIVE_MIN_EXPANSIONS = 100
 # tamp2d_blocked with a first search budget of one expansion: 3 -> 2 took 7 -> 3 s CPU;
 # 1 slowed tamp2d_uniform_tight_4 (6 seeds, median CPU 0.066 -> 0.096 s).
 MAX_SPECULATIVE_IN_A_ROW = 2
-
-
-# Adaptive gives the incremental algorithm's breadth a share of its time once a solve has
-# run this long (CPU seconds of the solving thread): a round calls every instance of the
-# streams observed to be cheap once over the real facts and searches the real task.
-# Optimistic plans can be short-sighted for good: on PDDLStream's rmmp example (modes made
-# by streams) every optimistic plan ends in a mode where the goal test fails, and adaptive
-# timed out at 30 s where the incremental algorithm plans in 0.2 s. Solves that end
-# sooner are unchanged.
-INCREMENTAL_AFTER_S = 2.0
-INCREMENTAL_SHARE = 0.25
 
 
 @dataclass(frozen=True)
@@ -228,15 +215,10 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
     capped_task: frozenset[object] | None = None
     sampling = SamplingRound()
     speculative_in_a_row = 0
-    incremental = IncrementalShare()
     try:
         while not state.timed_out():
             state.iterations += 1
             evaluate_eager(state)
-            if adaptive and incremental.due(state):
-                result = incremental.round(state)
-                if result is not None:
-                    return result
             head = queue.peek()
             stalled = (head is None
                        or head.attempts > retry_limit(state, head, retry_threshold, adaptive)
@@ -329,55 +311,6 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
         return state.result(TIMEOUT, None)
     except SearchTimeout:
         return state.result(TIMEOUT, None)
-
-
-@dataclass
-class IncrementalShare:
-    """The incremental rounds that adaptive interleaves (see :data:`INCREMENTAL_SHARE`)."""
-
-    seconds: float = 0.0  # CPU seconds spent in rounds so far
-    # CPU seconds of the solving thread: machine load must not bring rounds into solves
-    # that end quickly.
-    start: float = field(default_factory=time.thread_time)
-
-    def due(self, state: PlannerState) -> bool:
-        elapsed = time.thread_time() - self.start
-        return (elapsed > INCREMENTAL_AFTER_S
-                and self.seconds < INCREMENTAL_SHARE * (elapsed - self.seconds))
-
-    def round(self, state: PlannerState) -> PlanResult | None:
-        """Call every cheap instance once over the real facts, then search the real task;
-        the result when that finds a plan."""
-        start = time.thread_time()
-        try:
-            sample_cheap(state)
-            evaluate_eager(state)
-            discrete = state.search(state.facts.members, state.object_types,
-                                    state.function_values, REAL_SEARCH_EXPANSIONS)
-            if discrete.solved:
-                facts, terms = plan_preimage(discrete)
-                return state.result(SOLVED, discrete, facts | terms)
-            return None
-        finally:
-            self.seconds += time.thread_time() - start
-
-
-def sample_cheap(state: PlannerState) -> None:
-    """One incremental round restricted to the externals (streams, predicates, functions;
-    not :fluents streams) that calls so far showed to be cheap: each of their instances
-    over the real facts is called once (one never called yet is probed once first)."""
-    probe_unmeasured(state)
-    cheap = [name for name, external in state.externals.items()
-             if not (isinstance(external, Stream) and external.fluents)
-             and observed_cheap(state.history.get(name), state.stream_stats.get(name))]
-    for name in cheap:
-        for inputs in state.new_bindings(state.externals[name], "cheap-round"):
-            state.instance(name, inputs)
-    for instance in list(state.instances.values()):
-        if state.timed_out():
-            raise SearchTimeout
-        if instance.name in cheap and not instance.exhausted:
-            state.call(instance)
 
 
 def cheap_step(state: PlannerState, binding: Binding) -> bool:
