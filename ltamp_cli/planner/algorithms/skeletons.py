@@ -91,6 +91,39 @@ class Skeleton:
     # (step, output index, bound placeholders) of every generator output taken so far, so
     # that a local repair and the ordinary alternative do not extend the same branch twice.
     tried: set[tuple[object, ...]] = field(default_factory=set, compare=False)
+    # Nogoods: placeholder values under which a test of this stream plan failed (see
+    # :meth:`learn_nogood`); a binding that assigns all of one's values is doomed.
+    nogoods: list[tuple[tuple[str, str], ...]] = field(default_factory=list, compare=False)
+
+    def learn_nogood(self, step: int, mapping: dict[str, str]) -> None:
+        """Record that the test at ``step`` failed with the placeholders bound by
+        ``mapping``. Its inputs are placeholders (or fixed values), and each placeholder is
+        an output of an earlier step whose own inputs are placeholders too: with the same
+        values of that set of placeholders, every binding calls the test on the same inputs,
+        which it already rejected (a test without ``:fluents`` is called once per input
+        tuple). Such bindings are dropped instead of being processed to that test again
+        (kitchen_fluent: alternatives of unrelated samplers re-ran a failed collision test,
+        spending the sampling share before a search)."""
+        producer = {placeholder: key for key, outputs in self.placeholders.items()
+                    for placeholder in outputs}
+        relevant: set[str] = set()
+        pending = [x for x in self.stream_plan[step][1] if x in producer]
+        while pending:
+            placeholder = pending.pop()
+            if placeholder in relevant:
+                continue
+            relevant.add(placeholder)
+            pending.extend(x for x in producer[placeholder][1] if x in producer)
+        if not relevant <= mapping.keys():
+            return  # a placeholder bound outside this stream plan: keep the binding
+        nogood = tuple(sorted((x, mapping[x]) for x in relevant))
+        if nogood not in self.nogoods:
+            self.nogoods.append(nogood)
+
+    def doomed(self, mapping: dict[str, str]) -> bool:
+        """Whether ``mapping`` assigns every value of a recorded nogood."""
+        return any(all(mapping.get(x) == value for x, value in nogood)
+                   for nogood in self.nogoods)
 
 
 @dataclass
@@ -120,13 +153,23 @@ class BindingQueue:
         heapq.heappush(self._heap, (binding.priority(), next(self._counter), binding))
 
     def pop(self) -> Binding:
+        self._drop_doomed()
         return heapq.heappop(self._heap)[2]
 
     def peek(self) -> Binding | None:
+        self._drop_doomed()
         return self._heap[0][2] if self._heap else None
 
     def __len__(self) -> int:
+        self._drop_doomed()
         return len(self._heap)
+
+    def _drop_doomed(self) -> None:
+        """Discard head bindings that a nogood of their skeleton dooms (they would only
+        reach a test that already failed on the same inputs)."""
+        heap = self._heap
+        while heap and heap[0][2].skeleton.doomed(heap[0][2].mapping):
+            heapq.heappop(heap)
 
 
 def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
@@ -150,6 +193,8 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
                             binding.made_by, 0, binding.attempts, binding, binding.repairs)]
         state.record_failure(instance)
         report_unusable(state, real_inputs, binding.made_by)
+        if not context:
+            binding.skeleton.learn_nogood(binding.step, binding.mapping)
         return _local_repair(state, binding, real_inputs)
     key = binding.branch_key()
     if key in binding.skeleton.tried:
