@@ -94,6 +94,8 @@ class Skeleton:
     # Nogoods: placeholder values under which a test of this stream plan failed (see
     # :meth:`learn_nogood`); a binding that assigns all of one's values is doomed.
     nogoods: list[tuple[tuple[str, str], ...]] = field(default_factory=list, compare=False)
+    # placeholder -> the instance whose output it is (filled by the first learn_nogood)
+    producers: dict[str, InstanceKey] = field(default_factory=dict, compare=False)
 
     def learn_nogood(self, step: int, mapping: dict[str, str]) -> None:
         """Record that the test at ``step`` failed with the placeholders bound by
@@ -104,8 +106,10 @@ class Skeleton:
         tuple). Such bindings are dropped instead of being processed to that test again
         (kitchen_fluent: alternatives of unrelated samplers re-ran a failed collision test,
         spending the sampling share before a search)."""
-        producer = {placeholder: key for key, outputs in self.placeholders.items()
-                    for placeholder in outputs}
+        producer = self.producers
+        if not producer:
+            producer.update((placeholder, key) for key, outputs in self.placeholders.items()
+                            for placeholder in outputs)
         relevant: set[str] = set()
         pending = [x for x in self.stream_plan[step][1] if x in producer]
         while pending:
