@@ -129,10 +129,17 @@ class Kitchen2DRun:
 
     def rotate_about(self, pivot: Point, in_hand: Point, goal: float, speed: float) -> None:
         """Turn the gripper to ``goal`` keeping the point ``in_hand`` (gripper frame) at
-        ``pivot`` in the world, from rest to rest at most ``ANGULAR_ACCELERATION``. The hand
+        ``pivot`` in the world (where that point is now, if the hand is not exactly there),
+        from rest to rest at most ``ANGULAR_ACCELERATION``. The hand
         then moves on a circle of radius ``|in_hand|``: its tangential (r·α) and centripetal
         (r·ω²) accelerations are kept to half of ``ACCELERATION`` each."""
-        start = self.gripper._target[2]
+        here = self.gripper._target
+        start = here[2]
+        # Turn about where the point in hand actually is: the plan's pivot can be off by a
+        # centimetre or two, and jumping there in one step is an acceleration spike.
+        c0, s0 = math.cos(start), math.sin(start)
+        pivot = (here[0] + c0 * in_hand[0] - s0 * in_hand[1],
+                 here[1] + s0 * in_hand[0] + c0 * in_hand[1])
         lever = math.hypot(*in_hand)
         accel, spin = ANGULAR_ACCELERATION, speed
         if lever > 1e-9:
