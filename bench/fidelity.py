@@ -14,6 +14,8 @@ Rows (``--rows``, default all):
 * ``2d-pour-reference``: Box2D pour as shipped (200 particles, tilt 1.0 rad/s, 10 s cap)
   vs the reference implementation's settings (500 particles, 0.1 rad/s, 30 s cap);
   ``2d-pour-particles`` and ``2d-pour-tilt`` change one of them only.
+* ``2d-scoop-reference``: Box2D scoop as shipped (grains of radius 0.1) vs the reference
+  implementation's grains (radius 0.05, four times as many for the same bed).
 * ``3d-<skill>-engine`` (pour, scoop, push, stir): PyBullet vs SAPIEN, both as shipped.
 * ``3d-<skill>-solver``: PyBullet with 5 solver iterations (shipped) vs 50 (the reference
   implementation's).
@@ -46,6 +48,7 @@ from scipy.stats import binomtest
 from ltamp_cli.backends import SkillBackend, load_backend
 from ltamp_cli.backends.box2d.backend import Kitchen2DBackend
 from ltamp_cli.backends.box2d.skills.pour import PourConfig
+from ltamp_cli.backends.box2d.skills.scoop import reference_config as reference_scoop
 
 RESULTS_DIR = Path(__file__).resolve().parent / "results"
 SKILLS_3D = ("pour", "scoop", "push", "stir")
@@ -64,12 +67,20 @@ def _box2d(**pour_changes: float) -> SkillBackend:
     return backend
 
 
+def _box2d_reference_scoop() -> SkillBackend:
+    """The Box2D backend with the reference implementation's scoop grains."""
+    backend = Kitchen2DBackend()
+    backend.config = replace(backend.config, scoop=reference_scoop())
+    return backend
+
+
 #: Setting name -> how to build its backend (built when a row needs it, closed after).
 SETTINGS: dict[str, Callable[[], SkillBackend]] = {
     "box2d": lambda: load_backend("box2d"),
     "box2d-reference-pour": lambda: _box2d(**REFERENCE_2D_POUR),
     "box2d-500-particles": lambda: _box2d(n_particles=500),
     "box2d-tilt-0.1": lambda: _box2d(rotate_speed=0.1, max_time=30.0),
+    "box2d-reference-scoop": _box2d_reference_scoop,
     "pybullet": lambda: load_backend("pybullet"),
     "pybullet-solver-50": lambda: load_backend(
         "pybullet", solver_iterations=REFERENCE_SOLVER_ITERATIONS
@@ -92,6 +103,7 @@ ROWS: tuple[Row, ...] = (
     Row("2d-pour-reference", "pour", "box2d", "box2d-reference-pour"),
     Row("2d-pour-particles", "pour", "box2d", "box2d-500-particles"),
     Row("2d-pour-tilt", "pour", "box2d", "box2d-tilt-0.1"),
+    Row("2d-scoop-reference", "scoop", "box2d", "box2d-reference-scoop"),
     *(Row(f"3d-{skill}-engine", skill, "pybullet", "sapien") for skill in SKILLS_3D),
     *(Row(f"3d-{skill}-solver", skill, "pybullet", "pybullet-solver-50") for skill in SKILLS_3D),
 )
@@ -187,8 +199,11 @@ def backends(names: tuple[str, ...]) -> Iterator[dict[str, SkillBackend]]:
 
 
 def run_row(row: Row, n: int, seed: int, cache_path: Path, cache: dict[str, dict],
-            progress: bool) -> dict:
-    """Run (or reuse from the cache) the row's trials and summarise the agreement."""
+            progress: bool, shard: tuple[int, int] = (0, 1)) -> dict:
+    """Run (or reuse from the cache) the row's trials and summarise the agreement.
+
+    ``shard = (k, m)`` runs only inputs ``i`` with ``i % m == k`` (several processes can
+    share a long row through one cache); the others count only once cached."""
     with backends((row.fast, row.reference)) as built:
         fast, reference = built[row.fast], built[row.reference]
         inputs = draw_inputs(fast, reference, row.skill, n, seed)
@@ -198,6 +213,10 @@ def run_row(row: Row, n: int, seed: int, cache_path: Path, cache: dict[str, dict
             pair = []
             for setting, backend in ((row.fast, fast), (row.reference, reference)):
                 key = trial_key(setting, row.skill, context, control, trial_seed)
+                if key not in cache and index % shard[1] != shard[0]:
+                    cache.update(load_cache(cache_path))  # another shard may have run it
+                    if key not in cache:
+                        break
                 if key not in cache:
                     record = {"key": key, "setting": setting, "skill": row.skill,
                               "seed": trial_seed, "context": context.tolist(),
@@ -207,7 +226,8 @@ def run_row(row: Row, n: int, seed: int, cache_path: Path, cache: dict[str, dict
                     append_record(cache_path, record)
                     cache[key] = record
                 pair.append(cache[key])
-            pairs.append(pair)
+            if len(pair) == 2:
+                pairs.append(pair)
             if progress:
                 print(f"\r{row.name}: {index + 1}/{n}", end="", file=sys.stderr, flush=True)
         if progress:
@@ -265,6 +285,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--cache", type=Path, default=RESULTS_DIR / "fidelity_trials.jsonl")
     parser.add_argument("--out", type=Path, default=RESULTS_DIR / "fidelity.json")
     parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    parser.add_argument("--shard", default="0/1", metavar="K/M",
+                        help="run only inputs i with i %% M == K (others: from the cache)")
     args = parser.parse_args(argv)
     if args.trials < 1:
         parser.error("--trials must be at least 1")
@@ -280,7 +302,8 @@ def main(argv: list[str] | None = None) -> int:
     cache = load_cache(args.cache)
     by_name = {row.name: row for row in ROWS}
     chosen = [by_name[name] for name in dict.fromkeys(args.rows)]  # in the order given
-    summaries = [run_row(row, args.trials, args.seed, args.cache, cache, not args.quiet)
+    k, m = (int(v) for v in args.shard.split("/"))
+    summaries = [run_row(row, args.trials, args.seed, args.cache, cache, not args.quiet, (k, m))
                  for row in chosen]
     print_table(summaries, args.target)
     report = {"trials": args.trials, "seed": args.seed, "target": args.target,

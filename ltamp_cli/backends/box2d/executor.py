@@ -34,10 +34,17 @@ from ltamp_cli.backends.box2d.tamp import (
 )
 from ltamp_cli.backends.execution import ExecutionReport
 from ltamp_cli.backends.frames import GifTiming, action_caption
+from ltamp_cli.motion.timing import MotionLimits, planar_limits, time_path
 
 SPEED = 14.0
 SLOW = 3.0
 HOLD_SPEED = 6.0
+#: Largest hand acceleration (u/s²) of every executed motion, and of its rotations
+#: (rad/s², with ``ANGULAR_SPEED`` rad/s): motions start and stop at rest at every path
+#: corner. Speed-only limits threw carried liquid ~2 units up when a cup was set down.
+ACCELERATION = 5.0
+ANGULAR_SPEED = 1.0
+ANGULAR_ACCELERATION = 2.0
 #: Fraction of a cup's inner width the stirrer's paddle must sweep for ``Stirred``.
 STIR_COVERAGE = 0.6
 #: Fraction of a poured/filled material that must end in the cup for ``Contains``.
@@ -71,6 +78,9 @@ class Kitchen2DRun:
         self.sugar_dumped: dict[str, int] = {}
         self.n_created = len(self.scene.kitchen.particles)
         self.log: list[dict[str, Any]] = []
+        #: Every timed hand trajectory ``(m, 3)`` the run commanded (its first row the pose
+        #: it started from, at rest), in order.
+        self.commanded: list[np.ndarray] = []
         self.obstacles = [b for b in self.scene.kitchen.world.bodies
                           if b.userData and b.userData.get("name") in GUARDED]
         #: First static obstacle the hand (or what it holds) overlapped, if any.
@@ -100,37 +110,48 @@ class Kitchen2DRun:
     def gripper(self) -> Any:
         return self.scene.gripper
 
+    def track(self, poses: np.ndarray) -> None:
+        """Command the timed hand poses ``(m, 3)``, one per physics step, and keep them,
+        after the pose they start from, in :attr:`commanded` (what a test checks the
+        accelerations of)."""
+        self.commanded.append(np.concatenate([np.array([self.gripper._target]), poses]))
+        self.gripper.track(poses)
+
     def follow(self, path: Sequence[Sequence[float]], speed: float = SPEED,
                angle: float = 0.0) -> None:
-        """Visit ``path``'s points in straight lines with a smooth (cosine) speed profile:
-        abrupt starts and stops would throw grains out of a carried spoon or cup."""
-        dt = self.scene.kitchen.config.dt
-        for x, y in path:
-            start = self.gripper._target
-            length = math.hypot(x - start[0], y - start[1])
-            if length < 1e-9:
-                continue
-            # Peak speed of a cosine profile is pi/2 times its mean speed.
-            steps = max(1, math.ceil(length / speed * (math.pi / 2) / dt))
-            for k in range(1, steps + 1):
-                f = 0.5 * (1.0 - math.cos(math.pi * k / steps))
-                self.gripper.command((start[0] + f * (x - start[0]),
-                                      start[1] + f * (y - start[1]), angle))
-                self.scene.kitchen.step()
+        """Visit ``path``'s points in straight lines, starting and stopping at rest at every
+        point with at most ``ACCELERATION`` (abrupt starts and stops throw grains out of
+        a carried spoon or cup); the hand turns to ``angle`` on the first segment."""
+        start = self.gripper._target
+        poses = np.array([start, *((float(x), float(y), angle) for x, y in path)])
+        limits = planar_limits(speed, ANGULAR_SPEED, ACCELERATION, ANGULAR_ACCELERATION)
+        self.track(time_path(poses, limits, self.scene.kitchen.config.dt)[1:])
 
     def rotate_about(self, pivot: Point, in_hand: Point, goal: float, speed: float) -> None:
         """Turn the gripper to ``goal`` keeping the point ``in_hand`` (gripper frame) at
-        ``pivot`` in the world."""
-        dt = self.scene.kitchen.config.dt
-        start = self.gripper.pose[2]
-        n = max(1, math.ceil(abs(goal - start) / (speed * dt)))
-        for k in range(1, n + 1):
-            a = start + (goal - start) * k / n
-            c, s = math.cos(a), math.sin(a)
-            x = pivot[0] - (c * in_hand[0] - s * in_hand[1])
-            y = pivot[1] - (s * in_hand[0] + c * in_hand[1])
-            self.gripper.command((x, y, a))
-            self.scene.kitchen.step()
+        ``pivot`` in the world (where that point is now, if the hand is not exactly there),
+        from rest to rest at most ``ANGULAR_ACCELERATION``. The hand
+        then moves on a circle of radius ``|in_hand|``: its tangential (r·α) and centripetal
+        (r·ω²) accelerations are kept to half of ``ACCELERATION`` each."""
+        here = self.gripper._target
+        start = here[2]
+        # Turn about where the point in hand actually is: the plan's pivot can be off by a
+        # centimetre or two, and jumping there in one step is an acceleration spike.
+        c0, s0 = math.cos(start), math.sin(start)
+        pivot = (here[0] + c0 * in_hand[0] - s0 * in_hand[1],
+                 here[1] + s0 * in_hand[0] + c0 * in_hand[1])
+        lever = math.hypot(*in_hand)
+        accel, spin = ANGULAR_ACCELERATION, speed
+        if lever > 1e-9:
+            accel = min(accel, ACCELERATION / 2 / lever)
+            spin = min(spin, math.sqrt(ACCELERATION / 2 / lever))
+        limits = MotionLimits((spin,), (accel,))
+        angles = time_path(np.array([[start], [goal]]), limits,
+                           self.scene.kitchen.config.dt)[1:, 0]
+        c, s = np.cos(angles), np.sin(angles)
+        x = pivot[0] - (c * in_hand[0] - s * in_hand[1])
+        y = pivot[1] - (s * in_hand[0] + c * in_hand[1])
+        self.track(np.stack([x, y, angles], axis=1))
 
     def settle(self, max_time: float, rest_speed: float = 0.05) -> None:
         """Hold still until no particle moves (or ``max_time``); spill is frozen."""
@@ -166,12 +187,20 @@ class Kitchen2DRun:
 
     # --- actions -------------------------------------------------------------------------
     def move(self, path: Sequence[Point], speed: float = SPEED) -> None:
+        held = self.gripper.held
+        name = (held.userData or {}).get("object") if held is not None else None
+        cup = name is not None and self.spec.object(name).kind in ("cup", "bowl")
+        before = sum(self.contents(name).values()) if cup else 0
         self.follow(path, speed=speed)
+        if cup:
+            # Carried contents: what a test checks stays in the cup.
+            self.log.append({"carry": name, "before": before,
+                             "after": sum(self.contents(name).values())})
 
     def pick(self, name: str, pose: Point, grasp: Point, approach: Sequence[Point]) -> None:
         empty = empty_hand_path(approach)
-        self.gripper.move((*empty[0], 0.0), opening=approach_opening(self.spec.object(name)))
-        self.follow(empty[1:-1])
+        self.gripper.move(self.gripper._target, opening=approach_opening(self.spec.object(name)))
+        self.follow(empty[:-1])
         self.follow(empty[-1:], speed=SLOW)
         grasped = self.gripper.close()
         # SWIG makes a new proxy per access: compare the bodies' tags, not identities.
@@ -200,7 +229,8 @@ class Kitchen2DRun:
         conf, start, end = approach
         body = self.scene.bodies[name]
         x_before = float(body.position[0])
-        self.gripper.move((*conf, 0.0), opening=0.0)
+        self.gripper.move(self.gripper._target, opening=0.0)
+        self.follow([conf])
         self.follow([start], speed=SLOW)
         dt = self.scene.kitchen.config.dt
         steps = max(1, round(float(control[3]) / dt))
@@ -244,6 +274,7 @@ class Kitchen2DRun:
         grasp = self.gripper._held_rel
         start = approach[-1]
         dangle = float(control[3])
+        # Tilt as far as the control asks, or until the cup would touch the table.
         angle = 0.0
         step = 1.0 * self.scene.kitchen.config.dt
         while angle > -dangle + 1e-12:
@@ -253,8 +284,7 @@ class Kitchen2DRun:
             if corners[:, 1].min() < top:
                 break
             angle = nxt
-            self.gripper.command((start[0], start[1], angle))
-            self.scene.kitchen.step()
+        self.rotate_about(start, (0.0, 0.0), angle, 1.0)
         self.settle(10.0)
         self.log.append({"pour": source, "into": target, "contents": self.contents(target)})
         self.rotate_about(start, (0.0, 0.0), 0.0, 1.0)
@@ -267,14 +297,14 @@ class Kitchen2DRun:
         config = scoop_skill.ScoopConfig()
         cup = self.spec.object(bowl).spec
         self.follow(approach[1:], speed=SLOW)
-        path = scoop_skill.waypoints(np.array([cup.width, cup.height]),
-                                     np.asarray(control, dtype=float), config)
+        spoon_path = scoop_skill.spoon_poses(np.array([cup.width, cup.height]),
+                                             np.asarray(control, dtype=float), config)
+        spoon_path = spoon_path + np.array([pose[0], pose[1] - self.spec.layout.table_top, 0])
         hand = self.gripper._held_rel
-        gx, gy = -hand[0], -hand[1]
-        dx, dy = pose[0], pose[1] - self.spec.layout.table_top
-        for x, y in path[1:]:
-            self.gripper.move((x + dx + gx, y + dy + gy, 0.0), speed=config.speed)
-        self.gripper.hold(config.hold_time)
+        hands = scoop_skill.hand_poses(spoon_path, (-hand[0], -hand[1]))
+        self.commanded.append(np.concatenate([hands[:1], scoop_skill.timed_hands(
+            hands, config, self.scene.kitchen.config.dt)]))
+        scoop_skill.execute_scoop(self.gripper, hands, config)
         sp = self.spec.object(spoon).spec
         held = inside_box(self.scene.kitchen.particle_positions(), self.scene.bodies[spoon],
                           -sp.inner_width / 2, sp.inner_width / 2, sp.wall, sp.bowl_depth)
@@ -309,11 +339,12 @@ class Kitchen2DRun:
         x0, y0 = self.gripper.pose[0], self.gripper.pose[1]
         amplitude, cycles = float(control[1]), int(control[2])
         swept = []
+        strokes = []
         for _ in range(cycles):
             for side in (1.0, -1.0):
-                self.gripper.move((x0 + side * amplitude, y0, 0.0), speed=1.0)
+                strokes.append((x0 + side * amplitude, y0))
                 swept.append(side * amplitude)
-        self.gripper.move((x0, y0, 0.0), speed=1.0)
+        self.follow([*strokes, (x0, y0)], speed=1.0)
         self.settle(2.0)
         self.follow(list(reversed(approach[:-1])), speed=SLOW)
         # Stirred: the paddle, down at the cup's floor, swept most of the cup's width.

@@ -107,6 +107,8 @@ class Gripper:
         self._target_opening = self.opening
         self.held: b2.body | None = None
         self._held_rel: Pose = (0.0, 0.0, 0.0)
+        #: Force-limited drive of a dynamically held body (see :meth:`hold_dynamically`).
+        self._drive_joint: b2.joint | None = None
         world = kitchen.world
         color = (230, 190, 40)
         palm = self.spec.palm_box()
@@ -139,7 +141,7 @@ class Gripper:
         targets = [(self.palm, pose)]
         for side, body in zip((-1, 1), self.fingers, strict=True):
             targets.append((body, compose(pose, (*self.spec.finger_center(side, opening), 0.0))))
-        if self.held is not None:
+        if self.held is not None and self._drive_joint is None:
             targets.append((self.held, compose(pose, self._held_rel)))
         for body, (x, y, a) in targets:
             body.linearVelocity = ((x - body.position[0]) / dt, (y - body.position[1]) / dt)
@@ -156,12 +158,51 @@ class Gripper:
         self.held = body
         return True
 
+    def hold_dynamically(self, max_force: float, max_torque: float) -> None:
+        """Make the held body dynamic, driven to its grasp pose by a motor joint on the palm
+        whose force (units) and torque are bounded: contacts can then slow or stop it, as
+        they would a real grasp, instead of an unstoppable kinematic body crushing what it
+        meets. The fingers stop colliding with it (they would otherwise push it with
+        infinite force). :meth:`hold_rigidly` undoes it."""
+        body = self.held
+        if body is None or self._drive_joint is not None:
+            return
+        body.type = b2.dynamicBody
+        body.awake = True
+        for part in (body, *self.bodies):
+            for fixture in part.fixtures:
+                data = fixture.filterData
+                data.groupIndex = -1
+                fixture.filterData = data
+        self._drive_joint = self.kitchen.world.CreateMotorJoint(
+            bodyA=self.palm, bodyB=body, maxForce=max_force, maxTorque=max_torque,
+            correctionFactor=0.3, collideConnected=False)
+        rel = relative(body_pose(self.palm), body_pose(body))
+        self._drive_joint.linearOffset = (rel[0], rel[1])
+        self._drive_joint.angularOffset = rel[2]
+
+    def hold_rigidly(self) -> None:
+        """Back to a kinematic hold at the body's current pose in the hand."""
+        body = self.held
+        if body is None or self._drive_joint is None:
+            return
+        self.kitchen.world.DestroyJoint(self._drive_joint)
+        self._drive_joint = None
+        for part in (body, *self.bodies):
+            for fixture in part.fixtures:
+                data = fixture.filterData
+                data.groupIndex = 0
+                fixture.filterData = data
+        self._held_rel = relative(self.pose, body_pose(body))
+        body.type = b2.kinematicBody
+
     def release(self, open_fingers: bool = True) -> b2.body | None:
         """Let go: the held body becomes dynamic again and keeps its current velocity.
 
         With ``open_fingers`` the fingers then open fully (stepping the world), since
         closed fingers would otherwise keep holding the body by friction.
         """
+        self.hold_rigidly()
         body, self.held = self.held, None
         if body is not None:
             velocity, spin = b2.vec2(body.linearVelocity), body.angularVelocity
@@ -221,6 +262,13 @@ class Gripper:
                 tuple(s + f * (g - s) for s, g in zip(start, pose, strict=True)),  # type: ignore[arg-type]
                 start_opening + f * (goal_opening - start_opening),
             )
+            self.kitchen.step()
+
+    def track(self, poses: np.ndarray) -> None:
+        """Command one pose ``(x, y, θ)`` per physics step, rows of ``poses`` ``(m, 3)`` (a
+        timed trajectory, e.g. from :func:`ltamp_cli.motion.timing.time_path`)."""
+        for pose in np.asarray(poses, dtype=float):
+            self.command((float(pose[0]), float(pose[1]), float(pose[2])))
             self.kitchen.step()
 
     def hold(self, seconds: float) -> None:

@@ -35,7 +35,6 @@ Goal facts checked physically:
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -82,7 +81,7 @@ from ltamp_cli.backends.pybullet.tamp.planning import pose_of
 from ltamp_cli.backends.pybullet.tamp.scene import SceneSpec, scene_from_world
 from ltamp_cli.backends.pybullet.tamp.values import ArmPath
 from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig
-from ltamp_cli.motion.interpolation import densify_path
+from ltamp_cli.motion.timing import MotionLimits, time_path
 
 #: Fraction of a material's beads that must end in a container for ``(Contains c m)``.
 CONTAINS_FRACTION = 0.8
@@ -136,11 +135,11 @@ class ExecutionSettings:
     settle_s: float = 0.4
     pour_hold_s: float = 0.8
     render_every: int = 12
-    #: Largest joint acceleration (rad/s²) of a motion carrying contents: every segment of
-    #: the planned path starts and ends at rest with a trapezoidal speed profile, as a real
-    #: arm would (at constant joint speed a carry's corners jerked the cup at ~60 m/s²;
-    #: with this limit the peaks were ~9 m/s²).
-    carry_acceleration: float = 2.0
+    #: Largest joint acceleration (rad/s²) of every executed motion: every segment of a
+    #: path starts and ends at rest with a trapezoidal speed profile, as a real arm would
+    #: (at constant joint speed a carry's corners jerked the cup at ~60 m/s²; with this
+    #: limit the peaks were ~9 m/s²).
+    acceleration: float = 2.0
 
 
 def _material(kind: str, rng: np.random.Generator, fixed: bool) -> BodyMaterial:
@@ -150,34 +149,6 @@ def _material(kind: str, rng: np.random.Generator, fixed: bool) -> BodyMaterial:
     mass = 0.0 if fixed else {"cup": 0.15, "block": 0.2}.get(kind, 0.1)
     return BodyMaterial(mass=mass, lateral_friction=friction, restitution=0.1,
                         rgba=colours.get(kind, (0.7, 0.7, 0.7, 1.0)))
-
-
-def trapezoidal_steps(waypoints: np.ndarray, speed: float, acceleration: float,
-                      dt: float) -> np.ndarray:
-    """Configurations one time step ``dt`` (s) apart along ``waypoints`` ``(n, dof)``: each
-    straight segment starts and ends at rest, its largest joint accelerating at most
-    ``acceleration`` (rad/s²) up to at most ``speed`` (rad/s). Shape ``(m, dof)``, first and
-    last rows the first and last waypoints."""
-    points = np.asarray(waypoints, dtype=float)
-    out = [points[:1]]
-    for start, end in itertools.pairwise(points):
-        length = float(np.max(np.abs(end - start)))
-        if length < 1e-9:
-            continue
-        # Trapezoid (or triangle when the segment is too short to reach ``speed``).
-        peak = min(speed, math.sqrt(acceleration * length))
-        ramp_t = peak / acceleration
-        cruise_t = (length - peak * ramp_t) / peak
-        total = 2.0 * ramp_t + cruise_t
-        times = np.arange(1, math.ceil(total / dt) + 1) * dt
-        times[-1] = total
-        t_down = np.clip(times - ramp_t - cruise_t, 0.0, ramp_t)
-        s = (0.5 * acceleration * np.minimum(times, ramp_t) ** 2
-             + peak * np.clip(times - ramp_t, 0.0, cruise_t)
-             + peak * t_down - 0.5 * acceleration * t_down ** 2)
-        fractions = np.clip(s / length, 0.0, 1.0)[:, None]
-        out.append(start + fractions * (end - start))
-    return np.concatenate(out, axis=0)
 
 
 def _goal_atoms(formula: Any) -> list[tuple[str, tuple[str, ...]]]:
@@ -336,13 +307,16 @@ class Kitchen3DRun:
 
     def follow(self, arm_index: int, configurations: np.ndarray, speed: float,
                drive: bool = False) -> None:
-        """Drive the arm through ``configurations`` (n, 7) at ``speed`` rad/s (max joint).
+        """Drive the arm through ``configurations`` (n, 7) at ``speed`` rad/s (max joint),
+        accelerating at most ``settings.acceleration`` rad/s² and stopping at every waypoint.
 
         ``drive`` (pushes): the links also get the joint velocities that reach the next
         configuration, so contacts see a moving hand; a merely teleported hand sinks into
         what it pushes and leaves it behind."""
         arm = self.scene.arms[arm_index]
-        dense = densify_path(np.asarray(configurations), speed * self.world.config.time_step)
+        dense = time_path(np.asarray(configurations),
+                          MotionLimits((speed,), (self.settings.acceleration,)),
+                          self.world.config.time_step)
         held = self.held.get(arm_index)
         self.driving = drive
         try:
@@ -428,10 +402,7 @@ class Kitchen3DRun:
         if not carrying:
             self.follow(path.arm, path.configurations, self.settings.free_speed)
             return
-        held = self.held.get(path.arm)
-        dense = trapezoidal_steps(np.asarray(path.configurations), self.settings.carry_speed,
-                                  self.settings.carry_acceleration, self.world.config.time_step)
-        self._follow_dense(path.arm, dense, held, drive=False)
+        self.follow(path.arm, path.configurations, self.settings.carry_speed)
 
     def perceived_approach(self, name: str, grasp: Any, path: ArmPath) -> np.ndarray:
         """The approach ``(n, 7)`` of ``path`` moved with the object: the plan's approach
