@@ -126,9 +126,7 @@ class PhysicsCheck:
         if self.spent:
             return False
         if self._backend is None:  # one physics world, connected on first use, reused
-            beads = PourSettings(bead_count_mean=PRECHECK_BEADS,
-                                 bead_count_low=PRECHECK_BEADS - 5,
-                                 bead_count_high=PRECHECK_BEADS + 5)
+            beads = PourSettings(bead_count=PRECHECK_BEADS)
             self._backend = Kitchen3DBackend(pour_settings=beads)
             weakref.finalize(self, self._backend.close)
         self.left -= 1

@@ -12,10 +12,12 @@ from ltamp_cli.backends.kitchenware_geometry import ContainmentPrism
 from ltamp_cli.backends.protocol import SkillBackend
 from ltamp_cli.backends.pybullet.skills.pour import NOMINAL_CUP
 from ltamp_cli.backends.pybullet.skills.push import (
+    PUSH_ROTATION_TOLERANCE_RAD,
     PUSH_TOLERANCE_M,
     PushContext,
     push_path,
     push_score,
+    rotation_angle,
 )
 from ltamp_cli.backends.pybullet.skills.stir import (
     STIR_MIN_TIME_S,
@@ -60,12 +62,28 @@ def test_push_and_stir_are_registered_with_their_spaces(backend: SkillBackend) -
         context <= spec.context.high_array())
 
 
-def test_push_score_crosses_zero_at_the_tolerance_and_toppling_fails() -> None:
+def test_push_score_crosses_zero_at_both_tolerances_and_toppling_fails() -> None:
+    # The reference's criterion: position error <= 2.5 cm and rotation error <= 0.1 rad.
+    assert PUSH_TOLERANCE_M == 0.025 and PUSH_ROTATION_TOLERANCE_RAD == 0.1
     assert push_score(0.0, 0.0) == 1.0
     assert push_score(PUSH_TOLERANCE_M, 0.0) == pytest.approx(0.0)
     assert push_score(2 * PUSH_TOLERANCE_M, 0.0) == pytest.approx(-1.0)
     assert push_score(10.0, 0.0) == -1.0
+    assert push_score(0.0, PUSH_ROTATION_TOLERANCE_RAD) == pytest.approx(0.0)
+    # On target but turned by 0.15 rad: a failure; the worse of the two errors decides.
+    assert push_score(0.0, 0.15) < 0
+    assert push_score(0.005, 0.05) == pytest.approx(0.5)
     assert push_score(0.0, math.radians(60)) == -1.0
+
+
+def test_rotation_angle_of_a_turned_and_a_tipped_block() -> None:
+    half = 0.3 / 2
+    yawed = np.array([0.0, 0.0, math.sin(half), math.cos(half)])
+    assert rotation_angle(yawed) == pytest.approx(0.3)
+    assert rotation_angle(-yawed) == pytest.approx(0.3)  # q and -q are one rotation
+    tipped = np.array([math.sin(math.pi / 4), 0.0, 0.0, math.cos(math.pi / 4)])
+    assert rotation_angle(tipped) == pytest.approx(math.pi / 2)
+    assert rotation_angle(np.array([0.0, 0.0, 0.0, 1.0])) == 0.0
 
 
 def test_push_path_is_a_straight_line_along_x_ending_at_the_contact_point() -> None:
@@ -88,9 +106,9 @@ def test_good_push_reaches_the_target_and_a_short_one_fails(backend: SkillBacken
     good = backend.run_trial("push", PUSH_CONTEXT, PUSH_GOOD, seed=0)
     short = backend.run_trial("push", PUSH_CONTEXT, PUSH_SHORT, seed=0)
     assert good.valid and good.info["error_m"] < 0.01 and good.score > 0.4
-    assert not good.info["toppled"]
+    assert good.info["rotation_rad"] < 0.05 and not good.info["toppled"]
     # Stopping 5 cm short leaves the block about 5 cm short.
-    assert short.score == -1.0 and 0.04 < short.info["error_m"] < 0.06
+    assert short.score < -0.5 and 0.04 < short.info["error_m"] < 0.06
     assert short.info["final_xy"][0] < good.info["final_xy"][0] - 0.04
 
 

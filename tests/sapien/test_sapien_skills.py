@@ -34,7 +34,7 @@ BAD_POUR = np.array([-math.pi / 2, -0.5, 0.5, 0.75, 0.12])
 COLLIDING_POUR = np.array([-3 * math.pi / 4, -0.5, 0.5, 0.5, 0.0])
 SCOOP_CONTEXT = ScoopContext(NOMINAL_BOWL, SpoonDims(0.2)).to_array()
 # A short drag low through the heap, then straight up.
-GOOD_SCOOP = np.array([0.1, -0.1, 0.0, -0.015, 0.02])
+GOOD_SCOOP = np.array([0.25, -0.05, 0.0, -0.015, 0.02])
 # No drag at all, above the heap.
 BAD_SCOOP = np.array([0.0, 0.0, 0.0, 0.02, 0.03])
 

@@ -20,7 +20,14 @@ from ltamp_cli.backends.pybullet.kitchenware import KitchenwareBody, world_to_ob
 
 @dataclass(frozen=True)
 class BeadSpec:
-    """``count`` spheres of ``radius`` m and ``mass`` kg each, with contact properties."""
+    """Up to ``count`` spheres of ``radius`` m and ``mass`` kg each, with contact properties.
+
+    ``rolling_friction`` and ``spinning_friction`` are Bullet's coefficients (m); ``damping``
+    is the linear and angular velocity damping (1/s). ``fill_height`` (m above the vessel's
+    frame origin, its outer base) caps the bead *tops* when filling a vessel: only the beads
+    that fit below it are created. ``None``: a column up to 4 × the vessel's height, so an
+    overfull vessel spills while settling.
+    """
 
     count: int
     radius: float = 0.006
@@ -28,12 +35,18 @@ class BeadSpec:
     lateral_friction: float = 0.5
     restitution: float = 0.7
     rgba: tuple[float, float, float, float] = (0.2, 0.4, 0.9, 1.0)
+    rolling_friction: float = 1e-5
+    spinning_friction: float = 0.0
+    damping: float = 0.04
+    fill_height: float | None = None
 
     def __post_init__(self) -> None:
         if self.count < 0:
             raise ValueError("count must be non-negative")
         if not (self.radius > 0 and self.mass > 0):
             raise ValueError("radius and mass must be positive")
+        if self.fill_height is not None and not self.fill_height > 0:
+            raise ValueError("fill_height must be positive")
 
     @property
     def volume(self) -> float:
@@ -73,6 +86,15 @@ def grid_in_vessel(
     return points + jitter
 
 
+def bead_layout(dims: VesselDims, spec: BeadSpec, rng: np.random.Generator) -> np.ndarray:
+    """Bead centres ``(n, 3)`` in a vessel's frame for ``spec`` (shared by every engine, so
+    the same draws from ``rng`` give the same beads): up to ``spec.fill_height`` when it is
+    set, else a column up to 4 × the vessel's height."""
+    if spec.fill_height is None:
+        return grid_in_vessel(dims, spec, rng, max_height=4.0 * dims.height)
+    return grid_in_vessel(dims, spec, rng, max_height=spec.fill_height - spec.radius)
+
+
 def spawn_beads(client: int, spec: BeadSpec, positions_world: np.ndarray) -> np.ndarray:
     """Create one sphere per row of ``positions_world`` ``(n, 3)``; returns body ids ``(n,)``."""
     shape = p.createCollisionShape(p.GEOM_SPHERE, radius=spec.radius, physicsClientId=client)
@@ -89,7 +111,10 @@ def spawn_beads(client: int, spec: BeadSpec, positions_world: np.ndarray) -> np.
             -1,
             lateralFriction=spec.lateral_friction,
             restitution=spec.restitution,
-            rollingFriction=1e-5,
+            rollingFriction=spec.rolling_friction,
+            spinningFriction=spec.spinning_friction,
+            linearDamping=spec.damping,
+            angularDamping=spec.damping,
             physicsClientId=client,
         )
         ids.append(body)
@@ -99,11 +124,12 @@ def spawn_beads(client: int, spec: BeadSpec, positions_world: np.ndarray) -> np.
 def spawn_beads_in(
     container: KitchenwareBody, spec: BeadSpec, rng: np.random.Generator
 ) -> np.ndarray:
-    """Spawn ``spec.count`` beads inside ``container`` (a vessel) at its current pose."""
+    """Spawn up to ``spec.count`` beads inside ``container`` (a vessel) at its current pose
+    (:func:`bead_layout`)."""
     dims = container.geometry.vessel
     if dims is None:
         raise ValueError(f"a {container.geometry.kind} is not a vessel: cannot hold beads")
-    local = grid_in_vessel(dims, spec, rng, max_height=4.0 * dims.height)
+    local = bead_layout(dims, spec, rng)
     position, orientation = container.pose()
     rotation = np.asarray(p.getMatrixFromQuaternion(list(orientation))).reshape(3, 3)
     return spawn_beads(container.client, spec, local @ rotation.T + position)

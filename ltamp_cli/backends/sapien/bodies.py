@@ -22,7 +22,7 @@ from scipy.spatial.transform import Rotation
 
 from ltamp_cli.backends.kitchenware_geometry import KitchenwareGeometry
 from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial
-from ltamp_cli.backends.pybullet.particles import BeadSpec, grid_in_vessel
+from ltamp_cli.backends.pybullet.particles import BeadSpec, bead_layout
 from ltamp_cli.backends.sapien.world import (
     SapienWorld,
     from_sapien_pose,
@@ -33,8 +33,6 @@ from ltamp_cli.backends.sapien.world import (
 
 BodyType = Literal["static", "kinematic", "dynamic"]
 IDENTITY_QUAT = (0.0, 0.0, 0.0, 1.0)
-#: PyBullet's default damping (1/s) for multibodies, used for beads so both engines agree.
-BEAD_DAMPING = 0.04
 
 
 @dataclass(frozen=True, eq=False)
@@ -211,8 +209,9 @@ def spawn_beads(world: SapienWorld, spec: BeadSpec, positions_world: np.ndarray)
         shape.rest_offset = 0.0
         component.attach(shape)
         component.mass = float(spec.mass)
-        component.linear_damping = BEAD_DAMPING
-        component.angular_damping = BEAD_DAMPING
+        # PhysX has no rolling or spinning friction: the spec's damping is all it gets.
+        component.linear_damping = float(spec.damping)
+        component.angular_damping = float(spec.damping)
         component.solver_position_iterations = config.solver_position_iterations
         component.solver_velocity_iterations = config.solver_velocity_iterations
         entity = sapien.Entity()
@@ -257,11 +256,11 @@ def contained_mask(container: SapienBody, positions_world: np.ndarray) -> np.nda
 def spawn_beads_in(
     world: SapienWorld, container: SapienBody, spec: BeadSpec, rng: np.random.Generator
 ) -> Beads:
-    """Spawn ``spec.count`` beads inside ``container`` (a vessel) at its current pose, on
-    the same jittered grid (and the same draws from ``rng``) as the PyBullet backend."""
+    """Spawn up to ``spec.count`` beads inside ``container`` (a vessel) at its current pose,
+    on the same jittered grid (and the same draws from ``rng``) as the PyBullet backend."""
     dims = container.geometry.vessel
     if dims is None:
         raise ValueError(f"a {container.geometry.kind} is not a vessel: cannot hold beads")
-    local = grid_in_vessel(dims, spec, rng, max_height=4.0 * dims.height)
+    local = bead_layout(dims, spec, rng)
     position, orientation = container.pose()
     return spawn_beads(world, spec, object_to_world(local, position, orientation))

@@ -16,8 +16,11 @@ Control (5):
 
 The cup starts upright with its pivot at the bowl pivot and rotates about it in ``π/16``
 waypoints up to ``pitch``. A control whose cup path touches the bowl or the table is invalid
-and is not simulated. Score: ``g(x; τ = 0.9)`` with ``x`` = beads in the bowl at the end /
-beads in the cup after settling; trials with fewer than 10 beads in the cup are rejected.
+and is not simulated. Beads as in the reference: up to 100, filling the cup to a random 75-100 %
+of its height, with randomised size, mass, restitution and damping
+(:func:`sample_pour_beads`). Score: ``g(x; τ = 0.9)`` with ``x`` = beads in the bowl at the
+end / beads in the cup after settling; trials with fewer than 10 beads in the cup are
+dropped (invalid), as the reference drops them.
 """
 
 from __future__ import annotations
@@ -39,8 +42,8 @@ from ltamp_cli.backends.skills3d.common import (
     batch_path_validity,
     check_tool_path,
     rejection,
-    sample_beads,
     sample_material,
+    truncated_normal,
 )
 from ltamp_cli.backends.skills3d.physics import (
     StepCallback,
@@ -92,16 +95,22 @@ POUR_SPEC = SkillSpec(
 
 @dataclass(frozen=True)
 class PourSettings:
-    """Simulation timing: settle/hold in seconds, tilt speed in rad/s; beads per trial: a
-    normal of mean ``bead_count_mean`` (sd 10) truncated to ``[bead_count_low,
-    bead_count_high]`` (a quick check can simulate fewer)."""
+    """Simulation timing: settle/hold in seconds, tilt speed in rad/s. Beads as in the
+    reference: at most ``bead_count`` are created (a quick check can simulate fewer), filling
+    the upright cup up to a fraction of its height drawn uniformly from ``fill_range``."""
 
     settle_s: float = 0.3
     hold_s: float = 0.8
     angular_speed: float = 2.0
-    bead_count_mean: float = 100.0
-    bead_count_low: float = 70.0
-    bead_count_high: float = 130.0
+    bead_count: int = 100
+    fill_range: tuple[float, float] = (0.75, 1.0)
+
+    def __post_init__(self) -> None:
+        low, high = self.fill_range
+        if not (0.0 < low <= high <= 1.0):
+            raise ValueError(f"fill_range must satisfy 0 < low <= high <= 1, got {self.fill_range}")
+        if self.bead_count < 1:
+            raise ValueError("bead_count must be at least 1")
 
 
 @dataclass(frozen=True)
@@ -243,12 +252,33 @@ class PourLatents:
     cup_material: BodyMaterial
 
 
-def sample_pour_latents(rng: np.random.Generator, settings: PourSettings) -> PourLatents:
-    beads = sample_beads(rng, settings.bead_count_mean, 10.0, settings.bead_count_low,
-                         settings.bead_count_high)
+def sample_pour_beads(rng: np.random.Generator, settings: PourSettings, cup: VesselDims
+                      ) -> BeadSpec:
+    """The reference's pour beads (field facts): radius N(6, 1) mm (at least 4 mm), mass
+    N(1, 0.2) g, restitution N(0.8, 0.1), friction N(0.5, 0.1), rolling and spinning
+    friction 0.001, damping N(0.04, 0.01) 1/s; up to ``settings.bead_count`` filling the
+    cup to a uniform fraction of its height in ``settings.fill_range``.
+    Draw order: radius, mass, friction, restitution, damping, fill."""
+    return BeadSpec(
+        count=settings.bead_count,
+        radius=truncated_normal(rng, 0.006, 0.001, 0.004, 0.009),
+        mass=truncated_normal(rng, 0.001, 0.0002, 0.0004, 0.0016),
+        lateral_friction=truncated_normal(rng, 0.5, 0.1, 0.2, 0.8),
+        restitution=truncated_normal(rng, 0.8, 0.1, 0.5, 0.99),
+        rolling_friction=0.001,
+        spinning_friction=0.001,
+        damping=truncated_normal(rng, 0.04, 0.01, 0.01, 0.07),
+        fill_height=rng.uniform(*settings.fill_range) * cup.height,
+    )
+
+
+def sample_pour_latents(rng: np.random.Generator, settings: PourSettings, cup: VesselDims
+                        ) -> PourLatents:
+    """Beads (:func:`sample_pour_beads`), then the bowl's and the cup's materials."""
+    beads = sample_pour_beads(rng, settings, cup)
     bowl = sample_material(rng, BOWL_RGBA)
-    cup = sample_material(rng, (0.9, 0.5, 0.2, 1.0), mass=(0.15, 0.03, 0.08, 0.25))
-    return PourLatents(beads, bowl, cup)
+    cup_material = sample_material(rng, (0.9, 0.5, 0.2, 1.0), mass=(0.15, 0.03, 0.08, 0.25))
+    return PourLatents(beads, bowl, cup_material)
 
 
 def run_pour(
@@ -272,7 +302,7 @@ def run_pour(
         return trial.rejected
     path, scene = trial.path, trial.scene
     rng = np.random.default_rng(seed)
-    latents = sample_pour_latents(rng, settings)
+    latents = sample_pour_latents(rng, settings, scene.cup)
     physics.reset()
     bowl = physics.add_body(vessel_geometry(scene.bowl, "bowl"), latents.bowl_material, "fixed")
     cup = physics.add_body(trial.tool, latents.cup_material, "tool",

@@ -22,9 +22,12 @@ Control (4):
 A control whose pad would start below the table (``contact_height × side`` less than half
 the pad's height plus :data:`PAD_CLEARANCE_M`) is invalid and not simulated.
 
-Score: ``g = 1 − e / PUSH_TOLERANCE_M`` clipped to ``[-1, 1]`` with ``e`` the distance (m) of
-the block's final base centre from the target; a block that ends tilted by more than
-:data:`TOPPLE_RAD` scores −1. ``g > 0`` exactly when the block ends within 2 cm, upright.
+Score (the reference's criterion: success iff the final position error is at most 2.5 cm and
+the rotation error at most 0.1 rad): ``g = min(1 − e / PUSH_TOLERANCE_M,
+1 − r / PUSH_ROTATION_TOLERANCE_RAD)`` clipped to ``[-1, 1]``, with ``e`` the distance (m) of
+the block's final base centre from the target and ``r`` the angle (rad) of its final
+rotation from its start orientation, the target's (a toppled block has ``r ≥ π/2``).
+``g > 0`` exactly when ``e < 2.5 cm`` and ``r < 0.1 rad``.
 """
 
 from __future__ import annotations
@@ -52,9 +55,11 @@ PAD_SIZE_M = (0.016, 0.02, 0.03)
 PAD_CLEARANCE_M = 0.002
 #: The pad starts this far (m) behind the block's face.
 APPROACH_GAP_M = 0.02
-#: Final position error (m) at which the score crosses zero.
-PUSH_TOLERANCE_M = 0.02
-#: A block tilted by more than this (rad) has toppled.
+#: Final position error (m) at which the score crosses zero (reference: 2.5 cm).
+PUSH_TOLERANCE_M = 0.025
+#: Final rotation error (rad) at which the score crosses zero (reference: 0.1 rad).
+PUSH_ROTATION_TOLERANCE_RAD = 0.1
+#: A block tilted by more than this (rad) has toppled (reported in ``info``).
 TOPPLE_RAD = math.radians(30.0)
 #: Fingertips are reset every step (kinematic); a heavy pad barely yields within a step.
 PAD_MASS_KG = 2.0
@@ -158,11 +163,20 @@ def prepare_push(context: np.ndarray, control: np.ndarray, check: bool
     return SkillTrial(scene, control, push_path(scene, control), pad_geometry(), rejected)
 
 
-def push_score(error_m: float, tilt_rad: float) -> float:
-    """``clip(1 − error / PUSH_TOLERANCE_M, −1, 1)``; −1 when toppled."""
-    if tilt_rad > TOPPLE_RAD:
-        return -1.0
-    return float(np.clip(1.0 - error_m / PUSH_TOLERANCE_M, -1.0, 1.0))
+def push_score(error_m: float, rotation_rad: float) -> float:
+    """``clip(min(1 − error / PUSH_TOLERANCE_M, 1 − rotation /
+    PUSH_ROTATION_TOLERANCE_RAD), −1, 1)``: positive iff both errors are within tolerance."""
+    margin = min(1.0 - error_m / PUSH_TOLERANCE_M,
+                 1.0 - rotation_rad / PUSH_ROTATION_TOLERANCE_RAD)
+    return float(np.clip(margin, -1.0, 1.0))
+
+
+def rotation_angle(quaternion: np.ndarray) -> float:
+    """Angle (rad, in ``[0, π]``) of the rotation ``quaternion`` ``(4,)`` xyzw from the
+    identity, the block's start and target orientation."""
+    q = np.asarray(quaternion, dtype=float)
+    w = abs(float(q[3])) / float(np.linalg.norm(q))
+    return float(2.0 * math.acos(min(1.0, w)))
 
 
 def tilt_of(quaternion: np.ndarray) -> float:
@@ -187,15 +201,17 @@ def push_outcome(scene: PushContext, position: np.ndarray, quaternion: np.ndarra
     """Score and ``info`` from the block's final pose (shared with the SAPIEN push)."""
     error = float(np.hypot(position[0] - scene.distance, position[1]))
     tilt = tilt_of(quaternion)
+    rotation = rotation_angle(quaternion)
     info = {
         "final_xy": [float(position[0]), float(position[1])],
         "error_m": error,
+        "rotation_rad": rotation,
         "tilt_rad": tilt,
         "toppled": tilt > TOPPLE_RAD,
         "sim_steps": steps,
         "sim_time_s": steps * dt,
     }
-    return TrialResult(push_score(error, tilt), True, info)
+    return TrialResult(push_score(error, rotation), True, info)
 
 
 def run_push(
@@ -233,7 +249,8 @@ def run_push(
 
 
 __all__ = [
-    "PUSH_CONTEXT", "PUSH_CONTROL", "PUSH_SPEC", "PUSH_TOLERANCE_M", "PushContext",
+    "PUSH_CONTEXT", "PUSH_CONTROL", "PUSH_ROTATION_TOLERANCE_RAD", "PUSH_SPEC",
+    "PUSH_TOLERANCE_M", "PushContext",
     "PushSettings", "check_push", "pad_geometry", "prepare_push", "push_is_valid", "push_outcome",
-    "push_path", "push_score", "run_push", "sample_push_context",
+    "push_path", "push_score", "rotation_angle", "run_push", "sample_push_context",
 ]

@@ -18,17 +18,19 @@ Control (5):
 
 Path: entry (above the start, 4 cm over the rim) → start → end → exit. Controls whose spoon
 path touches the bowl or the table are invalid and not simulated. Score: ``g(x; τ = 0.7)``
-with ``x`` = beads in the spoon's head at the end / the spoon's capacity.
+with ``x`` = beads in the spoon's head at the end / the spoon's capacity, measured per trial
+with the trial's beads (:func:`measure_spoon_capacity`).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ltamp_cli.backends.kitchenware_geometry import (
+    KitchenwareGeometry,
     SpoonDims,
     VesselDims,
     spoon_geometry,
@@ -65,11 +67,11 @@ SCOOP_TAU = 0.7
 SCOOP_TILT_RAD = math.radians(60.0)
 SCOOP_CLEARANCE_M = 0.02
 ENTRY_HEIGHT_M = 0.04
-PACKING_FRACTION = 0.5
 SPOON_LENGTH_RANGE = (0.16, 0.24)
-#: Nominal bead radius (m) used for the spoon's capacity, so that the capacity depends on
-#: the context only and not on the trial's latent bead size.
-NOMINAL_BEAD_RADIUS_M = 0.006
+#: Beads poured onto the spoon to measure its capacity (far more than any head holds).
+CAPACITY_BEADS = 120
+#: Height (m) of the spoon's frame above the table while its capacity is measured.
+CAPACITY_LIFT_M = 0.05
 
 SCOOP_CONTEXT = ParamSpace(
     names=("bowl_diameter", "bowl_height", "bowl_base_diameter", "spoon_length"),
@@ -131,10 +133,21 @@ def sample_scoop_context(rng: np.random.Generator) -> np.ndarray:
     return ScoopContext(bowl, SpoonDims(rng.uniform(*SPOON_LENGTH_RANGE))).to_array()
 
 
-def spoon_capacity(spoon: SpoonDims, bead_radius: float = NOMINAL_BEAD_RADIUS_M) -> int:
-    """Beads a level spoonful holds: packed cavity volume over one bead's volume."""
-    bead_volume = 4.0 / 3.0 * math.pi * bead_radius**3
-    return max(1, math.floor(PACKING_FRACTION * spoon.head().cavity_volume() / bead_volume))
+def measure_spoon_capacity(physics: TrialPhysics, spoon: KitchenwareGeometry, beads: BeadSpec,
+                           material: BodyMaterial, rng: np.random.Generator,
+                           settle_s: float) -> int:
+    """Beads of ``beads``' kind a level spoonful holds, measured (``physics`` is reset
+    first): the upright spoon, clear of the table, is overfilled (a column of up to
+    :data:`CAPACITY_BEADS` beads up to 4 × the head's height) and held still for
+    ``settle_s`` s; the beads then inside the head's containment prism, the prism that
+    counts a scooped spoonful, are its capacity (at least 1)."""
+    physics.reset()
+    tool = physics.add_body(spoon, material, "tool", (0.0, 0.0, CAPACITY_LIFT_M))
+    pile = replace(beads, count=CAPACITY_BEADS, fill_height=None)
+    filled = physics.spawn_beads_in(tool, pile, rng)
+    position, quaternion = tool.pose()
+    physics.hold(tool, position, quaternion, physics.steps_for(settle_s))
+    return max(1, int(contained_mask(tool, filled.positions()).sum()))
 
 
 def scoop_path(context: ScoopContext, control: np.ndarray) -> PosePath:
@@ -180,13 +193,16 @@ def prepare_scoop(context: np.ndarray, control: np.ndarray, check: bool
     return SkillTrial(scene, control, path, spoon, rejected)
 
 
-def scoop_outcome(scene: ScoopContext, total: int, in_bowl_start: int, in_spoon: int,
+def scoop_outcome(capacity: int, total: int, in_bowl_start: int, in_spoon: int,
                   lost: int, bead_radius: float, steps: int, dt: float) -> TrialResult:
-    """Score and ``info`` of a simulated scoop (shared with the SAPIEN scoop): ``total``
-    beads, ``in_bowl_start`` of them in the bowl after settling, ``in_spoon`` in the spoon's
-    head at the end, ``lost`` off the table; ``steps`` of ``dt`` s simulated."""
-    capacity = spoon_capacity(scene.spoon)
-    fraction = min(1.0, in_spoon / capacity)
+    """Score and ``info`` of a simulated scoop: the spoon's measured ``capacity`` (beads),
+    ``total`` beads, ``in_bowl_start`` of them in the bowl after settling, ``in_spoon`` in
+    the spoon's head at the end, ``lost`` off the table; ``steps`` of ``dt`` s simulated.
+
+    ``info["fraction_of_capacity"]`` is ``in_spoon / capacity`` as measured (it can exceed 1
+    when the scooped pile packs more densely than the measured spoonful); only the score
+    clips it to ``[0, 1]``."""
+    fraction = in_spoon / capacity
     info = {
         "beads_total": total,
         "beads_in_bowl_start": in_bowl_start,
@@ -234,8 +250,11 @@ def run_scoop(
     on_step: StepCallback | None = None,
     check: bool = True,
 ) -> TrialResult:
-    """Simulate one scoop with ``physics`` (reset first); deterministic given ``seed``. The
-    bowl is fixed and filled; the spoon is a tool."""
+    """Simulate one scoop with ``physics`` (reset first); deterministic given ``seed``.
+
+    First the spoon's capacity for this trial's beads is measured
+    (:func:`measure_spoon_capacity`), then the scene is reset: the bowl is fixed and
+    filled, the spoon is a tool."""
     settings = settings or ScoopSettings()
     trial = prepare_scoop(context, control, check)
     if trial.rejected is not None:
@@ -243,6 +262,8 @@ def run_scoop(
     path = trial.path
     rng = np.random.default_rng(seed)
     latents = sample_scoop_latents(rng, settings)
+    capacity = measure_spoon_capacity(physics, trial.tool, latents.beads,
+                                      latents.spoon_material, rng, settings.settle_s)
     physics.reset()
     bowl = physics.add_body(vessel_geometry(trial.scene.bowl, "bowl"), latents.bowl_material,
                             "fixed")
@@ -258,6 +279,6 @@ def run_scoop(
     steps += physics.hold(spoon, path.positions[-1], path.quaternions[-1],
                           physics.steps_for(settings.hold_s), on_step, steps)
     end = beads.positions()
-    return scoop_outcome(trial.scene, len(beads), in_bowl_start,
+    return scoop_outcome(capacity, len(beads), in_bowl_start,
                          int(contained_mask(spoon, end).sum()), count_lost(end),
                          latents.beads.radius, steps, dt)
