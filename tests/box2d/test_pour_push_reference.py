@@ -114,3 +114,47 @@ def test_friction_joint_stops_the_object_during_the_coast_and_longer_pushes_go_f
     assert finals[0] > 2.0 and np.all(np.diff(finals) > 0.5)
     # Pushed at the tracked 10 u/s for ~0.1 s more each time: about 1 unit further.
     assert np.diff(finals) == pytest.approx([1.0, 1.0], abs=0.3)
+
+
+class _PushAway:
+    """A stand-in model whose θ* pushes away from every goal (the object stays put)."""
+
+    def most_confident_control(self, context: np.ndarray, rng: np.random.Generator,
+                               is_valid: object) -> tuple[np.ndarray, float]:
+        return np.array([-2.0, 0.0, math.pi, 0.5]), 0.0
+
+
+class _CountingBackend:
+    """The Box2D backend, counting the controls it runs."""
+
+    def __init__(self) -> None:
+        from ltamp_cli.backends.box2d.backend import Kitchen2DBackend
+
+        self.inner = Kitchen2DBackend()
+        self.controls: list[np.ndarray] = []
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self.inner, name)
+
+    def run_trial(self, skill: str, context: np.ndarray, control: np.ndarray,
+                  seed: int) -> object:
+        self.controls.append(np.asarray(control))
+        return self.inner.run_trial(skill, context, control, seed)
+
+
+def test_evaluate_scores_theta_star_and_a_random_valid_control_in_the_same_contexts() -> None:
+    from ltamp_cli.cli.evaluate import _live_success_rates
+
+    backend = _CountingBackend()
+    star, random_rate = _live_success_rates(backend, "push", _PushAway(), 30, 3)
+    rng = np.random.default_rng(3)
+    goals = np.array([backend.inner.sample_context("push", rng) for _ in range(30)])
+    # Pushing away leaves the object at the origin: success iff the goal is within 2.
+    assert star == pytest.approx(np.mean(np.linalg.norm(goals, axis=1) < 2.0))
+    assert len(backend.controls) == 60  # θ* and one random control per context
+    randoms = np.array(backend.controls[1::2])
+    assert backend.inner.is_valid("push", goals[0], randoms).all()
+    assert not np.allclose(randoms, randoms[0])
+    assert 0.0 <= random_rate <= 1.0
+    assert _live_success_rates(_CountingBackend(), "push", _PushAway(), 30, 3) == (
+        star, random_rate)
