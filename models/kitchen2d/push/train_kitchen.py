@@ -3,7 +3,7 @@
 ``ltamp train push --backend box2d --strategy lse2`` (600 trials) gave a model whose most
 confident control succeeded in 2 of 20 goals drawn over the context box, no better than a
 uniformly random valid control (2 of 20): a push at 10 units/s that lasts up to 2 s sends
-the object up to ~20 units away, so most trials score far below 0 (down to about −18) and
+the object up to ~20 units away, so most trials score far below 0 (down to −22) and
 the GP's fit is spent on that tail (its angle lengthscale went to the lower bound and two
 other inputs to the upper bound); the successes (pusher behind the object, aimed at the
 goal, for the right duration) are a thin slice of the control box.
