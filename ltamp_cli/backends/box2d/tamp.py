@@ -60,6 +60,8 @@ MIN_GRIP = 0.8
 #: centre (skills/push.py); the kitchen pushes with the closed fingers, whose leading face
 #: is put where the rectangle's would be.
 PUSHER_HALF_DEPTH = push_skill.PushConfig().pusher_depth / 2
+#: Radius of the push skill's round object.
+PUSH_OBJECT_RADIUS = push_skill.PushConfig().object_radius
 #: Pusher speed (units/s), as in the push skill's trials.
 PUSH_SPEED = push_skill.PushConfig().speed
 #: The learned push goal lies this far past the table edge: a control with g > 0 leaves the
@@ -546,13 +548,22 @@ class KitchenGeometry:
                            pose[1] + size]])
         return not self.overlaps(swept, np.array(self.furniture[1:]))
 
+    def push_offset(self, name: str) -> float:
+        """How far ahead of the skill's pusher centre ``rx`` the hand's centre goes, so that
+        the gap from the hand's leading face to block ``name`` is the skill's gap from its
+        pusher's leading face to its disc (the learned durations then reach the block)."""
+        half = self.spec.gripper.finger_width  # closed fingers: two finger widths wide
+        size = self.spec.object(name).spec.size
+        return PUSHER_HALF_DEPTH - half + PUSH_OBJECT_RADIUS - size / 2
+
     def push_setup(self, name: str, pose: Point, edge: str, control: Sequence[float]
                    ) -> tuple[Point, tuple[Point, Point, Point]] | None:
         """Conf and push approach ``(conf, start, end)`` of a push of block ``name`` off
         ``edge`` with the push skill's control ``(rx, ry, angle, duration)``.
 
-        The closed gripper goes down beside the block (its leading face where the skill's
-        pusher's leading face would be) and moves along the table by the x part of the skill's push,
+        The closed gripper goes down beside the block (its leading face as far from the
+        block as the skill's pusher's from its disc, see :meth:`push_offset`) and moves along
+        the table by the x part of the skill's push,
         ``PUSH_SPEED · duration · cos(angle)``. ``None`` if the push does not run towards
         the edge or the gripper would hit furniture (outside the block's own column).
         """
@@ -561,8 +572,7 @@ class KitchenGeometry:
         travel = PUSH_SPEED * duration * math.cos(angle)
         if direction * travel <= 0 or direction * rx >= 0:
             return None
-        half = self.spec.gripper.finger_width  # closed fingers: two finger widths wide
-        start = (_r(pose[0] + rx + direction * (PUSHER_HALF_DEPTH - half)),
+        start = (_r(pose[0] + rx + direction * self.push_offset(name)),
                  self.push_height(name, pose))
         end = (_r(start[0] + travel), start[1])
         conf = (start[0], self.conf_height(None, None))

@@ -28,7 +28,6 @@ from ltamp_cli.backends.box2d.skills import scoop as scoop_skill
 from ltamp_cli.backends.box2d.tamp import (
     MIN_GRIP,
     PUSH_SPEED,
-    PUSHER_HALF_DEPTH,
     TRANSIT_MARGIN,
     KitchenGeometry,
     Point,
@@ -252,10 +251,9 @@ def push_mask(geometry: KitchenGeometry, block: str, pose: Point, edge: str,
     direction = math.copysign(1.0, geometry.edge_x(edge) - pose[0])
     travel = PUSH_SPEED * duration * np.cos(angle)
     ok = (direction * travel > 0) & (direction * rx < 0)
-    half = geometry.spec.gripper.finger_width
     n = len(controls)
     y = np.full(n, geometry.push_height(block, pose))
-    start = np.stack([_round(pose[0] + rx + direction * (PUSHER_HALF_DEPTH - half)), y], axis=1)
+    start = np.stack([_round(pose[0] + rx + direction * geometry.push_offset(block)), y], axis=1)
     end = np.stack([_round(start[:, 0] + travel), y], axis=1)
     top = np.full(n, conf_heights(geometry, None))
     conf = np.stack([start[:, 0], top], axis=1)
