@@ -88,10 +88,11 @@ def _task2_streams(sampler: str, tmp_path: Path, seed: int = 0) -> dict[str, Any
 @pytest.mark.parametrize("sampler", SAMPLER_NAMES)
 def test_every_sampler_yields_only_pours_the_kitchen_can_use(sampler: str,
                                                               tmp_path: Path) -> None:
-    """Task II (cup beside a wall): without the kitchen's tests inside the sampler, most of
-    a sampler's skill-valid confident pours hit the wall, the table or graze the cup (the
-    reason the generic stream was once reverted); with them every yielded pour passes
-    ``pour_setup`` and the stream never had to skip one."""
+    """Task II (cup beside a wall): without the kitchen's tests inside the sampler, a
+    sampler's skill-valid confident pours still hit the wall, the table or graze the cup
+    (20-47 % of 30 draws per sampler with the #20 model; before the skill's validity checked
+    the tilt too, most of them: the reason the generic stream was once reverted); with them
+    every yielded pour passes ``pour_setup`` and the stream never had to skip one."""
     seed = 0
     scene = scene_from_world(load_problem(TASK2).world, np.random.default_rng(seed))
     geometry = KitchenGeometry(scene)
@@ -104,7 +105,7 @@ def test_every_sampler_yields_only_pours_the_kitchen_can_use(sampler: str,
                          is_valid=lambda c, u: pour_skill.valid_mask(c, u, config))
     usable = np.mean([geometry.pour_setup("pitcher", "cup", pose, next(plain)) is not None
                       for _ in range(30)])
-    assert usable < 0.3, usable
+    assert usable < 0.9, usable
 
     binding = _task2_streams(sampler, tmp_path, seed)["sample-pour"]
     wired = binding.function.__self__
