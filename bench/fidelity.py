@@ -27,6 +27,12 @@ summary is written to ``--out`` (default ``bench/results/fidelity.json``).
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 3d-pour-engine
     OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 2d-pour-reference --trials 50
+
+The 2D pour's committed run (resumable: the reference trials cost 10-15 s CPU each):
+
+    OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 2d-pour-reference \
+        --trials 200 --cache docs/results/fidelity/pour_trials.jsonl \
+        --out docs/results/fidelity/pour.json
 """
 
 from __future__ import annotations
