@@ -11,9 +11,11 @@ reaches ``--target`` (default 0.95).
 
 Rows (``--rows``, default all):
 
-* ``2d-pour-reference``: Box2D pour as shipped (200 particles, tilt 1.0 rad/s, 10 s cap)
-  vs the reference implementation's settings (500 particles, 0.1 rad/s, 30 s cap);
-  ``2d-pour-particles`` and ``2d-pour-tilt`` change one of them only.
+* ``2d-pour-reference``: Box2D pour as shipped (``PourConfig()``: 100 particles, tilt
+  0.25 rad/s, 10 s cap) vs the reference implementation's settings (``pour.REFERENCE``:
+  500 particles, 0.1 rad/s, 30 s cap); ``2d-pour-particles`` and ``2d-pour-tilt`` change one
+  of them only. Both carry the full cup from (−15, 0) to the pour pose first. (The 2D push
+  has no fast setting: it runs as the reference defines it, in milliseconds.)
 * ``2d-scoop-reference``: Box2D scoop as shipped (grains of radius 0.1) vs the reference
   implementation's grains (radius 0.05, four times as many for the same bed).
 * ``3d-<skill>-engine`` (pour, scoop, push, stir): PyBullet vs SAPIEN, both as shipped.
@@ -27,6 +29,12 @@ summary is written to ``--out`` (default ``bench/results/fidelity.json``).
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 3d-pour-engine
     OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 2d-pour-reference --trials 50
+
+The 2D pour's committed run (resumable: the reference trials cost 10-15 s CPU each):
+
+    OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 2d-pour-reference \
+        --trials 200 --cache docs/results/fidelity/pour_trials.jsonl \
+        --out docs/results/fidelity/pour.json
 """
 
 from __future__ import annotations
@@ -47,13 +55,14 @@ from scipy.stats import binomtest
 
 from ltamp_cli.backends import SkillBackend, load_backend
 from ltamp_cli.backends.box2d.backend import Kitchen2DBackend
-from ltamp_cli.backends.box2d.skills.pour import PourConfig
+from ltamp_cli.backends.box2d.skills.pour import REFERENCE, PourConfig
 from ltamp_cli.backends.box2d.skills.scoop import reference_config as reference_scoop
 
 RESULTS_DIR = Path(__file__).resolve().parent / "results"
 SKILLS_3D = ("pour", "scoop", "push", "stir")
 #: The Kitchen2D reference implementation's pour (field facts): particles, tilt rad/s, cap s.
-REFERENCE_2D_POUR = {"n_particles": 500, "rotate_speed": 0.1, "max_time": 30.0}
+REFERENCE_2D_POUR = {"n_particles": REFERENCE.n_particles, "rotate_speed": REFERENCE.rotate_speed,
+                     "max_time": REFERENCE.max_time}
 #: The Kitchen3D reference implementation's PyBullet solver iterations (field facts).
 REFERENCE_SOLVER_ITERATIONS = 50
 #: Controls drawn per context when looking for one that both pre-checks accept.
@@ -78,8 +87,9 @@ def _box2d_reference_scoop() -> SkillBackend:
 SETTINGS: dict[str, Callable[[], SkillBackend]] = {
     "box2d": lambda: load_backend("box2d"),
     "box2d-reference-pour": lambda: _box2d(**REFERENCE_2D_POUR),
-    "box2d-500-particles": lambda: _box2d(n_particles=500),
-    "box2d-tilt-0.1": lambda: _box2d(rotate_speed=0.1, max_time=30.0),
+    "box2d-500-particles": lambda: _box2d(n_particles=REFERENCE.n_particles),
+    "box2d-tilt-0.1": lambda: _box2d(rotate_speed=REFERENCE.rotate_speed,
+                                     max_time=REFERENCE.max_time),
     "box2d-reference-scoop": _box2d_reference_scoop,
     "pybullet": lambda: load_backend("pybullet"),
     "pybullet-solver-50": lambda: load_backend(

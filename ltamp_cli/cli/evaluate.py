@@ -83,23 +83,28 @@ def evaluate_command(
                 f1 = heldout.f1(model)
                 report["n_test"] = len(heldout.scores)
             report["f1"] = f1
-            report["success_rate"] = _live_success_rate(physics, skill, model, trials, seed)
+            rates = _live_success_rates(physics, skill, model, trials, seed)
+            report["success_rate"], report["random_success_rate"] = rates
             report["n_contexts"] = trials
     finally:
         physics.close()
     emit(report, as_json)
 
 
-def _live_success_rate(
+def _live_success_rates(
     physics: SkillBackend, skill: str, model: SkillModel, trials: int, seed: int
-) -> float | None:
+) -> tuple[float | None, float | None]:
+    """Success rates of θ* and of a uniformly random valid control, each run once in the
+    same ``trials`` contexts drawn from the backend's context distribution (seeded)."""
     if trials == 0:
-        return None
+        return None, None
     import numpy as np  # lazy, like every command's heavy imports: keeps `ltamp --help` fast
     from tqdm import tqdm
 
     rng = np.random.default_rng(seed)
-    successes = 0
+    baseline_rng = np.random.default_rng([seed, 1])
+    space = physics.skills()[skill].control
+    successes = baseline = 0
     for index in tqdm(
         range(trials),
         disable=not progress_enabled(),
@@ -113,4 +118,11 @@ def _live_success_rate(
         )
         result = physics.run_trial(skill, context, control, seed=seed * 100_003 + index)
         successes += bool(result.valid and result.score > 0)
-    return successes / trials
+        # The baseline: the first valid control of a uniform batch (invalid if none is).
+        candidates = space.sample_uniform(baseline_rng, 1000)
+        valid = np.flatnonzero(physics.is_valid(skill, context, candidates))
+        if len(valid):
+            random_result = physics.run_trial(skill, context, candidates[valid[0]],
+                                              seed=seed * 100_003 + index)
+            baseline += bool(random_result.valid and random_result.score > 0)
+    return successes / trials, baseline / trials

@@ -13,14 +13,14 @@ from ltamp_cli.backends.protocol import SkillBackend
 
 # (skill, context, known-good control, known-bad but valid control)
 CASES = {
-    "pour": ([4.0, 4.0, 6.0, 4.0], [0.5, 1.0, 6.0, 2.5], [0.5, -6.0, 6.0, 2.5]),
+    "pour": ([4.0, 4.0, 6.0, 4.0], [0.5, -2.0, 6.0, 2.0], [0.5, -6.0, 6.0, 2.0]),
     "scoop": (
         [7.0, 5.0],
         # Tilted mouth-left into the bed, sweep left, turn upright low in the bed, lift.
         [0.59, 0.02, 0.84, -0.48, 0.51, 0.51, 0.15],
         [0.5, -0.5, 0.95, 0.0, 0.95, 0.5, 0.95],  # skims the bed's surface
     ),
-    "push": ([3.0, 0.0], [-1.0, 0.0, 0.0, 0.5], [-1.0, 0.0, math.pi, 0.5]),
+    "push": ([3.0, 0.0], [-2.0, 0.0, 0.0, 0.1], [-2.0, 0.0, math.pi, 0.5]),
 }
 
 
@@ -56,7 +56,7 @@ def test_particles_are_conserved(backend: Kitchen2DBackend, skill: str) -> None:
     for control in (good, bad):
         info = backend.run_trial(skill, context, control, 3).info
         n = info["n_particles"]
-        assert n > 100
+        assert n >= 100
         assert info["n_in_world"] == n  # none escaped the world or became NaN
         counted = sum(v for k, v in info.items() if k.startswith("n_in_") and k != "n_in_world")
         assert counted + info["n_elsewhere"] == n
@@ -74,7 +74,7 @@ def test_colliding_start_scores_minus_one_without_simulating(backend: Kitchen2DB
     # Grasp point just above the target's rim, held cup straight through the target cup.
     pour_bad = np.array([0.5, 0.0, 1.0, 2.0])
     scoop_bad = np.array([0.0, -1.0, 0.0, 0.0, 0.0, 1.0, 0.0])  # gripper into the cup wall
-    push_bad = np.array([0.2, 0.1, 0.0, 1.0])  # pusher inside the block
+    push_bad = np.array([0.2, 0.1, 0.0, 1.0])  # pusher inside the object
     for skill, context, control in (
         ("pour", [4.0, 5.0, 6.0, 3.0], pour_bad),
         ("scoop", [5.0, 8.0], scoop_bad),

@@ -20,8 +20,8 @@ ROOT = Path(__file__).resolve().parents[2]
 COFFEE = ROOT / "problems" / "kitchen2d" / "coffee.yaml"
 # A pour context/control that lands everything and one that spills (tests/box2d cases).
 CONTEXT = np.array([4.0, 4.0, 6.0, 4.0])
-GOOD = np.array([0.5, 1.0, 6.0, 2.5])
-BAD = np.array([0.5, -6.0, 6.0, 2.5])
+GOOD = np.array([0.5, -2.0, 6.0, 2.0])
+BAD = np.array([0.5, -6.0, 6.0, 2.0])
 
 
 def _streams_module() -> ModuleType:
@@ -60,7 +60,7 @@ def test_precheck_skips_controls_next_to_a_failed_one() -> None:
     # 0.1 lengthscales from the failure: refused without a trial (the limit is not spent).
     assert not passes(CONTEXT, BAD + np.array([0.0, 0.2, 0.0, 0.0]))
     assert (check.checked, check.skipped) == (1, 1)
-    # Far from it (the good control is 3.5 lengthscales away): simulated and accepted.
+    # Far from it (the good control is 2 lengthscales away): simulated and accepted.
     assert passes(CONTEXT, GOOD)
     assert (check.checked, check.rejected, check.skipped) == (2, 1, 1)
 

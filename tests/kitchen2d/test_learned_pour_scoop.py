@@ -88,10 +88,11 @@ def _task2_streams(sampler: str, tmp_path: Path, seed: int = 0) -> dict[str, Any
 @pytest.mark.parametrize("sampler", SAMPLER_NAMES)
 def test_every_sampler_yields_only_pours_the_kitchen_can_use(sampler: str,
                                                               tmp_path: Path) -> None:
-    """Task II (cup beside a wall): without the kitchen's tests inside the sampler, most of
-    a sampler's skill-valid confident pours hit the wall, the table or graze the cup (the
-    reason the generic stream was once reverted); with them every yielded pour passes
-    ``pour_setup`` and the stream never had to skip one."""
+    """Task II (cup beside a wall): without the kitchen's tests inside the sampler, a
+    sampler's skill-valid confident pours still hit the wall, the table or graze the cup
+    (20-47 % of 30 draws per sampler with the #20 model; before the skill's validity checked
+    the tilt too, most of them: the reason the generic stream was once reverted); with them
+    every yielded pour passes ``pour_setup`` and the stream never had to skip one."""
     seed = 0
     scene = scene_from_world(load_problem(TASK2).world, np.random.default_rng(seed))
     geometry = KitchenGeometry(scene)
@@ -104,7 +105,7 @@ def test_every_sampler_yields_only_pours_the_kitchen_can_use(sampler: str,
                          is_valid=lambda c, u: pour_skill.valid_mask(c, u, config))
     usable = np.mean([geometry.pour_setup("pitcher", "cup", pose, next(plain)) is not None
                       for _ in range(30)])
-    assert usable < 0.3, usable
+    assert usable < 0.9, usable
 
     binding = _task2_streams(sampler, tmp_path, seed)["sample-pour"]
     wired = binding.function.__self__
@@ -195,10 +196,11 @@ def test_kernel_learning_bench_plans_tasks_1_to_3_with_each_sampler(tmp_path: Pa
 
 
 def test_push_model_is_confident_only_on_the_strip_the_sampling_table_uses() -> None:
-    """Why the sampling table's push row draws goals on the push model's training strip: off
-    it the GP (goal_y found irrelevant) is confidently wrong — its most confident push for
-    goal (2.7, -3.9) has μ/σ > 1 and fails in a real push trial — while on it the most
-    confident push succeeds."""
+    """Why the sampling table's push row draws goals on the push model's strip (where it is
+    trained densely: a quarter of its goals): off it the GP is misleading — its most
+    confident in-section push for goal (2.7, -3.9) fails in a real push trial although its
+    μ/σ is higher than the on-strip one's — while on the strip the most confident push
+    succeeds (goals (-4.5, 0) and (4.5, 0))."""
     if str(ROOT) not in sys.path:
         sys.path.insert(0, str(ROOT))
     from bench.paper.sampling_table import LiveScores, _push_strip
@@ -207,7 +209,9 @@ def test_push_model_is_confident_only_on_the_strip_the_sampling_table_uses() -> 
     from ltamp_cli.sampling.superlevel import build_superlevel_set
 
     strip = _push_strip("models/kitchen2d/push")
-    assert strip == {"goal_x_abs": [3.0, 5.0], "goal_y_abs_max": 0.5}
+    assert strip is not None
+    assert {key: strip[key] for key in ("goal_x_abs", "goal_y_abs_max")} == {
+        "goal_x_abs": [3.0, 5.0], "goal_y_abs_max": 0.5}
     backend = load_backend("box2d")
     try:
         scores = LiveScores(backend, "push", strip)
@@ -216,14 +220,17 @@ def test_push_model_is_confident_only_on_the_strip_the_sampling_table_uses() -> 
         assert ((np.abs(goals[:, 0]) >= 3.0) & (np.abs(goals[:, 0]) <= 5.0)).all()
         assert (np.abs(goals[:, 1]) <= 0.5).all() and (goals[:, 0] < 0).any()
         model = load_model(ROOT / "models" / "kitchen2d" / "push").model
-        for goal, succeeds in (((2.7, -3.88), False), ((-4.5, 0.0), True)):
+        phi = {}
+        for goal, succeeds in (((2.7, -3.88), False), ((-4.5, 0.0), True), ((4.5, 0.0), True)):
             context = np.array(goal)
             level = build_superlevel_set(
                 model, context, np.random.default_rng(1),
                 is_valid=lambda c, u: scores.is_valid("push", c, u))
             star = level.to_physical(level.theta_star)
-            assert section_mask(context, star)[0] and level.phi_star > 1.0
+            assert section_mask(context, star)[0]
+            phi[goal] = level.phi_star
             score = backend.run_trial("push", context, star[0], 4242).score
             assert (score > 0) == succeeds, (goal, score)
+        assert phi[(2.7, -3.88)] > max(phi[(-4.5, 0.0)], phi[(4.5, 0.0)])
     finally:
         backend.close()

@@ -64,20 +64,20 @@ def test_push_setup_runs_the_skill_push_along_the_table_clear_of_the_curb() -> N
     pose = (spec.object("block").home, geometry.top)
     context = geometry.push_context("block", pose, "left_edge")
     assert context is not None and context[0] < -2.0 and context[1] == 0.0
-    good = np.array([2.0, 0.0, np.pi, 1.5])  # start right of the block, push left 6 units
+    good = np.array([2.0, 0.0, np.pi, 0.6])  # start right of the block, push left 6 units
     conf, (above, start, end) = geometry.push_setup("block", pose, "left_edge", good)
     assert conf == above and start[0] > pose[0] and end[0] == pytest.approx(start[0] - 6.0)
     # The fingertips pass over the curb (0.25 high) but hit the block (0.6 high).
     tip = start[1] - spec.gripper.tip
     assert geometry.top + 0.25 < tip < geometry.top + 0.6
     # Pushing away from the edge, or from the wrong side, is no push off that edge.
-    assert geometry.push_setup("block", pose, "left_edge", [2.0, 0.0, 0.0, 1.5]) is None
-    assert geometry.push_setup("block", pose, "left_edge", [-2.0, 0.0, np.pi, 1.5]) is None
+    assert geometry.push_setup("block", pose, "left_edge", [2.0, 0.0, 0.0, 0.6]) is None
+    assert geometry.push_setup("block", pose, "left_edge", [-2.0, 0.0, np.pi, 0.6]) is None
     # Out of the skill's reach: a goal past an edge more than 5 units away.
     far = (pose[0] + 3.0, pose[1])
     assert geometry.push_context("block", far, "left_edge") is None
-    mask = section_mask(context, np.array([good, [2.0, 2.0, np.pi, 1.5],
-                                           [2.0, 0.0, np.pi / 2, 1.5]]))
+    mask = section_mask(context, np.array([good, [2.0, 2.0, np.pi, 0.6],
+                                           [2.0, 0.0, np.pi / 2, 0.6]]))
     assert mask.tolist() == [True, False, False]
 
 

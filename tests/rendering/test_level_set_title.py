@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -38,8 +39,13 @@ def test_units_round_trip_and_label_axes() -> None:
 def test_the_title_names_the_context_with_units_and_the_held_controls() -> None:
     loaded = load_model(shipped_push_model())
     model = loaded.model
-    assert not model.spec.control.units  # saved before specs had units
-    spec = _spec_with_units(model.spec, loaded.metadata.get("backend"))
+    assert model.spec.control.units == ("units", "units", "rad", "s")  # saved with units
+    # A model saved before specs had units gets them from its backend.
+    bare = dataclasses.replace(model.spec, **{
+        part: ParamSpace(space.names, space.lows, space.highs)
+        for part, space in (("context", model.spec.context), ("control", model.spec.control))})
+    assert not bare.control.units and not bare.context.units
+    spec = _spec_with_units(bare, loaded.metadata.get("backend"))
     assert spec.control.units == ("units", "units", "rad", "s")
     superlevel = build_superlevel_set(model, np.array([2.0, -1.0]), np.random.default_rng(0))
     title = default_title(superlevel, (0, 1), spec)

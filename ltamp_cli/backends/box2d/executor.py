@@ -25,6 +25,7 @@ from ltamp_cli.backends.box2d.scene import (
     build_scene,
     scene_from_world,
 )
+from ltamp_cli.backends.box2d.skills import pour as pour_skill
 from ltamp_cli.backends.box2d.skills import scoop as scoop_skill
 from ltamp_cli.backends.box2d.tamp import (
     KitchenGeometry,
@@ -273,18 +274,21 @@ class Kitchen2DRun:
         item = self.spec.object(source)
         grasp = self.gripper._held_rel
         start = approach[-1]
+        # Tilt like the skill: towards the target (sign(rel_x)) at its tilt speed.
         dangle = float(control[3])
+        sense = pour_skill.tilt_sign(float(control[1]))
+        tilt_speed = pour_skill.PourConfig().rotate_speed
         # Tilt as far as the control asks, or until the cup would touch the table.
-        angle = 0.0
-        step = 1.0 * self.scene.kitchen.config.dt
-        while angle > -dangle + 1e-12:
-            nxt = max(angle - step, -dangle)
+        magnitude = 0.0
+        step = tilt_speed * self.scene.kitchen.config.dt
+        while magnitude < dangle - 1e-12:
+            nxt = min(magnitude + step, dangle)
             corners = self.geometry.hand_corners(item, (-grasp[0], -grasp[1]), start[0],
-                                                 start[1], nxt)
+                                                 start[1], sense * nxt)
             if corners[:, 1].min() < top:
                 break
-            angle = nxt
-        self.rotate_about(start, (0.0, 0.0), angle, 1.0)
+            magnitude = nxt
+        self.rotate_about(start, (0.0, 0.0), sense * magnitude, tilt_speed)
         self.settle(10.0)
         self.log.append({"pour": source, "into": target, "contents": self.contents(target)})
         self.rotate_about(start, (0.0, 0.0), 0.0, 1.0)

@@ -68,6 +68,9 @@ MATERIALS: Mapping[str, ParticleSpec] = {
     "sugar": ParticleSpec(radius=0.1, color=(250, 140, 190), material="sugar"),
 }
 
+#: Grains in a filled cup unless its ``particles`` says otherwise (the kitchen's count; the
+#: pour skill's trials use fewer, see ``bench/fidelity.py`` for why that does not matter).
+CUP_PARTICLES = 200
 #: Clearance kept around every object's footprint (the fingers need room beside handles).
 CLEARANCE = 0.7
 #: A holder's walls: thickness, and their gaps to the handle bar (left; narrower than a
@@ -180,7 +183,7 @@ def _make_object(name: str, raw: Any, rng: np.random.Generator) -> SceneObject:
                              f"[2, 9], got {width:g} x {height:g}")
         spec = CupSpec(width, height, pour_skill.PourConfig().wall)
         if material and kind == "cup":
-            n = int(raw.get("particles", pour_skill.PourConfig().n_particles))
+            n = int(raw.get("particles", CUP_PARTICLES))
         elif material:
             n = scoop_skill.fill_count(spec, scoop_skill.ScoopConfig())
     elif kind == "spoon":

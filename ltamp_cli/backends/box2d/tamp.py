@@ -39,6 +39,8 @@ from ltamp_cli.backends.box2d.scene import (
     grasp_opening,
     object_top,
 )
+from ltamp_cli.backends.box2d.skills import pour as pour_skill
+from ltamp_cli.backends.box2d.skills import push as push_skill
 from ltamp_cli.backends.box2d.skills import scoop as scoop_skill
 from ltamp_cli.motion import RRTConnectConfig, plan_rrt_connect
 
@@ -54,11 +56,14 @@ TRANSIT_MARGIN = 0.5
 #: object already in hand, so they accept a grasp at the very end of a bar; a real grasp
 #: there tips the object over).
 MIN_GRIP = 0.8
-#: The push skill's pusher is a disc of this radius (skills/push.py); the kitchen pushes
-#: with the closed fingers, whose leading face is put where the disc's would be.
-PUSHER_RADIUS = 0.4
+#: The push skill's pusher is a rectangle whose leading face is this far ahead of its
+#: centre (skills/push.py); the kitchen pushes with the closed fingers, whose leading face
+#: is put where the rectangle's would be.
+PUSHER_HALF_DEPTH = push_skill.PushConfig().pusher_depth / 2
+#: Radius of the push skill's round object.
+PUSH_OBJECT_RADIUS = push_skill.PushConfig().object_radius
 #: Pusher speed (units/s), as in the push skill's trials.
-PUSH_SPEED = 4.0
+PUSH_SPEED = push_skill.PushConfig().speed
 #: The learned push goal lies this far past the table edge: a control with g > 0 leaves the
 #: block within 2 of it, so its centre ends at least 0.5 past the edge and it falls.
 PUSH_PAST_EDGE = 2.5
@@ -380,8 +385,9 @@ class KitchenGeometry:
         exclude = [spot] if spot else []
         if not self.segment_free(item, grasp, approach, exclude):
             return None
-        # Tilt clockwise about the grasp point (the gripper origin) up to dangle.
-        angles = -np.linspace(0.0, float(control[3]), 24)
+        # Tilt about the grasp point (the gripper origin) up to dangle, towards the target
+        # (the skill's sense: sign(rel_x)).
+        angles = pour_skill.tilt_sign(float(control[1])) * np.linspace(0.0, float(control[3]), 24)
         if not self.swing_free(item, grasp, start, angles, (0.0, 0.0), [*exclude, "table"]):
             return None
         # The pour score does not mind shoving the target cup aside; a plan does (the cup
@@ -542,13 +548,22 @@ class KitchenGeometry:
                            pose[1] + size]])
         return not self.overlaps(swept, np.array(self.furniture[1:]))
 
+    def push_offset(self, name: str) -> float:
+        """How far ahead of the skill's pusher centre ``rx`` the hand's centre goes, so that
+        the gap from the hand's leading face to block ``name`` is the skill's gap from its
+        pusher's leading face to its disc (the learned durations then reach the block)."""
+        half = self.spec.gripper.finger_width  # closed fingers: two finger widths wide
+        size = self.spec.object(name).spec.size
+        return PUSHER_HALF_DEPTH - half + PUSH_OBJECT_RADIUS - size / 2
+
     def push_setup(self, name: str, pose: Point, edge: str, control: Sequence[float]
                    ) -> tuple[Point, tuple[Point, Point, Point]] | None:
         """Conf and push approach ``(conf, start, end)`` of a push of block ``name`` off
         ``edge`` with the push skill's control ``(rx, ry, angle, duration)``.
 
-        The closed gripper goes down beside the block (its leading face where the skill's
-        pusher disc would be) and moves along the table by the x part of the skill's push,
+        The closed gripper goes down beside the block (its leading face as far from the
+        block as the skill's pusher's from its disc, see :meth:`push_offset`) and moves along
+        the table by the x part of the skill's push,
         ``PUSH_SPEED · duration · cos(angle)``. ``None`` if the push does not run towards
         the edge or the gripper would hit furniture (outside the block's own column).
         """
@@ -557,8 +572,7 @@ class KitchenGeometry:
         travel = PUSH_SPEED * duration * math.cos(angle)
         if direction * travel <= 0 or direction * rx >= 0:
             return None
-        half = self.spec.gripper.finger_width  # closed fingers: two finger widths wide
-        start = (_r(pose[0] + rx + direction * (PUSHER_RADIUS - half)),
+        start = (_r(pose[0] + rx + direction * self.push_offset(name)),
                  self.push_height(name, pose))
         end = (_r(start[0] + travel), start[1])
         conf = (start[0], self.conf_height(None, None))

@@ -23,11 +23,11 @@ import numpy as np
 
 from ltamp_cli.backends.box2d.geometry import Box
 from ltamp_cli.backends.box2d.scene import SceneObject
+from ltamp_cli.backends.box2d.skills import pour as pour_skill
 from ltamp_cli.backends.box2d.skills import scoop as scoop_skill
 from ltamp_cli.backends.box2d.tamp import (
     MIN_GRIP,
     PUSH_SPEED,
-    PUSHER_RADIUS,
     TRANSIT_MARGIN,
     KitchenGeometry,
     Point,
@@ -174,10 +174,13 @@ def pour_mask(geometry: KitchenGeometry, source: str, target: str, pose: Point,
         rows = rows[ok[rows]]
         if len(rows) == 0:
             continue
-        # Tilt clockwise about the gripper origin to -dangle, exactly as np.linspace does.
+        # Tilt about the gripper origin to ±dangle (towards the target, the skill's
+        # sign(rel_x)), exactly as np.linspace does.
         dangle = controls[rows, 3]
-        angles = -(steps[None, :] * (dangle / (N_ANGLES - 1))[:, None])
-        angles[:, -1] = -dangle
+        sense = pour_skill.tilt_sign(controls[rows, 1])[:, None]
+        angles = steps[None, :] * (dangle / (N_ANGLES - 1))[:, None]
+        angles[:, -1] = dangle
+        angles = sense * angles
         c, s = np.cos(angles)[..., None], np.sin(angles)[..., None]  # (r, A, 1)
         sx, sy = start[rows, 0, None, None], start[rows, 1, None, None]
         grasp = grasps[rows][:, None, :]
@@ -248,10 +251,9 @@ def push_mask(geometry: KitchenGeometry, block: str, pose: Point, edge: str,
     direction = math.copysign(1.0, geometry.edge_x(edge) - pose[0])
     travel = PUSH_SPEED * duration * np.cos(angle)
     ok = (direction * travel > 0) & (direction * rx < 0)
-    half = geometry.spec.gripper.finger_width
     n = len(controls)
     y = np.full(n, geometry.push_height(block, pose))
-    start = np.stack([_round(pose[0] + rx + direction * (PUSHER_RADIUS - half)), y], axis=1)
+    start = np.stack([_round(pose[0] + rx + direction * geometry.push_offset(block)), y], axis=1)
     end = np.stack([_round(start[:, 0] + travel), y], axis=1)
     top = np.full(n, conf_heights(geometry, None))
     conf = np.stack([start[:, 0], top], axis=1)

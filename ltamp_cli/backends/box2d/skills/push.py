@@ -1,23 +1,32 @@
-"""Push: slide a block on a table towards a goal, seen from above (no gravity).
+"""Push: push a round object on a table towards a goal, seen from above (no gravity).
 
-Context: the goal position ``goal_x, goal_y`` in [−5, 5] (world units; the block starts at
-the origin). Control: the pusher's start ``rx, ry`` in [−5, 5] relative to the block, the
-push direction ``angle`` in [0, 2π] and the push ``duration`` in [0, 2] s at ``speed``.
-The pusher is the closed gripper seen from above (a disc); the table's friction is modelled
-by the block's linear and angular damping. After the push the block slides until it stops.
+The skill as the reference Kitchen2D defines it (field facts):
 
-Score (seed paper): g = 2 − ‖x − x_goal‖ with x the block's final position. A pusher start
-overlapping the block is invalid and scores −1. There are no particles in this skill.
+* Context: the goal position ``goal_x, goal_y`` in [−5, 5] (world units; the object starts
+  at the origin).
+* Control: the pusher's start ``rx, ry`` in [−5, 5] relative to the object, the push
+  direction ``angle`` in [0, 2π] and the push ``duration`` in [0, 2] s.
+* The object is a disc of radius 1 held to the table by a friction joint (max force 5,
+  max torque 2: the table's friction seen from above). The pusher is a 0.6 × 2 rectangle
+  (thin along the push, wide across it) driven by force tracking: every step a force
+  brings its velocity to ``speed`` (10 units/s) along ``angle``. After ``duration`` it
+  tracks zero velocity while the object coasts for ``coast_time`` (1 s, 100 steps).
+* Validity: a pusher start overlapping the object scores −1 without simulating.
+
+Score (seed paper): g = 2 − ‖x − x_goal‖ with x the object's position at the end. Nothing
+here is random. The object's density is not among the reference facts; 0.1 makes it light
+enough that the friction joint (deceleration 5 / mass ≈ 16 units/s²) stops a push at
+10 units/s within the coast (about 3 units), so goals over the whole box are reachable.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
+from Box2D import b2
 
-from ltamp_cli.backends.box2d.kitchenware import BlockSpec, add_body
 from ltamp_cli.backends.box2d.skills.common import new_kitchen
 from ltamp_cli.backends.box2d.world import Observer, PhysicsConfig
 from ltamp_cli.backends.protocol import ParamSpace, SkillSpec, TrialResult
@@ -29,31 +38,48 @@ SPEC = SkillSpec(
         ("rx", "ry", "angle", "duration"), (-5.0, -5.0, 0.0, 0.0), (5.0, 5.0, 2 * math.pi, 2.0),
         ("units", "units", "rad", "s"),
     ),
-    description="push a block to a goal seen from above; g = 2 - |x - goal|",
+    description="push a round object to a goal seen from above; g = 2 - |x - goal|",
 )
 
 
 @dataclass(frozen=True)
 class PushConfig:
-    """Simulation settings of a push trial."""
+    """Simulation settings of a push trial (the reference's; lengths in world units)."""
 
-    block: BlockSpec = field(default_factory=BlockSpec)
-    pusher_radius: float = 0.4
-    speed: float = 4.0
-    max_slide_time: float = 4.0
-    rest_speed: float = 0.01
+    object_radius: float = 1.0
+    object_density: float = 0.1
+    #: Friction joint to the table: max force and max torque.
+    friction_force: float = 5.0
+    friction_torque: float = 2.0
+    #: Pusher: ``depth`` along the push, ``width`` across it.
+    pusher_depth: float = 0.6
+    pusher_width: float = 2.0
+    pusher_density: float = 1.0
+    #: Tracked pusher speed (units/s) and the coast after the push (s).
+    speed: float = 10.0
+    coast_time: float = 1.0
 
 
 def score(distance: float) -> float:
     return 2.0 - distance
 
 
+def pusher_distance(controls: np.ndarray, config: PushConfig) -> np.ndarray:
+    """Distance from the object's centre (the origin) to the pusher rectangle at its start,
+    for controls ``(n, 4)``; returns ``(n,)`` (0 when the centre is inside it)."""
+    rx, ry, angle = controls[:, 0], controls[:, 1], controls[:, 2]
+    c, s = np.cos(angle), np.sin(angle)
+    # The origin in the pusher's frame (x along the push).
+    lx, ly = -(c * rx + s * ry), -(-s * rx + c * ry)
+    dx = np.maximum(np.abs(lx) - config.pusher_depth / 2, 0.0)
+    dy = np.maximum(np.abs(ly) - config.pusher_width / 2, 0.0)
+    return np.hypot(dx, dy)
+
+
 def valid_mask(context: np.ndarray, controls: np.ndarray, config: PushConfig) -> np.ndarray:
-    """Whether the pusher disc starts clear of the block, for a batch ``(n, 4)``."""
-    half = config.block.size / 2
-    dx = np.maximum(np.abs(controls[:, 0]) - half, 0.0)
-    dy = np.maximum(np.abs(controls[:, 1]) - half, 0.0)
-    return np.hypot(dx, dy) > config.pusher_radius + 0.01
+    """Whether the pusher starts clear of the object, for a batch ``(n, 4)``: ``(n,)``."""
+    controls = np.asarray(controls, dtype=float).reshape(-1, 4)
+    return pusher_distance(controls, config) > config.object_radius + 0.01
 
 
 def run(
@@ -66,41 +92,45 @@ def run(
     """Simulate one push. Nothing here is random, so ``seed`` does not change the outcome."""
     del seed
     if not valid_mask(context, control[None, :], config)[0]:
-        return TrialResult(SPEC.invalid_score, False, {"reason": "pusher starts in the block"})
+        return TrialResult(SPEC.invalid_score, False, {"reason": "pusher starts in the object"})
     rx, ry, angle, duration = (float(v) for v in control)
     kitchen = new_kitchen(observer, furniture=False, config=PhysicsConfig(gravity=(0.0, 0.0)))
-    block = add_body(
-        kitchen,
-        config.block.boxes(),
-        (0.0, 0.0, 0.0),
-        name="block",
-        density=config.block.density,
-        friction=0.5,
-        color=(200, 80, 60),
-    )
-    block.linearDamping = config.block.linear_damping
-    block.angularDamping = config.block.angular_damping
-    goal = kitchen.world.CreateStaticBody(position=(float(context[0]), float(context[1])))
+    world = kitchen.world
+    ground = world.CreateStaticBody(position=(0.0, 0.0))
+    thing = world.CreateDynamicBody(position=(0.0, 0.0))
+    thing.CreateCircleFixture(radius=config.object_radius, density=config.object_density,
+                              friction=0.5)
+    thing.userData = {"name": "object", "color": (200, 80, 60)}
+    world.CreateFrictionJoint(bodyA=ground, bodyB=thing, localAnchorA=(0.0, 0.0),
+                              localAnchorB=(0.0, 0.0), maxForce=config.friction_force,
+                              maxTorque=config.friction_torque, collideConnected=False)
+    goal = world.CreateStaticBody(position=(float(context[0]), float(context[1])))
     goal.CreateCircleFixture(radius=0.15, isSensor=True)
     goal.userData = {"name": "goal", "color": (40, 170, 60)}
-    pusher = kitchen.world.CreateKinematicBody(position=(rx, ry))
-    pusher.CreateCircleFixture(radius=config.pusher_radius, friction=0.5)
+    pusher = world.CreateDynamicBody(position=(rx, ry), angle=angle, fixedRotation=True)
+    pusher.CreatePolygonFixture(box=(config.pusher_depth / 2, config.pusher_width / 2),
+                                density=config.pusher_density, friction=0.5)
     pusher.userData = {"name": "gripper", "color": (230, 190, 40)}
+    pusher.bullet = True  # 0.1 units per step against a 0.6 thick box: no tunnelling
 
-    velocity = (config.speed * math.cos(angle), config.speed * math.sin(angle))
-    pusher.linearVelocity = velocity
+    desired = b2.vec2(0.0, 0.0)
+
+    def track(dt: float) -> None:
+        # Force tracking: the force that reaches the desired velocity in one step.
+        pusher.ApplyForceToCenter(pusher.mass * (desired - pusher.linearVelocity) / dt, True)
+
+    kitchen.add_hook(track)
+    desired = b2.vec2(config.speed * math.cos(angle), config.speed * math.sin(angle))
     kitchen.step(round(duration / kitchen.config.dt))
-    pusher.linearVelocity = (0.0, 0.0)
-    for _ in range(round(config.max_slide_time / kitchen.config.dt)):
-        if block.linearVelocity.length < config.rest_speed:
-            break
-        kitchen.step()
-    final = np.array(tuple(block.position))
+    desired = b2.vec2(0.0, 0.0)
+    kitchen.step(round(config.coast_time / kitchen.config.dt))
+    final = np.array(tuple(thing.position))
     distance = float(np.linalg.norm(final - np.asarray(context, dtype=float)))
     info = {
         "distance": distance,
         "final_x": float(final[0]),
         "final_y": float(final[1]),
+        "final_speed": float(thing.linearVelocity.length),
         "sim_time_s": round(kitchen.time, 4),
     }
     return TrialResult(score(distance), True, info)
