@@ -220,7 +220,10 @@ def test_sapien_pour_with_nan_or_too_fast_bead_is_invalid(
     finally:
         backend.close()
     assert reasons[0].startswith("physics diverged: non-finite")
-    assert reasons[1].startswith("physics diverged: speed > 1000")
+    # Which limit trips first depends on when the guard's rotating slice reaches the kicked
+    # bead: by then it may already be 100 m away. Either names the bead and invalidates.
+    assert reasons[1].startswith(("physics diverged: speed > 1000",
+                                  "physics diverged: |position| > 100"))
     assert all("first bead" in reason for reason in reasons)
 
 
