@@ -99,6 +99,22 @@ def trapezoid_fraction(times: np.ndarray, length: float, speed: float,
     return np.clip(s / length, 0.0, 1.0)
 
 
+def min_jerk(length: float, speed: float, accel: float, dt: float) -> np.ndarray:
+    """Rest-to-rest minimum-jerk progress along a straight leg of ``length`` units (a smoother
+    alternative to the trapezoid: its acceleration is continuous; the 2D pour's carry uses it).
+
+    s(τ) = 10τ³ − 15τ⁴ + 6τ⁵ peaks at 1.875·L/T in speed and 5.774·L/T² in acceleration,
+    so the duration T is the shortest meeting both limits. Returns the fractions of the
+    leg reached at the end of each ``dt`` step, shape ``(steps,)``, ending at 1.0.
+    """
+    if length <= 0.0:
+        return np.zeros(0)
+    duration = max(1.875 * length / speed, math.sqrt(5.7735 * length / accel))
+    tau = np.arange(1, math.ceil(duration / dt - 1e-9) + 1) * dt / duration
+    tau = np.minimum(tau, 1.0)
+    return tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
+
+
 def segment_limits(delta: np.ndarray, groups: Groups, speeds: np.ndarray,
                    accelerations: np.ndarray) -> tuple[float, float]:
     """Limits on the path parameter's speed and acceleration (per second, per second²) of a

@@ -10,6 +10,7 @@ import pytest
 
 from ltamp_cli.backends.box2d.skills import pour, push
 from ltamp_cli.backends.box2d.world import Kitchen
+from ltamp_cli.motion.timing import min_jerk
 
 CONTEXT = np.array([4.0, 4.0, 6.0, 4.0])
 
@@ -38,14 +39,14 @@ def test_reference_setting_is_the_reference_implementations() -> None:
 
 def test_min_jerk_respects_its_speed_and_acceleration_limits() -> None:
     dt, length, speed, accel = 0.01, 15.0, 10.0, 8.0
-    s = np.concatenate([[0.0], pour.min_jerk(length, speed, accel, dt)]) * length
+    s = np.concatenate([[0.0], min_jerk(length, speed, accel, dt)]) * length
     assert s[-1] == pytest.approx(length) and np.all(np.diff(s) >= 0)
     v = np.diff(s) / dt
     a = np.diff(v) / dt
     assert v.max() <= speed * 1.01 and np.abs(a).max() <= accel * 1.05
     # The slower limit sets the duration: at least one of them is nearly reached.
     assert v.max() > 0.95 * speed or np.abs(a).max() > 0.95 * accel
-    assert len(pour.min_jerk(0.0, speed, accel, dt)) == 0
+    assert len(min_jerk(0.0, speed, accel, dt)) == 0
 
 
 def test_pour_carries_the_full_cup_from_its_start_to_the_pour_pose() -> None:

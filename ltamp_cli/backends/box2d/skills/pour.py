@@ -13,7 +13,7 @@ The skill as the reference Kitchen2D defines it (field facts):
   the grasp point ``carry_from`` = (−15, 0) from the target's centre (x) and the table
   (y, plus the grasp height). The gripper carries it up, across above everything and
   down to the pour pose, each leg rest-to-rest with a minimum-jerk profile whose duration
-  respects ``carry_speed`` and ``carry_accel`` (see :func:`min_jerk`), then tilts at
+  respects ``carry_speed`` and ``carry_accel`` (``motion.timing.min_jerk``), then tilts at
   ``rotate_speed`` and holds until no particle can still change the score, or
   ``max_time`` after the tilt.
 * Validity: the start, the pour pose and the whole tilt must keep the gripper and the held
@@ -43,6 +43,7 @@ from ltamp_cli.backends.box2d.particles import ParticleSpec, add_particles, hex_
 from ltamp_cli.backends.box2d.skills.common import freeze, new_kitchen
 from ltamp_cli.backends.box2d.world import KitchenLayout, Observer
 from ltamp_cli.backends.protocol import ParamSpace, SkillSpec, TrialResult
+from ltamp_cli.motion.timing import min_jerk
 
 SPEC = SkillSpec(
     name="pour",
@@ -111,21 +112,6 @@ def tilt_sign(rel_x: float | np.ndarray) -> float | np.ndarray:
     ``rel_x = 0`` tilting clockwise (the handle side is the left)."""
     return np.where(np.asarray(rel_x) > 0, 1.0, -1.0) if np.ndim(rel_x) else (
         1.0 if rel_x > 0 else -1.0)
-
-
-def min_jerk(length: float, speed: float, accel: float, dt: float) -> np.ndarray:
-    """Rest-to-rest minimum-jerk progress along a leg of ``length`` units.
-
-    s(τ) = 10τ³ − 15τ⁴ + 6τ⁵ peaks at 1.875·L/T in speed and 5.774·L/T² in acceleration,
-    so the duration T is the shortest meeting both limits. Returns the fractions of the
-    leg reached at the end of each ``dt`` step, shape ``(steps,)``, ending at 1.0.
-    """
-    if length <= 0.0:
-        return np.zeros(0)
-    duration = max(1.875 * length / speed, math.sqrt(5.7735 * length / accel))
-    tau = np.arange(1, math.ceil(duration / dt - 1e-9) + 1) * dt / duration
-    tau = np.minimum(tau, 1.0)
-    return tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
 
 
 def _cups(context: np.ndarray, config: PourConfig) -> tuple[CupSpec, CupSpec]:
