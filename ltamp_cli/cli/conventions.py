@@ -81,10 +81,16 @@ def progress_line(label: str) -> Iterator[None]:
     done = threading.Event()
     start = time.perf_counter()
 
+    def draw() -> None:
+        sys.stderr.write(f"\r{label} … {time.perf_counter() - start:.0f} s\x1b[K")
+        sys.stderr.flush()
+
     def tick() -> None:
         while not done.wait(TICK_S):
-            sys.stderr.write(f"\r{label} … {time.perf_counter() - start:.0f} s\x1b[K")
-            sys.stderr.flush()
+            draw()
+
+    # Drawn once up front, so a step shorter than a tick still says what it was doing.
+    draw()
 
     ticker = threading.Thread(target=tick, name="ltamp-progress", daemon=True)
     ticker.start()
