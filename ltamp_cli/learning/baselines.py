@@ -16,6 +16,7 @@ from sklearn.ensemble import RandomForestClassifier, RandomForestRegressor
 from sklearn.neural_network import MLPClassifier, MLPRegressor
 
 from ltamp_cli.backends.protocol import SkillSpec
+from ltamp_cli.learning.acquisition import first_valid
 from ltamp_cli.learning.model import DEFAULT_CANDIDATES, PhysicalValidity, SkillModel
 
 SKLEARN_KINDS = ("nn-c", "nn-r", "rf-c", "rf-r")
@@ -108,11 +109,14 @@ class RandomModel(SkillModel):
         is_valid: PhysicalValidity | None = None,
         n_candidates: int = DEFAULT_CANDIDATES,
     ) -> tuple[np.ndarray, float]:
-        """A uniformly random valid control (first valid of ``n_candidates`` draws)."""
+        """A uniformly random valid control (first valid of ``n_candidates`` draws, tested
+        lazily in blocks: a validity test can cost a millisecond per control)."""
         rng = rng if rng is not None else np.random.default_rng(0)
         controls = self.spec.control.sample_uniform(rng, n_candidates)
         if is_valid is not None:
-            ok = np.asarray(is_valid(np.asarray(context, dtype=float), controls), dtype=bool)
-            if ok.any():
-                return controls[int(np.argmax(ok))], 0.0
+            context = np.asarray(context, dtype=float)
+            first = first_valid(np.arange(len(controls)), controls, 1,
+                                lambda batch: is_valid(context, batch))
+            if len(first):
+                return controls[int(first[0])], 0.0
         return controls[0], 0.0

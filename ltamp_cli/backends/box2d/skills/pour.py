@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ltamp_cli.backends.box2d.geometry import Box
+from ltamp_cli.backends.box2d.geometry import Box, rotated_hits
 from ltamp_cli.backends.box2d.gripper import Gripper, GripperSpec
 from ltamp_cli.backends.box2d.kitchenware import CupSpec, add_cup
 from ltamp_cli.backends.box2d.particles import ParticleSpec, add_particles, hex_grid, inside_box
@@ -136,31 +136,6 @@ def _fixed_boxes(target: CupSpec, config: PourConfig) -> np.ndarray:
     return np.array(rows)
 
 
-def _hits(corners: np.ndarray, fixed: np.ndarray, margin: float) -> np.ndarray:
-    """Separating-axis test of rotated rectangles against axis-aligned boxes.
-
-    ``corners``: ``(..., 4, 2)`` corners of each rectangle in order; ``fixed``: ``(k, 4)``.
-    Returns ``(...)``: whether the rectangle overlaps (within ``margin``) any fixed box.
-    """
-    lo = corners.min(axis=-2)  # (..., 2)
-    hi = corners.max(axis=-2)
-    f = fixed[(None,) * (corners.ndim - 2)]  # (1.., k, 4)
-    f_lo, f_hi = f[..., :2] - margin, f[..., 2:] + margin
-    # World axes.
-    overlap = np.all((lo[..., None, :] < f_hi) & (f_lo < hi[..., None, :]), axis=-1)
-    # The rectangle's own two axes: project the fixed box's corners on them.
-    fc = np.stack([np.stack([f_lo[..., 0], f_lo[..., 1]], -1),
-                   np.stack([f_hi[..., 0], f_lo[..., 1]], -1),
-                   np.stack([f_hi[..., 0], f_hi[..., 1]], -1),
-                   np.stack([f_lo[..., 0], f_hi[..., 1]], -1)], axis=-2)  # (.., k, 4, 2)
-    for edge in (corners[..., 1, :] - corners[..., 0, :], corners[..., 3, :] - corners[..., 0, :]):
-        proj_r = (corners * edge[..., None, :]).sum(-1)  # (..., 4)
-        proj_f = (fc * edge[..., None, None, :]).sum(-1)  # (..., k, 4)
-        overlap &= ((proj_r.min(-1)[..., None] < proj_f.max(-1))
-                    & (proj_f.min(-1) < proj_r.max(-1)[..., None]))
-    return overlap.any(axis=-1)
-
-
 def valid_mask(context: np.ndarray, controls: np.ndarray, config: PourConfig) -> np.ndarray:
     """Start, pour-pose and tilt collision test for a batch of controls ``(n, 4)``.
 
@@ -173,31 +148,28 @@ def valid_mask(context: np.ndarray, controls: np.ndarray, config: PourConfig) ->
     top = config.layout.table_top
     fixed = _fixed_boxes(target, config)
     controls = np.asarray(controls, dtype=float).reshape(-1, 4)
-    out = np.zeros(len(controls), dtype=bool)
-    fractions = np.linspace(0.0, 1.0, SWING_ANGLES)
-    for lo in range(0, len(controls), 256):
-        batch = controls[lo:lo + 256]
-        gx, gy = batch[:, 1], top + target.height + batch[:, 2]
-        heights = np.array([held.grasp_height(float(r)) for r in batch[:, 0]])
-        # Corners of every moving box in the gripper frame: (n, b, 4, 2).
-        local = []
-        for row, h in enumerate(heights):
-            boxes = _moving_boxes(held, h, config) if row == 0 or h != heights[row - 1] else None
-            if boxes is not None:
-                corners = np.array([[[b.cx - b.hw, b.cy - b.hh], [b.cx + b.hw, b.cy - b.hh],
-                                     [b.cx + b.hw, b.cy + b.hh], [b.cx - b.hw, b.cy + b.hh]]
-                                    for b in boxes])
-            local.append(corners)
-        pts = np.array(local)
-        angles = (tilt_sign(batch[:, 1]) * batch[:, 3])[:, None] * fractions[None, :]  # (n, A)
-        c, s = np.cos(angles)[:, :, None, None], np.sin(angles)[:, :, None, None]
-        px, py = pts[:, None, ..., 0], pts[:, None, ..., 1]  # (n, 1, b, 4)
-        world = np.stack([gx[:, None, None, None] + c * px - s * py,
-                          gy[:, None, None, None] + s * px + c * py], axis=-1)  # (n, A, b, 4, 2)
-        start = _hits(world[:, :1], fixed, 0.01).any(axis=(1, 2))
-        swing = _hits(world[:, 1:], fixed, SWING_MARGIN).any(axis=(1, 2))
-        out[lo:lo + 256] = ~(start | swing)
-    return out
+    heights = np.array([held.grasp_height(float(r)) for r in controls[:, 0]])
+    # Moving boxes in the gripper frame: the gripper's do not depend on the grasp, the held
+    # cup's are lowered by the grasp height. Centres (n, b, 2), half extents (b, 2).
+    gripper = [*config.gripper.boxes(held.handle_width)]
+    cup = _moving_boxes(held, 0.0, config)[len(gripper):]
+    local = np.array([[b.cx, b.cy] for b in (*gripper, *cup)])
+    drop = np.zeros((len(controls), len(local), 2))
+    drop[:, len(gripper):, 1] = heights[:, None]
+    centers = local[None] - drop
+    half = np.array([[b.hw, b.hh] for b in (*gripper, *cup)])
+    grasp = np.stack([controls[:, 1], top + target.height + controls[:, 2]], axis=-1)  # (n, 2)
+    angles = (tilt_sign(controls[:, 1]) * controls[:, 3])[:, None] * np.linspace(
+        0.0, 1.0, SWING_ANGLES)[None, :]  # (n, A)
+    c, s = np.cos(angles)[..., None], np.sin(angles)[..., None]  # (n, A, 1)
+    px, py = centers[:, None, :, 0], centers[:, None, :, 1]  # (n, 1, b)
+    world = np.stack([grasp[:, None, None, 0] + c * px - s * py,
+                      grasp[:, None, None, 1] + s * px + c * py], axis=-1)  # (n, A, b, 2)
+    box_angles = np.broadcast_to(angles[..., None], world.shape[:-1])
+    start = rotated_hits(world[:, 0], box_angles[:, 0], half, fixed, 0.01).any(axis=-1)
+    swing = rotated_hits(world[:, 1:], box_angles[:, 1:], half, fixed,
+                         SWING_MARGIN).any(axis=(1, 2))
+    return ~(start | swing)
 
 
 def carry_waypoints(context: np.ndarray, control: np.ndarray, config: PourConfig
