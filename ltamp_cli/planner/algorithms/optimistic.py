@@ -4,6 +4,32 @@ Instances not yet (fully) called certify their facts with placeholder objects ``
 a complexity bound (complexity of an instance = summed complexity of its inputs + calls
 made); a plan over real and optimistic facts is then retraced to the *stream plan* of
 instances whose calls would make its optimistic facts real.
+
+Shared placeholders (PDDLStream's shared optimistic objects, ``StreamInfo(opt_gen_fn=
+PartialInputs(...))``): by default all instances of a stream with outputs share one
+placeholder per output (per value of the selected inputs with ``PartialInputs("?o")``), so
+the objects of the optimistic task, and the actions over them, do not grow with the number
+of instances (kitchen_fluent: 64 ``skill-conf`` instances gave 64 configurations, and the
+moves between all configurations most of the task). An instance becomes *refined* (its own
+placeholders, as before) once a plan needed it in a way sharing cannot bind
+(:func:`split_shared`). ``:fluents`` streams keep unique placeholders: what failed in a
+context is recorded per instance and blocks its output facts in that context
+(``context_blocks``), which a shared output would wrongly carry to the other instances.
+
+Correctness of binding a plan over shared placeholders. A shared placeholder ``X`` stands
+for the output of any of its producing instances; different instances' real outputs differ,
+so ``X`` may be bound only if a single instance ``k`` certifies every fact the plan needs
+that holds ``X`` as an output of its certifier (a fact over ``X`` as an *input*, e.g. a
+motion from ``X``, comes from an instance whose inputs contain ``X`` and is re-instantiated
+on the bound value like any placeholder input). Then renaming ``X`` to ``k``'s own
+placeholder maps every needed fact to one the unique evaluation has too, so the plan is one
+of that task and the stream plan binds ``X`` from ``k``'s call alone. When no single
+instance certifies them all (one placeholder serving as two different grasps, poses or
+configurations: a plan that exploits the sharing), :func:`split_shared` refines a smallest
+set of instances that certify them and the plan is discarded: the next search sees those
+instances with distinct placeholders. Each such round refines at least one more instance,
+so refinement ends (at worst with every instance unique, the behaviour without sharing),
+and every plan returned is still validated against the real facts.
 """
 
 from __future__ import annotations
@@ -29,6 +55,27 @@ from ltamp_cli.planner.search.solve import DiscreteResult
 from ltamp_cli.planner.streams import StreamInstance
 
 InstanceKey = tuple[str, tuple[str, ...]]
+
+
+@dataclass
+class Placeholders:
+    """The placeholder outputs of one solve, kept across its optimistic evaluations (the
+    same instance gets the same placeholders each time, so skeletons stay comparable).
+
+    ``unique``: refined instances -> their own placeholders; ``shared``: (stream, values of
+    the selected inputs) -> the placeholders its unrefined instances share."""
+
+    unique: dict[InstanceKey, tuple[str, ...]] = field(default_factory=dict)
+    shared: dict[InstanceKey, tuple[str, ...]] = field(default_factory=dict)
+
+    def new(self, stream: Stream) -> tuple[str, ...]:
+        number = len(self.unique) + len(self.shared)
+        return tuple(f"#{v[1:]}{number}" for v in stream.outputs)
+
+    def refine(self, stream: Stream, key: InstanceKey) -> None:
+        """Give instance ``key`` of ``stream`` its own placeholders from now on."""
+        if key not in self.unique:
+            self.unique[key] = self.new(stream)
 
 # Local repair: when a test of a stream plan fails on two (or more) values that streams
 # sampled, the cheap generator that sampled the later one for this stream plan is asked for
@@ -57,11 +104,12 @@ class OptimisticEvaluation:
     cut: bool = False  # an instance was left out by the complexity bound
     # Optimistic facts of :fluents streams -> contexts where the stream already failed.
     context_blocks: dict[Fact, list[Context]] = field(default_factory=dict)
+    # Shared placeholder tuple -> the instances that share it (in evaluation order).
+    sharing: dict[tuple[str, ...], list[InstanceKey]] = field(default_factory=dict)
 
 
 def optimistic_evaluation(state: PlannerState, complexity: int,
-                          placeholders: dict[InstanceKey, tuple[str, ...]]
-                          ) -> OptimisticEvaluation:
+                          placeholders: Placeholders) -> OptimisticEvaluation:
     index = FactIndex()
     for fact in sorted(state.facts.members):  # a hash-independent order
         index.add(fact)
@@ -115,7 +163,7 @@ def _pending_test(instance: StreamInstance) -> bool:
 
 
 def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: InstanceKey,
-                    level: int, placeholders: dict[InstanceKey, tuple[str, ...]]) -> bool:
+                    level: int, placeholders: Placeholders) -> bool:
     name, inputs = key
     external = state.externals[name]
     mapping = dict(zip(external_inputs(external), inputs, strict=True))
@@ -127,16 +175,37 @@ def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: 
         return False
     outputs: tuple[str, ...] = ()
     if isinstance(external, Stream) and external.outputs:
-        outputs = placeholders.get(key, ())
-        if not outputs:
-            number = len(placeholders)
-            outputs = tuple(f"#{v[1:]}{number}" for v in external.outputs)
-            placeholders[key] = outputs
+        outputs = placeholders.unique.get(key, ())
+        selected = (None if external.fluents else
+                    state.bindings[name].info.opt_gen_fn.selected(external.inputs))
+        # Instances over real values only keep their own placeholders: there are as many
+        # as the real facts allow whatever the optimistic task holds, and sharing theirs
+        # (kitchen_fluent: one pose for every object and region) only made most plans
+        # need refining (19 rather than 8 searches on seed 0).
+        if not any(x.startswith("#") for x in inputs):
+            selected = None
+        if outputs or selected is None:
+            if not outputs:
+                outputs = placeholders.unique[key] = placeholders.new(external)
+            for placeholder in outputs:
+                evaluation.level[placeholder] = level + 1
+                evaluation.object_producer[placeholder] = key
+        else:
+            group = (name, tuple(inputs[i] for i in selected))
+            outputs = placeholders.shared.get(group, ())
+            if not outputs:
+                outputs = placeholders.shared[group] = placeholders.new(external)
+            sharers = evaluation.sharing.setdefault(outputs, [])
+            sharers.append(key)
+            for placeholder in outputs:
+                # The least level of its producers (the level a unique one would have).
+                known = evaluation.level.get(placeholder)
+                evaluation.level[placeholder] = level + 1 if known is None else min(
+                    known, level + 1)
+                evaluation.object_producer.setdefault(placeholder, key)
         evaluation.outputs[key] = outputs
         for placeholder in outputs:
-            evaluation.level[placeholder] = level + 1
             evaluation.object_types[placeholder] = OBJECT_TYPE
-            evaluation.object_producer[placeholder] = key
         mapping.update(zip(external.outputs, outputs, strict=True))
         facts = instantiate_atoms(external.certified, mapping)
     elif isinstance(external, ExternalPredicate):
@@ -169,6 +238,84 @@ def stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
             _visit_producers(state, evaluation, key, dependencies, found)
     effort = {name: state.effort(name) for name in {key[0] for key in found}}
     return order_by_effort(found, dependencies, effort)
+
+
+def bindable_stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
+                         needed: Iterable[Fact], placeholders: Placeholders
+                         ) -> list[InstanceKey] | None:
+    """The stream plan of an optimistic plan whose preimage is ``needed``, with each shared
+    placeholder bound from one instance; ``None`` when sharing made the plan unbindable:
+    the instances it needed from one shared placeholder are refined (given their own
+    placeholders) and the caller searches again (see the module docstring)."""
+    needed = sorted(needed)
+    if evaluation.sharing and not _attribute_shared(state, evaluation, needed, placeholders):
+        return None
+    plan = stream_plan(state, evaluation, needed)
+    if evaluation.sharing:
+        # Two instances of one shared placeholder can still be in the plan for facts that do
+        # not hold it (a certified fact over inputs only): each would bind it.
+        users: dict[tuple[str, ...], list[InstanceKey]] = {}
+        for key in plan:
+            outputs = evaluation.outputs.get(key, ())
+            if outputs in evaluation.sharing:
+                users.setdefault(outputs, []).append(key)
+        clashing = [key for keys in users.values() if len(keys) > 1 for key in keys]
+        for key in clashing:
+            placeholders.refine(_stream(state, key), key)
+        if clashing:
+            return None
+    return plan
+
+
+def _stream(state: PlannerState, key: InstanceKey) -> Stream:
+    external = state.externals[key[0]]
+    assert isinstance(external, Stream)
+    return external
+
+
+def _attribute_shared(state: PlannerState, evaluation: OptimisticEvaluation,
+                      needed: list[Fact], placeholders: Placeholders) -> bool:
+    """Make one instance the producer of each shared placeholder tuple the plan needs: the
+    one that certifies every needed fact holding it as an output. Where no single instance
+    does, refine a greedy smallest set of instances that do, and return False."""
+    shared_of = {p: outputs for outputs in evaluation.sharing for p in outputs}
+    pins: dict[tuple[str, ...], list[Fact]] = {}
+    for fact in needed:
+        if fact in state.facts.members or fact not in evaluation.fact_producer:
+            continue
+        for group in dict.fromkeys(shared_of[a] for a in fact[1:] if a in shared_of):
+            pins.setdefault(group, []).append(fact)
+    certified: dict[InstanceKey, set[Fact]] = {}
+    split = False
+    for group, facts in pins.items():
+        sharers = evaluation.sharing[group]
+        for key in sharers:
+            if key not in certified:
+                stream = _stream(state, key)
+                mapping = dict(zip(stream.inputs, key[1], strict=True))
+                mapping.update(zip(stream.outputs, group, strict=True))
+                certified[key] = set(instantiate_atoms(stream.certified, mapping))
+        # Facts holding the placeholder as an input come from other instances.
+        remaining = [f for f in facts if any(f in certified[k] for k in sharers)]
+        chosen: list[InstanceKey] = []
+        while remaining:
+            best = max(sharers, key=lambda k: sum(f in certified[k] for f in remaining))
+            chosen.append(best)
+            remaining = [f for f in remaining if f not in certified[best]]
+        if len(chosen) == 1:
+            producer = chosen[0]
+            # All its facts, also those the plan needs only as the domain of a stream that
+            # takes the placeholder as input (a motion's (Conf #q)).
+            for fact in certified[producer]:
+                if fact in evaluation.fact_producer:
+                    evaluation.fact_producer[fact] = producer
+            for placeholder in group:
+                evaluation.object_producer[placeholder] = producer
+        elif chosen:
+            split = True
+            for key in chosen:
+                placeholders.refine(_stream(state, key), key)
+    return not split
 
 
 def _visit_producers(state: PlannerState, evaluation: OptimisticEvaluation, key: InstanceKey,
