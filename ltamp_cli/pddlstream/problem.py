@@ -280,13 +280,14 @@ def _planner_info(info: Info | None) -> PlannerStreamInfo:
         eager=bool(info.eager), opt_gen_fn=_partial_inputs(info))
 
 
-def _partial_inputs(info: Info) -> PlannerPartialInputs:
+def _partial_inputs(info: Info) -> PlannerPartialInputs | None:
     """``StreamInfo(opt_gen_fn=PartialInputs(inputs, unique))`` as the planner's; no
-    ``opt_gen_fn``: outputs shared by all instances (PDDLStream's default); another
-    callable (a custom optimistic generator, which ltamp does not call): unique outputs."""
+    ``opt_gen_fn``: the planner's default (one output shared by the instances with a
+    placeholder input, where PDDLStream shares it with all); another callable (a custom
+    optimistic generator, which ltamp does not call): unique outputs."""
     opt_gen_fn = getattr(info, "opt_gen_fn", None)
     if opt_gen_fn is None:
-        return PlannerPartialInputs()
+        return None
     if isinstance(opt_gen_fn, PartialInputs):
         return PlannerPartialInputs(opt_gen_fn.inputs, opt_gen_fn.unique)
     return PlannerPartialInputs(unique=True)

@@ -46,13 +46,16 @@ from ltamp_cli.planner.pddl.syntax import (
 class PartialInputs:
     """Which inputs a stream's optimistic outputs depend on (PDDLStream's ``PartialInputs``).
 
-    The focused, binding and adaptive algorithms give the instances of a stream that have
-    not been called yet placeholder outputs. With the default (``inputs=""``) every
-    instance of the stream shares one placeholder per output, so the optimistic task does
-    not grow with the number of instances; ``inputs="?o"`` shares one per value of ``?o``;
-    ``unique=True`` (or naming every input) gives each instance its own. A plan that needs
-    a shared placeholder from two instances is refined before it is bound (see
-    :mod:`ltamp_cli.planner.algorithms.optimistic`). ``inputs``: space-separated input
+    The focused, binding and adaptive algorithms give the instances of a stream
+    placeholder outputs. ``PartialInputs()`` (``inputs=""``): every instance of the stream
+    shares one placeholder per output, so the optimistic task does not grow with the number
+    of instances; ``inputs="?o"`` shares one per value of ``?o``; ``unique=True`` (or
+    naming every input) gives each instance its own. Without a policy
+    (``StreamInfo.opt_gen_fn=None``, the default) ``PartialInputs()`` applies to the
+    instances with a placeholder input and the others keep their own (see
+    :func:`ltamp_cli.planner.algorithms.optimistic._share_group`).
+    A plan that needs a shared placeholder from two instances is refined before it is bound
+    (see :mod:`ltamp_cli.planner.algorithms.optimistic`). ``inputs``: space-separated input
     parameters of the stream, e.g. ``"?o ?r"``.
     """
 
@@ -76,14 +79,14 @@ class StreamInfo:
     seconds per call (both order stream plans); ``eager``: call as soon as inputs exist
     (cheap tests); ``opt_cost``: optimistic lower bound of a ``:function``;
     ``opt_gen_fn``: which inputs the stream's optimistic outputs depend on
-    (:class:`PartialInputs`; default: none, one shared placeholder per output).
+    (:class:`PartialInputs`; ``None``: one shared by the instances with a placeholder input).
     """
 
     p_success: float = 1.0
     overhead: float = 1.0
     eager: bool = False
     opt_cost: float = 0.0
-    opt_gen_fn: PartialInputs = PartialInputs()
+    opt_gen_fn: PartialInputs | None = None
 
 
 @dataclass(frozen=True)
@@ -156,8 +159,9 @@ def resolve_bindings(stream_file: StreamFile, provided: Mapping[str, Any], sourc
         else:
             raise InputError(f"the binding of {kind} {name!r} in {source} is not callable",
                              external.location)
-        if isinstance(external, Stream):
-            unknown = [name for name in bindings[name].info.opt_gen_fn.inputs.split()
+        policy = bindings[name].info.opt_gen_fn
+        if isinstance(external, Stream) and policy is not None:
+            unknown = [name for name in policy.inputs.split()
                        if name.lower() not in external.inputs]
             if unknown:
                 raise InputError(

@@ -6,14 +6,16 @@ made); a plan over real and optimistic facts is then retraced to the *stream pla
 instances whose calls would make its optimistic facts real.
 
 Shared placeholders (PDDLStream's shared optimistic objects, ``StreamInfo(opt_gen_fn=
-PartialInputs(...))``): by default all instances of a stream with outputs share one
-placeholder per output (per value of the selected inputs with ``PartialInputs("?o")``), so
-the objects of the optimistic task, and the actions over them, do not grow with the number
-of instances (kitchen_fluent: 64 ``skill-conf`` instances gave 64 configurations, and the
-moves between all configurations most of the task). An instance becomes *refined* (its own
+PartialInputs(...))``, see :func:`_share_group`): by default the instances of a stream that
+have a placeholder among their inputs share one placeholder per output (with an explicit
+``PartialInputs("?o")``: the instances with the same ``?o``), so the objects of the
+optimistic task, and the actions over them, do not grow with the number of optimistic
+inputs (kitchen_fluent: 64 ``skill-conf`` instances, one per tool, container and
+placeholder pose, gave 64 configurations, and the moves between all configurations were
+most of its ~1,800 actions; now ~200-450). An instance becomes *refined* (its own
 placeholders, as before) once a plan needed it in a way sharing cannot bind
-(:func:`split_shared`). ``:fluents`` streams keep unique placeholders: what failed in a
-context is recorded per instance and blocks its output facts in that context
+(:func:`bindable_stream_plan`). ``:fluents`` streams keep unique placeholders: what failed
+in a context is recorded per instance and blocks its output facts in that context
 (``context_blocks``), which a shared output would wrongly carry to the other instances.
 
 Correctness of binding a plan over shared placeholders. A shared placeholder ``X`` stands
@@ -25,7 +27,7 @@ on the bound value like any placeholder input). Then renaming ``X`` to ``k``'s o
 placeholder maps every needed fact to one the unique evaluation has too, so the plan is one
 of that task and the stream plan binds ``X`` from ``k``'s call alone. When no single
 instance certifies them all (one placeholder serving as two different grasps, poses or
-configurations: a plan that exploits the sharing), :func:`split_shared` refines a smallest
+configurations: a plan that exploits the sharing), :func:`bindable_stream_plan` refines a
 set of instances that certify them and the plan is discarded: the next search sees those
 instances with distinct placeholders. Each such round refines at least one more instance,
 so refinement ends (at worst with every instance unique, the behaviour without sharing),
@@ -52,7 +54,7 @@ from ltamp_cli.planner.pddl.syntax import (
 from ltamp_cli.planner.search.clock import check_deadline
 from ltamp_cli.planner.search.ground import Context, CostBound, Fact, FactIndex
 from ltamp_cli.planner.search.solve import DiscreteResult
-from ltamp_cli.planner.streams import StreamInstance
+from ltamp_cli.planner.streams import PartialInputs, StreamInstance
 
 InstanceKey = tuple[str, tuple[str, ...]]
 
@@ -62,8 +64,8 @@ class Placeholders:
     """The placeholder outputs of one solve, kept across its optimistic evaluations (the
     same instance gets the same placeholders each time, so skeletons stay comparable).
 
-    ``unique``: refined instances -> their own placeholders; ``shared``: (stream, values of
-    the selected inputs) -> the placeholders its unrefined instances share."""
+    ``unique``: refined instances -> their own placeholders; ``shared``: share-group key
+    (see :func:`_share_group`) -> the placeholders its instances share."""
 
     unique: dict[InstanceKey, tuple[str, ...]] = field(default_factory=dict)
     shared: dict[InstanceKey, tuple[str, ...]] = field(default_factory=dict)
@@ -72,10 +74,16 @@ class Placeholders:
         number = len(self.unique) + len(self.shared)
         return tuple(f"#{v[1:]}{number}" for v in stream.outputs)
 
-    def refine(self, stream: Stream, key: InstanceKey) -> None:
-        """Give instance ``key`` of ``stream`` its own placeholders from now on."""
-        if key not in self.unique:
-            self.unique[key] = self.new(stream)
+
+def _refine(state: PlannerState, placeholders: Placeholders, keys: list[InstanceKey]) -> None:
+    """Give instances ``keys``, which one plan needed from one shared placeholder, their
+    own placeholders from now on. (Splitting a default-policy group by real input values
+    first, so that e.g. the kinematics of one object and grasp at any placeholder pose
+    share, took kitchen_fluent adaptive seeds 0-5 from 0.67 to 0.87 s median CPU.)"""
+    for key in keys:
+        if key not in placeholders.unique:
+            placeholders.unique[key] = placeholders.new(_stream(state, key))
+
 
 # Local repair: when a test of a stream plan fails on two (or more) values that streams
 # sampled, the cheap generator that sampled the later one for this stream plan is asked for
@@ -158,6 +166,29 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
         since = before
 
 
+def _share_group(key: InstanceKey, policy: PartialInputs | None,
+                 parameters: tuple[str, ...]) -> InstanceKey | None:
+    """The key of the shared placeholders of instance ``key`` (``None``: its own).
+
+    With an explicit ``PartialInputs`` policy, PDDLStream's rule: shared by the instances
+    that agree on the selected inputs. By default (no policy), PDDLStream's default
+    (``PartialInputs()``, one shared output) for the instances with a placeholder among
+    their inputs, whose number grows with the optimistic task; instances over real values
+    only keep their own, as many as the real facts give anyway. kitchen_fluent, adaptive,
+    seeds 0-5, median CPU on a loaded machine: 0.67 s; sharing all instances' outputs
+    (PDDLStream's default everywhere: plans then put several objects at one pose, refined
+    one search at a time) 0.96 s; sharing per value of the real inputs (~1,000 actions per
+    task instead of ~300) 1.27 s; no sharing ~0.91 s.
+    """
+    name, inputs = key
+    if policy is not None:
+        selected = policy.selected(parameters)
+        return None if selected is None else (name, tuple(inputs[i] for i in selected))
+    if not any(x.startswith("#") for x in inputs):
+        return None
+    return (name, ())
+
+
 def _pending_test(instance: StreamInstance) -> bool:
     return instance.is_test and instance.num_calls == 0
 
@@ -176,22 +207,15 @@ def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: 
     outputs: tuple[str, ...] = ()
     if isinstance(external, Stream) and external.outputs:
         outputs = placeholders.unique.get(key, ())
-        selected = (None if external.fluents else
-                    state.bindings[name].info.opt_gen_fn.selected(external.inputs))
-        # Instances over real values only keep their own placeholders: there are as many
-        # as the real facts allow whatever the optimistic task holds, and sharing theirs
-        # (kitchen_fluent: one pose for every object and region) only made most plans
-        # need refining (19 rather than 8 searches on seed 0).
-        if not any(x.startswith("#") for x in inputs):
-            selected = None
-        if outputs or selected is None:
+        group = None if external.fluents else _share_group(
+            key, state.bindings[name].info.opt_gen_fn, external.inputs)
+        if outputs or group is None:
             if not outputs:
                 outputs = placeholders.unique[key] = placeholders.new(external)
             for placeholder in outputs:
                 evaluation.level[placeholder] = level + 1
                 evaluation.object_producer[placeholder] = key
         else:
-            group = (name, tuple(inputs[i] for i in selected))
             outputs = placeholders.shared.get(group, ())
             if not outputs:
                 outputs = placeholders.shared[group] = placeholders.new(external)
@@ -260,9 +284,8 @@ def bindable_stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
             if outputs in evaluation.sharing:
                 users.setdefault(outputs, []).append(key)
         clashing = [key for keys in users.values() if len(keys) > 1 for key in keys]
-        for key in clashing:
-            placeholders.refine(_stream(state, key), key)
         if clashing:
+            _refine(state, placeholders, clashing)
             return None
     return plan
 
@@ -313,8 +336,7 @@ def _attribute_shared(state: PlannerState, evaluation: OptimisticEvaluation,
                 evaluation.object_producer[placeholder] = producer
         elif chosen:
             split = True
-            for key in chosen:
-                placeholders.refine(_stream(state, key), key)
+            _refine(state, placeholders, chosen)
     return not split
 
 
