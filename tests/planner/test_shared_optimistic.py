@@ -138,3 +138,17 @@ def test_partial_inputs_must_name_inputs_of_the_stream(make_problem) -> None:  #
     problem = touch_problem(make_problem, 2, "{inputs: '?x'}")
     with pytest.raises(InputError, match=r"names no input of it"):
         solve(problem, PlannerConfig(seed=0, max_time=5))
+
+
+def test_pddlstream_stream_info_sets_the_policy() -> None:
+    from ltamp_cli.pddlstream import PartialInputs as PDDLStreamPartialInputs
+    from ltamp_cli.pddlstream import StreamInfo as PDDLStreamInfo
+    from ltamp_cli.pddlstream.problem import _planner_info
+    from ltamp_cli.planner.streams import PartialInputs
+
+    info = _planner_info(PDDLStreamInfo(opt_gen_fn=PDDLStreamPartialInputs("?o")))
+    assert info.opt_gen_fn == PartialInputs("?o", unique=False)
+    assert _planner_info(PDDLStreamInfo()).opt_gen_fn is None
+    # A custom optimistic generator is not called: one placeholder per instance instead.
+    custom = _planner_info(PDDLStreamInfo(opt_gen_fn=lambda *values: iter([[("x",)]])))
+    assert custom.opt_gen_fn == PartialInputs(unique=True)
