@@ -51,9 +51,10 @@ class PartialInputs:
     shares one placeholder per output, so the optimistic task does not grow with the number
     of instances; ``inputs="?o"`` shares one per value of ``?o``; ``unique=True`` (or
     naming every input) gives each instance its own. Without a policy
-    (``StreamInfo.opt_gen_fn=None``, the default) ``PartialInputs()`` applies to the
-    instances with a placeholder input and the others keep their own (see
-    :func:`ltamp_cli.planner.algorithms.optimistic._share_group`).
+    (``StreamInfo.opt_gen_fn=None``, the default) the instances over real values, the first
+    ``UNSHARED_PER_STREAM`` (8) over placeholders, and all instances of a stream whose
+    outputs never reach a fact that actions change keep their own; the other instances
+    share one (see :mod:`ltamp_cli.planner.algorithms.optimistic`).
     A plan that needs a shared placeholder from two instances is refined before it is bound
     (see :mod:`ltamp_cli.planner.algorithms.optimistic`). ``inputs``: space-separated input
     parameters of the stream, e.g. ``"?o ?r"``.
@@ -79,7 +80,8 @@ class StreamInfo:
     seconds per call (both order stream plans); ``eager``: call as soon as inputs exist
     (cheap tests); ``opt_cost``: optimistic lower bound of a ``:function``;
     ``opt_gen_fn``: which inputs the stream's optimistic outputs depend on
-    (:class:`PartialInputs`; ``None``: one shared by the instances with a placeholder input).
+    (:class:`PartialInputs`; ``None``: shared only beyond the first instances over
+    placeholders).
     """
 
     p_success: float = 1.0

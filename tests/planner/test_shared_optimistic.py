@@ -12,7 +12,11 @@ import pytest
 
 from ltamp_cli.errors import InputError
 from ltamp_cli.planner.algorithms.common import PlannerConfig, initial_state
-from ltamp_cli.planner.algorithms.optimistic import Placeholders, optimistic_evaluation
+from ltamp_cli.planner.algorithms.optimistic import (
+    UNSHARED_PER_STREAM,
+    Placeholders,
+    optimistic_evaluation,
+)
 from ltamp_cli.planner.api import solve
 from ltamp_cli.planner.problem import PlanningProblem, load_problem
 from ltamp_cli.planner.validate import validate_plan
@@ -87,11 +91,16 @@ def optimistic_size(problem: PlanningProblem) -> tuple[int, int]:
 
 
 def test_optimistic_task_does_not_grow_with_the_optimistic_inputs(make_problem) -> None:  # type: ignore[no-untyped-def]
-    # 2 and 6 objects: 2 and 6 placeholder poses feed ik. Unshared, the task had 2 and 6
-    # placeholder configurations and 9 and 49 reach facts.
-    small = optimistic_size(touch_problem(make_problem, 2))
-    large = optimistic_size(touch_problem(make_problem, 6))
-    assert small == large == (1, 4)
+    # 10 and 20 objects: 10 and 20 placeholder poses feed ik. Unshared, the task had 10 and
+    # 20 placeholder configurations and 121 and 441 reach facts. By default the first
+    # UNSHARED_PER_STREAM instances keep their own, the others share one.
+    assert UNSHARED_PER_STREAM < 10
+    small = optimistic_size(touch_problem(make_problem, 10))
+    large = optimistic_size(touch_problem(make_problem, 20))
+    confs = UNSHARED_PER_STREAM + 1
+    assert small == large == (confs, (confs + 1) ** 2)
+    # Below that many, nothing is shared (small tasks stay as they were).
+    assert optimistic_size(touch_problem(make_problem, 3)) == (3, 16)
 
 
 def test_unique_policy_keeps_one_output_per_instance(make_problem) -> None:  # type: ignore[no-untyped-def]
@@ -101,7 +110,7 @@ def test_unique_policy_keeps_one_output_per_instance(make_problem) -> None:  # t
     assert optimistic_size(touch_problem(make_problem, 4, "{inputs: '?o'}")) == (4, 25)
     # Shared per value of ?p only is the same here (one placeholder pose per object).
     assert optimistic_size(touch_problem(make_problem, 4, "{inputs: '?p'}")) == (4, 25)
-    # PartialInputs("") shares across every instance, real inputs or not.
+    # PartialInputs("") shares across every instance from the first.
     assert optimistic_size(touch_problem(make_problem, 4, "{inputs: ''}")) == (1, 4)
 
 
@@ -121,7 +130,8 @@ def test_a_plan_over_one_shared_output_is_refined_before_binding(make_problem, m
         original(state, placeholders, keys)
 
     monkeypatch.setattr(optimistic, "_refine", spy)
-    problem = touch_problem(make_problem, 3)
+    # PDDLStream's default, PartialInputs(): one configuration shared by every ik instance.
+    problem = touch_problem(make_problem, 3, "{inputs: ''}")
     result = solve(problem, PlannerConfig(algorithm=algorithm, seed=0, max_time=20))
     assert result.solved
     assert [sorted(key[1][0] for key in keys if key[0] == "ik") for keys in refined] == [

@@ -6,17 +6,21 @@ made); a plan over real and optimistic facts is then retraced to the *stream pla
 instances whose calls would make its optimistic facts real.
 
 Shared placeholders (PDDLStream's shared optimistic objects, ``StreamInfo(opt_gen_fn=
-PartialInputs(...))``, see :func:`_share_group`): by default the instances of a stream that
-have a placeholder among their inputs share one placeholder per output (with an explicit
-``PartialInputs("?o")``: the instances with the same ``?o``), so the objects of the
-optimistic task, and the actions over them, do not grow with the number of optimistic
-inputs (kitchen_fluent: 64 ``skill-conf`` instances, one per tool, container and
-placeholder pose, gave 64 configurations, and the moves between all configurations were
-most of its ~1,800 actions; now ~200-450). An instance becomes *refined* (its own
-placeholders, as before) once a plan needed it in a way sharing cannot bind
-(:func:`bindable_stream_plan`). ``:fluents`` streams keep unique placeholders: what failed
-in a context is recorded per instance and blocks its output facts in that context
-(``context_blocks``), which a shared output would wrongly carry to the other instances.
+PartialInputs(...))``, see :func:`_share_group`): with an explicit policy, PDDLStream's
+rule (``PartialInputs()``: one placeholder per output shared by all the stream's instances;
+``PartialInputs("?o")``: by the instances with the same ``?o``). By default, the instances
+of a stream that have a placeholder among their inputs share one placeholder per output
+once :data:`UNSHARED_PER_STREAM` of them have their own, so the objects of the optimistic
+task, and the actions over them, stop growing with the number of optimistic inputs
+(kitchen_fluent: 64 ``skill-conf`` instances, one per tool, container and placeholder pose,
+gave 64 configurations, and the moves between all configurations were most of its ~1,800
+actions). Instances over real values only keep their own (as many as the real facts give
+anyway), and so do all instances of a stream whose outputs never reach a fact that actions
+change (:func:`stateful_streams`), and of ``:fluents`` streams: what failed in a context is
+recorded per instance and blocks its output facts in that context (``context_blocks``),
+which a shared output would wrongly carry to the other instances. An instance becomes
+*refined* (its own placeholders) once a plan needed it in a way sharing cannot bind
+(:func:`bindable_stream_plan`).
 
 Correctness of binding a plan over shared placeholders. A shared placeholder ``X`` stands
 for the output of any of its producing instances; different instances' real outputs differ,
@@ -45,11 +49,15 @@ from ltamp_cli.planner.algorithms.common import (
     instantiate_atoms,
 )
 from ltamp_cli.planner.algorithms.effort import observed_cheap, order_by_effort
+from ltamp_cli.planner.pddl.check import fluent_predicates
 from ltamp_cli.planner.pddl.syntax import (
     OBJECT_TYPE,
+    Domain,
     ExternalPredicate,
     Stream,
     StreamFunction,
+    effect_atoms,
+    formula_atoms,
 )
 from ltamp_cli.planner.search.clock import check_deadline
 from ltamp_cli.planner.search.ground import Context, CostBound, Fact, FactIndex
@@ -69,10 +77,68 @@ class Placeholders:
 
     unique: dict[InstanceKey, tuple[str, ...]] = field(default_factory=dict)
     shared: dict[InstanceKey, tuple[str, ...]] = field(default_factory=dict)
+    # Streams whose outputs may be shared (see :func:`stateful_streams`); set on first use.
+    stateful: frozenset[str] | None = None
+    # Stream -> how many of its instances over placeholders kept their own placeholders
+    # under the default policy (at most UNSHARED_PER_STREAM).
+    unshared: dict[str, int] = field(default_factory=dict)
 
     def new(self, stream: Stream) -> tuple[str, ...]:
         number = len(self.unique) + len(self.shared)
         return tuple(f"#{v[1:]}{number}" for v in stream.outputs)
+
+
+# Default policy: the first this many instances of a stream over placeholders (in the order
+# the optimistic evaluations meet them, the least complex first) keep their own placeholders
+# and only the later ones share, so small tasks stay as they were. Sharing from the first
+# instance cost tamp2d_4blocks (adaptive, 10 seeds, median CPU) 0.086 -> 0.21 s: its tasks
+# are small anyway, and each plan that exploited the sharing needed a refining search and
+# drew new samples, which its eager motions square.
+UNSHARED_PER_STREAM = 8
+
+
+def stateful_streams(domain: Domain, streams: Iterable[Stream]) -> frozenset[str]:
+    """The streams an output of which can become an argument of a fact that actions change
+    (directly, or through the inputs of other streams: a configuration feeds the motions
+    whose endpoints a move makes the robot's). Only their outputs are shared: an output
+    that only certifies (a trajectory in ``(Motion ?q1 ?t ?q2)``) saves no action when
+    shared, every instance still certifying its own facts over its inputs, and every plan
+    with two of them would need refining (tamp2d_blocked: all its motions, each search).
+
+    Computed on argument positions: ``(P, i)`` is stateful when an action's precondition
+    has at position ``i`` of ``P`` a parameter that its effect mentions (or a derived
+    predicate's body one of its head's parameters), or, to a fixpoint, when a stream's
+    domain has there an input that the stream certifies at a stateful position or in a
+    fluent predicate."""
+    fluent = fluent_predicates(domain)
+    positions: set[tuple[str, int]] = set()
+    for action in domain.actions:
+        changed = {arg for atom, _ in effect_atoms(action.effect) for arg in atom.args}
+        for atom in formula_atoms(action.precondition):
+            positions.update((atom.predicate, i) for i, arg in enumerate(atom.args)
+                             if arg in changed)
+    for axiom in domain.axioms:
+        head = {parameter.name for parameter in axiom.head.parameters}
+        for atom in formula_atoms(axiom.body):
+            positions.update((atom.predicate, i) for i, arg in enumerate(atom.args)
+                             if arg in head)
+    streams = list(streams)
+
+    def stateful_arguments(stream: Stream) -> set[str]:
+        return {arg for atom in stream.certified for i, arg in enumerate(atom.args)
+                if atom.predicate in fluent or (atom.predicate, i) in positions}
+
+    while True:
+        before = len(positions)
+        for stream in streams:
+            found = stateful_arguments(stream)
+            for atom in (*stream.domain, *stream.fluent_domain):
+                positions.update((atom.predicate, i) for i, arg in enumerate(atom.args)
+                                 if arg in found)
+        if len(positions) == before:
+            break
+    return frozenset(stream.name for stream in streams
+                     if not stateful_arguments(stream).isdisjoint(stream.outputs))
 
 
 def _refine(state: PlannerState, placeholders: Placeholders, keys: list[InstanceKey]) -> None:
@@ -173,8 +239,9 @@ def _share_group(key: InstanceKey, policy: PartialInputs | None,
     With an explicit ``PartialInputs`` policy, PDDLStream's rule: shared by the instances
     that agree on the selected inputs. By default (no policy), PDDLStream's default
     (``PartialInputs()``, one shared output) for the instances with a placeholder among
-    their inputs, whose number grows with the optimistic task; instances over real values
-    only keep their own, as many as the real facts give anyway. kitchen_fluent, adaptive,
+    their inputs, whose number grows with the optimistic task (the caller keeps the first
+    :data:`UNSHARED_PER_STREAM` of them apart); instances over real values only keep their
+    own, as many as the real facts give anyway. kitchen_fluent, adaptive,
     seeds 0-5, median CPU on a loaded machine: 0.67 s; sharing all instances' outputs
     (PDDLStream's default everywhere: plans then put several objects at one pose, refined
     one search at a time) 0.96 s; sharing per value of the real inputs (~1,000 actions per
@@ -207,8 +274,18 @@ def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: 
     outputs: tuple[str, ...] = ()
     if isinstance(external, Stream) and external.outputs:
         outputs = placeholders.unique.get(key, ())
-        group = None if external.fluents else _share_group(
-            key, state.bindings[name].info.opt_gen_fn, external.inputs)
+        if placeholders.stateful is None:
+            placeholders.stateful = stateful_streams(
+                state.problem.domain,
+                (x for x in state.externals.values() if isinstance(x, Stream)))
+        policy = state.bindings[name].info.opt_gen_fn
+        group = None if external.fluents or name not in placeholders.stateful else (
+            _share_group(key, policy, external.inputs))
+        if group is not None and policy is None and not outputs:
+            used = placeholders.unshared.get(name, 0)
+            if used < UNSHARED_PER_STREAM:
+                placeholders.unshared[name] = used + 1
+                group = None
         if outputs or group is None:
             if not outputs:
                 outputs = placeholders.unique[key] = placeholders.new(external)
