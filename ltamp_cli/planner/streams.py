@@ -52,7 +52,7 @@ class PartialInputs:
     of instances; ``inputs="?o"`` shares one per value of ``?o``; ``unique=True`` (or
     naming every input) gives each instance its own. Without a policy
     (``StreamInfo.opt_gen_fn=None``, the default) the instances over real values, the first
-    ``UNSHARED_PER_STREAM`` (8) over placeholders, and all instances of a stream whose
+    ``UNSHARED_PER_STREAM`` (16) over placeholders, and all instances of a stream whose
     outputs never reach a fact that actions change keep their own; the other instances
     share one (see :mod:`ltamp_cli.planner.algorithms.optimistic`).
     A plan that needs a shared placeholder from two instances is refined before it is bound

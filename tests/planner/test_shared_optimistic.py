@@ -91,12 +91,12 @@ def optimistic_size(problem: PlanningProblem) -> tuple[int, int]:
 
 
 def test_optimistic_task_does_not_grow_with_the_optimistic_inputs(make_problem) -> None:  # type: ignore[no-untyped-def]
-    # 10 and 20 objects: 10 and 20 placeholder poses feed ik. Unshared, the task had 10 and
-    # 20 placeholder configurations and 121 and 441 reach facts. By default the first
+    # 20 and 30 objects: 20 and 30 placeholder poses feed ik. Unshared, the task had 20 and
+    # 30 placeholder configurations and 441 and 961 reach facts. By default the first
     # UNSHARED_PER_STREAM instances keep their own, the others share one.
-    assert UNSHARED_PER_STREAM < 10
-    small = optimistic_size(touch_problem(make_problem, 10))
-    large = optimistic_size(touch_problem(make_problem, 20))
+    assert UNSHARED_PER_STREAM < 20
+    small = optimistic_size(touch_problem(make_problem, 20))
+    large = optimistic_size(touch_problem(make_problem, 30))
     confs = UNSHARED_PER_STREAM + 1
     assert small == large == (confs, (confs + 1) ** 2)
     # Below that many, nothing is shared (small tasks stay as they were).

@@ -92,9 +92,13 @@ class Placeholders:
 # the optimistic evaluations meet them, the least complex first) keep their own placeholders
 # and only the later ones share, so small tasks stay as they were. Sharing from the first
 # instance cost tamp2d_4blocks (adaptive, 10 seeds, median CPU) 0.086 -> 0.21 s: its tasks
-# are small anyway, and each plan that exploited the sharing needed a refining search and
-# drew new samples, which its eager motions square.
-UNSHARED_PER_STREAM = 8
+# are small anyway (8 kinematics instances over placeholder poses), and each plan that
+# exploited the sharing needed a refining search and drew new samples, which its eager
+# motions square. kitchen_fluent (16 kinematics and 64 skill-conf instances over
+# placeholders), adaptive, 10 seeds, median CPU, one interleaved run on a loaded machine:
+# 12 -> 0.60 s, 16 -> 0.61 s, 24 -> 0.67 s, no sharing 1.11 s (6 seeds: 0 -> 0.69 s,
+# 4 -> 0.75 s, 8 -> 0.94 s). 16 keeps every tamp2d example's tasks unshared.
+UNSHARED_PER_STREAM = 16
 
 
 def stateful_streams(domain: Domain, streams: Iterable[Stream]) -> frozenset[str]:
