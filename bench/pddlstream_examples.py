@@ -57,6 +57,7 @@ class Recorder:
 
     def solve(self, problem: Any, stream_info: Any = None, **_: Any) -> api.Solution:
         start = time.perf_counter()
+        cpu_start = time.process_time()
         record: dict[str, Any] = {"loaded": False, "solved": False}
         self.runs.append(record)
         try:
@@ -69,17 +70,20 @@ class Recorder:
         config = PlannerConfig(algorithm="adaptive", max_time=self.max_time)
         result = plan(planning_problem, config)
         record.update(solved=result.solved, status=result.status, solve_s=result.time_s,
+                      cpu_s=time.process_time() - cpu_start,
                       cost=result.cost if result.solved else None,
                       plan=[str(step) for step in result.plan or []])
         return to_solution(result)
 
     def solve_from_pddl(self, domain_pddl: str, problem_pddl: str, **_: Any) -> Any:
         start = time.perf_counter()
+        cpu_start = time.process_time()
         record: dict[str, Any] = {"loaded": False, "solved": False}
         self.runs.append(record)
         found, cost = api.solve_from_pddl(domain_pddl, problem_pddl, max_time=self.max_time)
         record.update(loaded=True, load_s=0.0, solved=found is not None,
-                      solve_s=time.perf_counter() - start, cost=cost,
+                      solve_s=time.perf_counter() - start,
+                      cpu_s=time.process_time() - cpu_start, cost=cost,
                       plan=[str(step) for step in found or []])
         return found, cost
 
@@ -244,7 +248,9 @@ def main() -> int:
         row["unsupported_names"] = sorted(redirect.unsupported)
         print(f"{row['example']:<40} loaded={row['loaded']!s:<5} solved={row['solved']!s:<5} "
               f"load={row.get('load_s', float('nan')):.3f}s "
-              f"solve={row.get('solve_s', float('nan')):.3f}s {row.get('error', '')[:90]}",
+              f"solve={row.get('solve_s', float('nan')):.3f}s "
+              f"cpu={row.get('cpu_s', float('nan')):.2f}s "
+              f"{row.get('status', '')} {row.get('error', '')[:90]}",
               flush=True)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps({"checkout": str(checkout), "max_time": args.max_time,
