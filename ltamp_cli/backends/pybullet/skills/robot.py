@@ -86,7 +86,9 @@ class RobotSettings:
     ``joint_acceleration`` (rad/s²): limits of the trapezoidal timing. ``position_gain``:
     PyBullet's joint position-control gain. ``slip_position_m`` / ``slip_angle_rad``: how far
     the tool may drift from the grasp before the trial counts as slipped.
-    ``contact_tolerance_m``: penetration depth an arm contact needs to count.
+    ``contact_tolerance_m``: penetration depth an arm contact needs to count (0: any
+    touch). ``plan_collisions``: check the solved path for collisions before simulating
+    (``False``: only the contacts met while simulating fail the trial).
     """
 
     grasp_force: float = 200.0
@@ -98,7 +100,8 @@ class RobotSettings:
     position_gain: float = 0.3
     slip_position_m: float = 0.02
     slip_angle_rad: float = 0.2
-    contact_tolerance_m: float = 5e-4
+    contact_tolerance_m: float = 0.0
+    plan_collisions: bool = True
     cartesian: CartesianConfig = field(default_factory=lambda: CartesianConfig(path_restarts=3))
 
     def __post_init__(self) -> None:
@@ -106,6 +109,8 @@ class RobotSettings:
                self.joint_acceleration, self.position_gain, self.slip_position_m,
                self.slip_angle_rad) <= 0:
             raise ValueError("robot settings must be positive")
+        if self.contact_tolerance_m < 0:
+            raise ValueError("contact_tolerance_m must be >= 0")
         if not self.grasp_heights or not all(0.0 < h < 1.0 for h in self.grasp_heights):
             raise ValueError("grasp_heights must be fractions in (0, 1)")
 
@@ -245,8 +250,10 @@ class RobotTrialPhysics(BulletTrialPhysics):
                     continue
                 checker = ArmCollisionChecker(arm, self.state.obstacles,
                                               AttachedBody(tool.body, grasp.tool_in_gripper))
-                found = follow_tool_path(arm, poses, grasp.tool_in_gripper, rng,
-                                         is_valid=checker, config=self.settings.cartesian)
+                found = follow_tool_path(
+                    arm, poses, grasp.tool_in_gripper, rng,
+                    is_valid=checker if self.settings.plan_collisions else None,
+                    config=self.settings.cartesian)
                 if found.success:
                     assert found.configurations is not None
                     plan = ArmPlan(base, grasp, found.configurations)
@@ -352,11 +359,11 @@ class RobotTrialPhysics(BulletTrialPhysics):
         depth = -self.settings.contact_tolerance_m
         for obstacle in self.state.obstacles:
             for contact in p.getContactPoints(robot, obstacle, physicsClientId=client):
-                if contact[3] != -1 and contact[8] < depth:
+                if contact[3] != -1 and contact[8] <= depth:
                     raise RobotFailure("collision", f"arm link {contact[3]} hit body "
                                        f"{obstacle} at step {step}")
         for contact in p.getContactPoints(robot, tool.body, physicsClientId=client):
-            if contact[3] not in PANDA_HAND_LINKS and contact[8] < depth:
+            if contact[3] not in PANDA_HAND_LINKS and contact[8] <= depth:
                 raise RobotFailure("collision", f"arm link {contact[3]} hit the tool at "
                                    f"step {step}")
         held = arm.end_effector_pose() @ plan.grasp.tool_in_gripper
