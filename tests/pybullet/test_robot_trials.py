@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,6 +24,7 @@ from ltamp_cli.backends.pybullet.skills.robot import (
     timed_configurations,
 )
 from ltamp_cli.backends.pybullet.world import PhysicsWorld
+from ltamp_cli.cli.app import main
 from ltamp_cli.errors import InputError
 from ltamp_cli.trials.collect import CollectJob, pending_indices
 from ltamp_cli.trials.record import TrialDataset, TrialRecord
@@ -138,7 +140,7 @@ def test_the_robot_is_part_of_the_backend_identity() -> None:
         load_backend("pybullet", robot="kuka")
 
 
-def test_free_and_robot_records_never_share_a_file(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_free_and_robot_records_never_share_a_file(tmp_path: Path) -> None:
     job = CollectJob(skill="pour", backend="pybullet", n=2, robot="panda")
     assert job.tag == "pybullet+panda" and job.options() == {"robot": "panda"}
     dataset = TrialDataset(tmp_path / "trials.jsonl")
@@ -146,3 +148,42 @@ def test_free_and_robot_records_never_share_a_file(tmp_path) -> None:  # type: i
                                score=-1.0, valid=True, seed=0, backend="pybullet", index=5))
     with pytest.raises(InputError, match="pybullet/pour trials, not pybullet\\+panda"):
         pending_indices(dataset, job)
+
+
+def run_cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str]:
+    with pytest.raises(SystemExit) as done:
+        main(list(args))
+    return int(done.value.code or 0), capsys.readouterr().err
+
+
+def test_collect_robot_option(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = str(tmp_path / "pour.jsonl")
+    for bad in (["--backend", "box2d", "--robot", "panda"], ["--robot", "kuka"],
+                ["--backend", "pybullet", "--robot", "panda", "--skill-is-push"]):
+        args = ["collect", "push" if "--skill-is-push" in bad else "pour", "-n", "1",
+                "--out", out, *(a for a in bad if a != "--skill-is-push")]
+        code, err = run_cli(capsys, *args)
+        assert code == 2 and len(err.strip().splitlines()) == 1 and "--robot" in err, err
+    code, err = run_cli(capsys, "collect", "pour", "-n", "1", "--out", out, "--backend",
+                        "pybullet", "--robot", "panda")
+    assert code == 0, err
+    (record,) = TrialDataset(out).read()
+    assert record.backend == "pybullet+panda"
+    # The same file cannot be continued with free-floating trials.
+    code, err = run_cli(capsys, "collect", "pour", "-n", "2", "--out", out, "--backend",
+                        "pybullet")
+    assert code == 2 and "pybullet+panda/pour trials, not pybullet/pour" in err, err
+
+
+def test_train_robot_option(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code, err = run_cli(capsys, "train", "pour", "--backend", "box2d", "--robot", "panda",
+                        "--out", str(tmp_path / "m1"))
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "--robot" in err, err
+    # A model directory with free-floating trials is not resumed with the robot.
+    TrialDataset(tmp_path / "m2" / "trials.jsonl").append(TrialRecord(
+        skill="pour", context=(0.2, 0.08, 0.12, 0.07, 0.1, 0.06),
+        control=(-2.0, 0.0, 0.0, 0.1, 0.05), score=-1.0, valid=True, seed=1,
+        backend="pybullet", index=0))
+    code, err = run_cli(capsys, "train", "pour", "--backend", "pybullet", "--robot", "panda",
+                        "--budget", "2", "--init", "2", "--out", str(tmp_path / "m2"))
+    assert code == 2 and "holds pybullet trials, not pybullet+panda" in err, err
