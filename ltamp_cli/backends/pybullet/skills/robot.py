@@ -79,8 +79,9 @@ class RobotSettings:
 
     ``grasp_force`` (N): largest force of the grasp constraint (the tool slips beyond it).
     ``base_distance`` (m): horizontal distance from the tool's start position to the arm's
-    base along ``y``; ``base_sides``: the sides (``-1``: at ``-y``, ``+1``: at ``+y``)
-    tried in turn until the path is solved. ``grasp_heights``: fractions of the cup's
+    base; ``base_bearings``: where the base stands around the tool's start (radians about
+    ``z`` from ``+x``: ``-π/2`` at ``-y``, ``0`` at ``+x``), tried in turn until the path
+    is solved. ``grasp_heights``: fractions of the cup's
     height tried for the side grasp, the first whose outer diameter fits the gripper wins.
     ``joint_speed`` (rad/s) and
     ``joint_acceleration`` (rad/s²): limits of the trapezoidal timing. ``position_gain``:
@@ -93,7 +94,7 @@ class RobotSettings:
 
     grasp_force: float = 200.0
     base_distance: float = 0.5
-    base_sides: tuple[float, ...] = (-1.0, 1.0)
+    base_bearings: tuple[float, ...] = (-np.pi / 2, np.pi / 2)
     grasp_heights: tuple[float, ...] = (0.45, 0.3, 0.15)
     joint_speed: float = 2.0
     joint_acceleration: float = 8.0
@@ -116,7 +117,8 @@ class RobotSettings:
 
 
 def cup_grasps(geometry: KitchenwareGeometry, heights: Sequence[float]) -> tuple[Grasp, ...]:
-    """Side grasps of a vessel approaching along ``±y`` (hand upright and flipped), at the
+    """Side grasps of a vessel approaching along ``±x`` and ``±y`` (hand upright and
+    flipped), at the
     first fraction of ``heights`` where the outer diameter fits the gripper; empty if none."""
     dims = geometry.vessel
     if dims is None:
@@ -127,9 +129,7 @@ def cup_grasps(geometry: KitchenwareGeometry, heights: Sequence[float]) -> tuple
             continue
         grasps = cylinder_side_grasps(radius, dims.height, base_z=0.0, grasp_height=fraction,
                                       n_yaw=4)
-        # The palm approaches along ±y: the gripper frame's z axis, in the object frame.
-        return tuple(g for g in grasps
-                     if abs(float(g.tool_in_gripper.inverse().rotation()[1, 2])) > 0.999)
+        return grasps
     return ()
 
 
@@ -231,12 +231,14 @@ class RobotTrialPhysics(BulletTrialPhysics):
         arm: PandaArm | None = None
         plan = None
         reasons = []
-        for side in self.settings.base_sides:
-            # The arm stands at side * y of the tool's start, facing it; the palm approaches
-            # along -side * y.
+        for bearing in self.settings.base_bearings:
+            # The arm stands base_distance from the tool's start at this bearing (radians
+            # about z from +x), facing it; the palm approaches the tool towards the base's
+            # opposite side.
+            towards = np.array([np.cos(bearing), np.sin(bearing), 0.0])
             base = Pose.from_euler(start.position * np.array([1.0, 1.0, 0.0])
-                                   + np.array([0.0, side * self.settings.base_distance, 0.0]),
-                                   yaw=-side * np.pi / 2)
+                                   + self.settings.base_distance * towards,
+                                   yaw=bearing + np.pi)
             if arm is None:
                 arm = PandaArm(client, base)
                 self.state.arm = arm
@@ -246,7 +248,8 @@ class RobotTrialPhysics(BulletTrialPhysics):
                                                   physicsClientId=client)
                 arm.base_pose = base
             for grasp in grasps:
-                if float(grasp.tool_in_gripper.inverse().rotation()[1, 2]) * -side < 0.999:
+                approach = grasp.tool_in_gripper.inverse().rotation()[:, 2]
+                if float(approach @ -towards) < 0.999:
                     continue
                 checker = ArmCollisionChecker(arm, self.state.obstacles,
                                               AttachedBody(tool.body, grasp.tool_in_gripper))
