@@ -278,7 +278,22 @@ def summarise(row: Row, pairs: list[list[dict]]) -> dict:
         "cpu_ratio": (float(np.mean([r["cpu_s"] for _, r in pairs])
                             / np.mean([f["cpu_s"] for f, _ in pairs])) if pairs else None),
         "reference_reasons": _count_reasons(r for _, r in kept),
+        **_agreement_where_run(kept),
     }
+
+
+def _agreement_where_run(kept: list[tuple[dict, dict]]) -> dict:
+    """Agreement on the inputs whose reference trial gave no failure reason (for the robot
+    row: those the Panda grasped, reached and carried out), with its Wilson interval, and
+    the CPU seconds per trial of both settings there."""
+    ran = [(f, r) for f, r in kept if "reason" in r and not r["reason"]]
+    if not ran:
+        return {}
+    agree = sum(is_success(f) == is_success(r) for f, r in ran)
+    return {"ran_trials": len(ran), "ran_agreement": agree / len(ran),
+            "ran_wilson95": list(wilson_interval(agree, len(ran))),
+            "ran_fast_cpu_s": float(np.mean([f["cpu_s"] for f, _ in ran])),
+            "ran_reference_cpu_s": float(np.mean([r["cpu_s"] for _, r in ran]))}
 
 
 def _count_reasons(records: Iterable[dict]) -> dict[str, int]:
