@@ -23,8 +23,9 @@ Rows (``--rows``, default all):
   implementation's).
 * ``3d-pour-robot``: PyBullet pour with the free-floating cup (fast) vs the Panda in the loop
   (``robot="panda"``: grasp with a force-limited constraint, IK + joint position control;
-  reach, arm collisions and slip fail). Its cost ratio (robot CPU / free CPU per trial)
-  decides whether the robot is the default (≤ 3×) or an option.
+  reach, arm collisions and slip fail). The summary adds the cost ratio (robot CPU / free
+  CPU per trial), the robot's failure reasons, and the agreement on the inputs the robot
+  carried out.
 
 Every trial is appended as one JSON line to ``--cache`` (default
 ``bench/results/fidelity_trials.jsonl``) as soon as it finishes; a rerun with the same

@@ -119,6 +119,8 @@ class Kitchen3DBackend:
     records' identity: :attr:`name` is ``pybullet+panda`` then.
     """
 
+    name = "pybullet"
+
     def __init__(
         self,
         gui: bool = False,
