@@ -21,6 +21,11 @@ Rows (``--rows``, default all):
 * ``3d-<skill>-engine`` (pour, scoop, push, stir): PyBullet vs SAPIEN, both as shipped.
 * ``3d-<skill>-solver``: PyBullet with 5 solver iterations (shipped) vs 50 (the reference
   implementation's).
+* ``3d-pour-robot``: PyBullet pour with the free-floating cup (fast) vs the Panda in the loop
+  (``robot="panda"``: grasp with a force-limited constraint, IK + joint position control;
+  reach, arm collisions and slip fail). The summary adds the cost ratio (robot CPU / free
+  CPU per trial), the robot's failure reasons, and the agreement on the inputs the robot
+  carried out.
 
 Every trial is appended as one JSON line to ``--cache`` (default
 ``bench/results/fidelity_trials.jsonl``) as soon as it finishes; a rerun with the same
@@ -29,6 +34,12 @@ summary is written to ``--out`` (default ``bench/results/fidelity.json``).
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 3d-pour-engine
     OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 2d-pour-reference --trials 50
+
+The robot row's committed run:
+
+    OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 3d-pour-robot \
+        --trials 200 --cache docs/results/fidelity/robot_trials.jsonl \
+        --out docs/results/fidelity/robot.json
 
 The 2D pour's committed run (resumable: the reference trials cost 10-15 s CPU each):
 
@@ -45,7 +56,7 @@ import os
 import platform
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -96,6 +107,7 @@ SETTINGS: dict[str, Callable[[], SkillBackend]] = {
         "pybullet", solver_iterations=REFERENCE_SOLVER_ITERATIONS
     ),
     "sapien": lambda: load_backend("sapien"),
+    "pybullet-panda": lambda: load_backend("pybullet", robot="panda"),
 }
 
 
@@ -116,6 +128,7 @@ ROWS: tuple[Row, ...] = (
     Row("2d-scoop-reference", "scoop", "box2d", "box2d-reference-scoop"),
     *(Row(f"3d-{skill}-engine", skill, "pybullet", "sapien") for skill in SKILLS_3D),
     *(Row(f"3d-{skill}-solver", skill, "pybullet", "pybullet-solver-50") for skill in SKILLS_3D),
+    Row("3d-pour-robot", "pour", "pybullet", "pybullet-panda"),
 )
 
 
@@ -193,7 +206,7 @@ def run_trial(backend: SkillBackend, setting: str, skill: str, context: np.ndarr
         return {"score": None, "valid": False, "error": str(error),
                 "cpu_s": time.process_time() - start}
     return {"score": float(result.score), "valid": bool(result.valid), "error": None,
-            "cpu_s": time.process_time() - start}
+            "cpu_s": time.process_time() - start, "reason": result.info.get("reason")}
 
 
 @contextmanager
@@ -263,7 +276,36 @@ def summarise(row: Row, pairs: list[list[dict]]) -> dict:
         "reference_only": int((~fast_labels & ref_labels).sum()),
         "fast_cpu_s": float(np.mean([f["cpu_s"] for f, _ in pairs])) if pairs else None,
         "reference_cpu_s": float(np.mean([r["cpu_s"] for _, r in pairs])) if pairs else None,
+        "cpu_ratio": (float(np.mean([r["cpu_s"] for _, r in pairs])
+                            / np.mean([f["cpu_s"] for f, _ in pairs])) if pairs else None),
+        "reference_reasons": _count_reasons(r for _, r in kept),
+        **_agreement_where_run(kept),
     }
+
+
+def _agreement_where_run(kept: list[tuple[dict, dict]]) -> dict:
+    """Agreement on the inputs whose reference trial gave no failure reason (for the robot
+    row: those the Panda grasped, reached and carried out), with its Wilson interval, and
+    the CPU seconds per trial of both settings there."""
+    ran = [(f, r) for f, r in kept if "reason" in r and not r["reason"]]
+    if not ran:
+        return {}
+    agree = sum(is_success(f) == is_success(r) for f, r in ran)
+    return {"ran_trials": len(ran), "ran_agreement": agree / len(ran),
+            "ran_wilson95": list(wilson_interval(agree, len(ran))),
+            "ran_fast_cpu_s": float(np.mean([f["cpu_s"] for f, _ in ran])),
+            "ran_reference_cpu_s": float(np.mean([r["cpu_s"] for _, r in ran]))}
+
+
+def _count_reasons(records: Iterable[dict]) -> dict[str, int]:
+    """How many trials gave each ``info["reason"]`` (failures that say why; older cached
+    records without the field are not counted)."""
+    counts: dict[str, int] = {}
+    for record in records:
+        reason = record.get("reason")
+        if reason:
+            counts[reason] = counts.get(reason, 0) + 1
+    return dict(sorted(counts.items()))
 
 
 def print_table(summaries: list[dict], target: float) -> None:

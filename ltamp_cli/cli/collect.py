@@ -9,6 +9,21 @@ import typer
 
 from ltamp_cli.errors import InputError
 
+#: ``--robot`` values, and the (backend, skills) that take a robot.
+ROBOT_CHOICES = ("none", "panda")
+ROBOT_BACKEND = "pybullet"
+ROBOT_SKILLS = ("pour",)
+
+
+def check_robot(robot: str, backend: str, skill: str) -> None:
+    """``--robot`` must name a known robot, and a robot needs a PyBullet pour."""
+    if robot not in ROBOT_CHOICES:
+        raise InputError(f"--robot: expected one of {', '.join(ROBOT_CHOICES)}, got {robot!r}")
+    if robot != "none" and (backend != ROBOT_BACKEND or skill not in ROBOT_SKILLS):
+        raise InputError(f"--robot {robot}: only --backend {ROBOT_BACKEND} with skill "
+                         f"{', '.join(ROBOT_SKILLS)} runs trials with a robot, not "
+                         f"{backend}/{skill}")
+
 
 def register(app: typer.Typer) -> None:
     app.command(name="collect")(collect_command)
@@ -42,6 +57,17 @@ def collect_command(
     wait: Annotated[
         bool, typer.Option("--wait", help="Wait for another writer of --out instead of failing.")
     ] = False,
+    robot: Annotated[
+        str,
+        typer.Option(
+            "--robot",
+            help="Who moves the tool in a trial: 'none' (free-floating along the skill's path) "
+            "or 'panda' (pybullet pour only: a Panda grasps the cup with a force-limited "
+            "grasp and follows the path by IK and joint position control; unreachable "
+            "poses, arm collisions and slip fail the trial). Records are tagged "
+            "pybullet+panda, so the two never mix in one file.",
+        ),
+    ] = "none",
 ) -> None:
     """Collect N random trials (uniform control; context from the backend), resumably."""
     from ltamp_cli.cli.conventions import emit
@@ -53,7 +79,9 @@ def collect_command(
         raise InputError(f"--workers: expected a number >= 1, got {workers}")
     if out.exists() and out.is_dir():
         raise InputError(f"--out: {out} is a directory, expected a .jsonl file path")
-    job = CollectJob(skill=skill, backend=backend, n=n, seed=seed, valid_only=valid_only)
+    check_robot(robot, backend, skill)
+    job = CollectJob(skill=skill, backend=backend, n=n, seed=seed, valid_only=valid_only,
+                     robot=robot)
     added = collect(job, out, workers=workers, ray_address=ray, wait=wait)
     if as_json:
         emit({"out": str(out), "added": added, "n": n}, as_json)

@@ -80,6 +80,15 @@ def train_command(
     wait: Annotated[
         bool, typer.Option("--wait", help="Wait for another writer of --out instead of failing.")
     ] = False,
+    robot: Annotated[
+        str,
+        typer.Option(
+            "--robot",
+            help="Live trials' robot: 'none' (free-floating tool) or 'panda' (pybullet pour "
+            "only: the Panda grasps and carries the cup; reach, arm collisions and slip "
+            "fail). The model and its trials are tagged pybullet+panda.",
+        ),
+    ] = "none",
 ) -> None:
     """Learn SKILL's success constraint and save the model to --out.
 
@@ -87,6 +96,7 @@ def train_command(
     pool mode (--data) picks trials from recorded ones instead.
     """
     from ltamp_cli.backends import load_backend
+    from ltamp_cli.cli.collect import check_robot
     from ltamp_cli.cli.conventions import emit, progress_enabled
     from ltamp_cli.learning.active import LearningConfig, learn_from_pool, learn_online
     from ltamp_cli.learning.confidence import beta_star
@@ -112,7 +122,8 @@ def train_command(
     if curve is not None and eval_every == 0:
         eval_every = max(1, budget // 10)
 
-    physics = load_backend(backend)
+    check_robot(robot, backend, skill)
+    physics = load_backend(backend, **({} if robot == "none" else {"robot": robot}))
     try:
         specs = physics.skills()
         if skill not in specs:
@@ -163,7 +174,7 @@ def train_command(
     ]
     result.model.save(
         str(out),
-        backend=backend,
+        backend=backend if robot == "none" else f"{backend}+{robot}",
         strategy=strategy,
         training={
             "mode": "pool" if data is not None else "online",

@@ -197,6 +197,14 @@ def learn_online(
             f"{dataset.path if dataset else ''} holds trials of skill "
             f"{strangers[0].skill!r}, not {skill!r}"
         )
+    # Labels of a robot-in-the-loop trial and of a free-floating one differ: never mix them.
+    other = next((r.backend for r in records
+                  if r.backend != backend.name and "+" in f"{r.backend}{backend.name}"), None)
+    if other is not None:
+        raise ValueError(
+            f"{dataset.path if dataset else ''} holds {other} trials, not {backend.name} "
+            "ones; use another --out"
+        )
     indices = [r.index for r in records if r.index >= 0]
     if len(set(indices)) != len(indices):
         repeated = next(i for i in indices if indices.count(i) > 1)

@@ -60,7 +60,12 @@ class TrialInput:
 
 @dataclass(frozen=True)
 class CollectJob:
-    """A collection job: ``n`` trials of ``skill`` on backend ``backend`` (with options)."""
+    """A collection job: ``n`` trials of ``skill`` on backend ``backend`` (with options).
+
+    ``robot``: ``"none"`` (the backend's tools move free-floating) or a robot that carries
+    them (``"panda"`` on ``pybullet``); it is passed to the backend as its ``robot`` option
+    and is part of the records' identity (:attr:`tag`), so a file never mixes the two.
+    """
 
     skill: str
     backend: str
@@ -68,6 +73,19 @@ class CollectJob:
     seed: int = 0
     valid_only: bool = False
     backend_options: Mapping[str, Any] | None = None
+    robot: str = "none"
+
+    @property
+    def tag(self) -> str:
+        """The ``backend`` field of this job's records: ``pybullet`` or ``pybullet+panda``."""
+        return self.backend if self.robot == "none" else f"{self.backend}+{self.robot}"
+
+    def options(self) -> dict[str, Any]:
+        """Keyword options of :func:`load_backend` (the robot included when there is one)."""
+        options = dict(self.backend_options or {})
+        if self.robot != "none":
+            options["robot"] = self.robot
+        return options
 
 
 def trial_seed(base_seed: int, index: int) -> int:
@@ -121,7 +139,7 @@ def _run_guarded(backend: SkillBackend, job: CollectJob, index: int) -> tuple[Tr
         score=float(result.score),
         valid=bool(result.valid),
         seed=item.seed,
-        backend=job.backend,
+        backend=job.tag,
         wall_time_s=time.perf_counter() - start,
         index=index,
         info=dict(result.info),
@@ -141,7 +159,7 @@ class TrialRunner:
 
     def run(self, index: int) -> TrialRecord:
         if self._backend is None:
-            self._backend = load_backend(self.job.backend, **dict(self.job.backend_options or {}))
+            self._backend = load_backend(self.job.backend, **self.job.options())
         record, crashed = _run_guarded(self._backend, self.job, index)
         if crashed:
             self.close()
@@ -157,10 +175,10 @@ def pending_indices(dataset: TrialDataset, job: CollectJob) -> list[int]:
     """Indices of ``job`` not yet in ``dataset``; refuses a file from a different job."""
     done: dict[int, int] = {}
     for line, record in enumerate(dataset.iter_records(), start=1):
-        if record.skill != job.skill or record.backend != job.backend:
+        if record.skill != job.skill or record.backend != job.tag:
             raise InputError(
                 f"{dataset.path}: holds {record.backend}/{record.skill} trials, not "
-                f"{job.backend}/{job.skill}; use another --out file"
+                f"{job.tag}/{job.skill}; use another --out file"
             )
         if 0 <= record.index < job.n and record.seed != trial_seed(job.seed, record.index):
             raise InputError(
@@ -290,7 +308,7 @@ def collect(
         raise InputError("--ray: expected 'local' or a Ray cluster address, got ''")
     job = replace(job, seed=usable_seed(job.seed))
     dataset = TrialDataset(out)
-    backend_check = load_backend(job.backend, **dict(job.backend_options or {}))
+    backend_check = load_backend(job.backend, **job.options())
     try:
         skill_spec(backend_check, job.skill)
     except KeyError as error:
@@ -327,7 +345,7 @@ def _append_all(
     with tqdm(
         total=job.n,
         initial=job.n - pending,
-        desc=f"{job.backend}/{job.skill}",
+        desc=f"{job.tag}/{job.skill}",
         unit="trial",
         disable=not progress,
         dynamic_ncols=True,

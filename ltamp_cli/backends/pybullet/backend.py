@@ -15,6 +15,12 @@ from ltamp_cli.backends.protocol import SkillSpec, TrialResult, as_batch
 from ltamp_cli.backends.pybullet.guard import bullet_guard
 from ltamp_cli.backends.pybullet.render import Camera, FrameRecorder
 from ltamp_cli.backends.pybullet.skills.physics import BulletTrialPhysics
+from ltamp_cli.backends.pybullet.skills.robot import (
+    ROBOTS,
+    RobotFailure,
+    RobotSettings,
+    RobotTrialPhysics,
+)
 from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig
 from ltamp_cli.backends.sanity import run_guarded
 from ltamp_cli.backends.skills3d.common import PathCheck
@@ -24,6 +30,7 @@ from ltamp_cli.backends.skills3d.pour import (
     PourSettings,
     check_pour,
     pour_is_valid,
+    prepare_pour,
     sample_pour_context,
 )
 from ltamp_cli.backends.skills3d.push import (
@@ -70,6 +77,14 @@ _CONTEXTS: Mapping[str, Callable[[np.random.Generator], np.ndarray]] = MappingPr
      "stir": sample_stir_context}
 )
 KNOWN_SKILLS = ", ".join(_SPECS)
+#: Skills whose trials can run with the Panda in the loop (``robot="panda"``).
+ROBOT_SKILLS = ("pour",)
+
+
+def backend_tag(robot: str) -> str:
+    """The backend name trial records carry: ``pybullet`` for free-floating tools,
+    ``pybullet+panda`` with the Panda in the loop (so the two kinds of labels never mix)."""
+    return "pybullet" if robot == "none" else f"pybullet+{robot}"
 
 
 def precheck_trial(spec: SkillSpec, context: np.ndarray, control: np.ndarray
@@ -96,8 +111,12 @@ class Kitchen3DBackend:
     ``stir`` (engineered, but trials and scores work the same way).
 
     Options: ``gui`` (open a PyBullet window instead of ``DIRECT``), ``solver_iterations``,
-    and per-skill timing via ``pour_settings``/``scoop_settings``/``push_settings``/
-    ``stir_settings``.
+    per-skill timing via ``pour_settings``/``scoop_settings``/``push_settings``/
+    ``stir_settings``, and ``robot``: ``"none"`` (the tool moves free-floating along the
+    skill's path) or ``"panda"`` (pour only: a Panda grasps the cup and follows the path by
+    IK and joint position control; reach, arm collisions and slip fail the trial, see
+    :mod:`.skills.robot`; ``robot_settings`` tunes it). The robot is part of the trial
+    records' identity: :attr:`name` is ``pybullet+panda`` then.
     """
 
     name = "pybullet"
@@ -110,7 +129,14 @@ class Kitchen3DBackend:
         scoop_settings: ScoopSettings | None = None,
         push_settings: PushSettings | None = None,
         stir_settings: StirSettings | None = None,
+        robot: str = "none",
+        robot_settings: RobotSettings | None = None,
     ) -> None:
+        if robot not in ROBOTS:
+            raise ValueError(f"robot must be one of {', '.join(ROBOTS)}, got {robot!r}")
+        self.robot = robot
+        self.robot_settings = robot_settings or RobotSettings()
+        self.name = backend_tag(robot)
         self.config = WorldConfig(gui=bool(gui), solver_iterations=int(solver_iterations))
         self.pour_settings = pour_settings or PourSettings()
         self.scoop_settings = scoop_settings or ScoopSettings()
@@ -188,16 +214,30 @@ class Kitchen3DBackend:
         context, control, rejected = precheck_trial(self._spec(skill), context, control)
         if rejected is not None:
             return rejected
-        physics = BulletTrialPhysics(self.world)
+        physics = self._physics(skill, context, control, int(seed))
         settings = self.settings_for(skill)
+        failure_score = self._spec(skill).invalid_score
+
+        def trial(step: StepCallback | None) -> TrialResult:
+            try:
+                return run_skill_trial(physics, skill, context, control, int(seed), settings,
+                                       step, check=False)
+            except RobotFailure as failure:
+                return failure.result(failure_score)
+
         # A diverged simulation (NaN, bodies flung away) makes an invalid trial.
-        return run_guarded(
-            bullet_guard(self.world.client),
-            lambda step: run_skill_trial(physics, skill, context, control, int(seed), settings,
-                                         step, check=False),
-            on_step,
-            self._spec(skill).invalid_score,
-        )
+        return run_guarded(bullet_guard(self.world.client), trial, on_step, failure_score)
+
+    def _physics(self, skill: str, context: np.ndarray, control: np.ndarray, seed: int
+                 ) -> BulletTrialPhysics:
+        """Free-floating tools, or the Panda carrying the tool along the skill's path."""
+        if self.robot == "none":
+            return BulletTrialPhysics(self.world)
+        if skill not in ROBOT_SKILLS:
+            raise ValueError(f"robot {self.robot!r} runs {', '.join(ROBOT_SKILLS)} trials only, "
+                             f"not {skill}")
+        preview = prepare_pour(context, control, check=False).path
+        return RobotTrialPhysics(self.world, preview, self.robot_settings, seed)
 
     def close(self) -> None:
         if self._world is not None:

@@ -138,8 +138,10 @@ class PandaArm:
 
     # Position control (for simulated execution) ------------------------------------------
 
-    def command_configuration(self, q: np.ndarray, forces: Sequence[float] | None = None) -> None:
-        """Set position-control targets for the arm joints (takes effect on stepSimulation)."""
+    def command_configuration(self, q: np.ndarray, forces: Sequence[float] | None = None,
+                              position_gain: float | None = None) -> None:
+        """Set position-control targets for the arm joints (takes effect on stepSimulation);
+        ``position_gain``: PyBullet's position gain of every joint (``None``: its default)."""
         values = np.asarray(q, dtype=float)
         if values.shape != (self.dof,):
             raise ValueError(f"a Panda configuration has shape (7,), got {values.shape}")
@@ -150,6 +152,8 @@ class PandaArm:
             pybullet.POSITION_CONTROL,
             targetPositions=[float(v) for v in values],
             forces=max_forces,
+            **({} if position_gain is None
+               else {"positionGains": [float(position_gain)] * self.dof}),
             physicsClientId=self.client_id,
         )
 
