@@ -104,6 +104,5 @@ def test_push_theta_star_beats_the_old_fit_on_far_goals() -> None:
     finally:
         backend.close()
     # Random valid controls succeed for 0.2-1.5 % of far goals' controls (bench/push_reach.py).
-    print("far-goal theta* successes: new", new_wins, "old", old_wins)
     assert new_wins >= 14, (new_wins, old_wins)
     assert new_wins >= old_wins + 7, (new_wins, old_wins)
