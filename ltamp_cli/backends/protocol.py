@@ -76,6 +76,11 @@ class SkillSpec:
     control: ParamSpace
     description: str = ""
     invalid_score: float = -1.0
+    #: True when a trial's score is a deterministic function of (context, control) (the
+    #: seed changes nothing): a GP fitted to it is given almost no observation noise
+    #: (:data:`ltamp_cli.learning.active.DETERMINISTIC_NOISE`), so its marginal likelihood
+    #: cannot explain a narrow success set away as noise.
+    deterministic: bool = False
 
 
 @dataclass(frozen=True)

@@ -155,7 +155,10 @@ class LevelSetModel(SkillModel):
         x = BoxNormalizer.for_space(joint_space(spec)).to_unit(
             join_inputs(spec, contexts, controls)
         )
-        gp = fit_gp(x, scores, kernel, restarts=restarts, rng=np.random.default_rng(seed))
+        from ltamp_cli.learning.active import gp_bounds  # active imports this module
+
+        gp = fit_gp(x, scores, kernel, restarts=restarts, rng=np.random.default_rng(seed),
+                    bounds=gp_bounds(spec))
         return LevelSetModel(spec, gp)
 
     @property

@@ -66,6 +66,7 @@ def spec_to_json(spec: SkillSpec) -> dict[str, Any]:
         "name": spec.name,
         "description": spec.description,
         "invalid_score": spec.invalid_score,
+        "deterministic": spec.deterministic,
         "context": space_to_json(spec.context),
         "control": space_to_json(spec.control),
     }
@@ -78,6 +79,7 @@ def spec_from_json(data: dict[str, Any]) -> SkillSpec:
         control=space_from_json(data["control"]),
         description=str(data.get("description", "")),
         invalid_score=float(data.get("invalid_score", -1.0)),
+        deterministic=bool(data.get("deterministic", False)),
     )
 
 

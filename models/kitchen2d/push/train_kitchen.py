@@ -18,7 +18,7 @@ where the kitchen's GoodPush asks (Task I: ``goal_x`` in ±[3, 5], ``goal_y`` in
 ``ltamp train``. The model keeps the skill's full
 spec; ``ltamp evaluate`` judges its most confident control among *all* valid controls.
 
-    OMP_NUM_THREADS=1 .venv/bin/python models/kitchen2d/push/train_kitchen.py --budget 300
+    OMP_NUM_THREADS=1 .venv/bin/python models/kitchen2d/push/train_kitchen.py --budget 500
 
 Writes ``models/kitchen2d/push`` (``model.json``, ``weights.npz``, ``trials.jsonl``); a rerun
 with a larger budget resumes from ``trials.jsonl``.

@@ -39,6 +39,7 @@ SPEC = SkillSpec(
         ("units", "units", "rad", "s"),
     ),
     description="push a round object to a goal seen from above; g = 2 - |x - goal|",
+    deterministic=True,
 )
 
 
