@@ -31,7 +31,8 @@ from ltamp_cli.cli.evaluate import _live_success_rates
 from ltamp_cli.learning.model_dir import load_model
 from ltamp_cli.threads import use_one_thread
 
-MODELS_DIR = Path(__file__).resolve().parents[1] / "models" / "kitchen3d"
+ROOT = Path(__file__).resolve().parents[1]
+MODELS_DIR = ROOT / "models" / "kitchen3d"
 #: The targets of issue #20: θ* success rate and its gap over random valid controls.
 THETA_TARGET = 0.8
 GAP_TARGET = 0.3
@@ -122,7 +123,8 @@ def main(argv: list[str] | None = None) -> int:
                         default=[MODELS_DIR / "pour", MODELS_DIR / "scoop"])
     parser.add_argument("--contexts", type=int, default=20)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--out", type=Path, default=MODELS_DIR.parents[1] / "bench" / "results" / "kitchen3d_models.json")
+    parser.add_argument("--out", type=Path,
+                        default=ROOT / "bench" / "results" / "kitchen3d_models.json")
     args = parser.parse_args(argv)
     if args.contexts < 1:
         parser.error("--contexts must be at least 1")
