@@ -157,8 +157,9 @@ def read_trials(paths: list[Path], skill: str, setting: str
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Contexts ``(n, d_context)``, controls ``(n, d_control)`` and scores ``(n,)`` of the
     valid ``skill`` trials of ``setting`` (a record's ``setting``, else its ``backend``) in
-    ``paths``; a repeated (context, control) is used once."""
-    seen: set[tuple[float, ...]] = set()
+    ``paths``; a trial recorded twice (same context, control and seed) is used once, the same
+    input run with other seeds (a fixed control's repeats) once per seed."""
+    seen: set[tuple[float | int | None, ...]] = set()
     contexts, controls, scores = [], [], []
     for path in paths:
         for line in path.read_text().splitlines():
@@ -171,7 +172,7 @@ def read_trials(paths: list[Path], skill: str, setting: str
                 continue
             if not record.get("valid", False) or record.get("score") is None:
                 continue
-            key = tuple(record["context"]) + tuple(record["control"])
+            key = (*record["context"], *record["control"], record.get("seed"))
             if key in seen:
                 continue
             seen.add(key)

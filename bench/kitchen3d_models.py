@@ -8,7 +8,8 @@ control per context, one live trial each, same trial seed), so its θ* and rando
 What this adds: 95 % Wilson intervals, the gap (target: θ* >= 0.8 and gap >= 0.3), the GP's
 context lengthscales (normalised inputs in [-1, 1]; a context input whose lengthscale sits at
 the bound is ignored by the model), the CPU seconds per live trial, and every trial run
-(context, control, score) in the JSON written to ``--out``.
+(context, control, score) in the JSON written to ``--out`` (and, with ``--log``, appended
+to a JSONL as each finishes, so a stopped run keeps them).
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/kitchen3d_models.py --contexts 20
 """
@@ -42,8 +43,9 @@ class TimedBackend:
     """A backend whose ``run_trial`` calls are recorded with their CPU seconds; every other
     attribute is the wrapped backend's."""
 
-    def __init__(self, backend: SkillBackend) -> None:
+    def __init__(self, backend: SkillBackend, log: Path | None = None) -> None:
         self._backend = backend
+        self._log = log
         self.trials: list[dict] = []
 
     def __getattr__(self, name: str) -> Any:
@@ -57,6 +59,9 @@ class TimedBackend:
                             "control": np.asarray(control).tolist(), "seed": seed,
                             "score": float(result.score), "valid": bool(result.valid),
                             "cpu_s": time.process_time() - start})
+        if self._log is not None:  # a stopped run leaves the trials it ran
+            with self._log.open("a") as out:
+                out.write(json.dumps({"skill": skill, **self.trials[-1]}) + "\n")
         return result
 
 
@@ -76,12 +81,12 @@ def context_lengthscales(metadata: dict) -> dict[str, float]:
             if name in context_names}
 
 
-def bench_model(directory: Path, contexts: int, seed: int) -> dict:
+def bench_model(directory: Path, contexts: int, seed: int, log: Path | None = None) -> dict:
     """θ* and random-valid success over ``contexts`` contexts of one model directory."""
     loaded = load_model(directory)
     model, metadata = loaded.model, loaded.metadata
     skill = model.spec.name
-    backend = TimedBackend(load_backend(str(metadata.get("backend", "pybullet"))))
+    backend = TimedBackend(load_backend(str(metadata.get("backend", "pybullet"))), log)
     try:
         theta_rate, random_rate = _live_success_rates(backend, skill, model, contexts, seed)
     finally:
@@ -122,6 +127,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("models", nargs="*", type=Path,
                         default=[MODELS_DIR / "pour", MODELS_DIR / "scoop"])
     parser.add_argument("--contexts", type=int, default=20)
+    parser.add_argument("--log", type=Path, default=None,
+                        help="append every live trial to this JSONL as it finishes")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path,
                         default=ROOT / "bench" / "results" / "kitchen3d_models.json")
@@ -133,7 +140,8 @@ def main(argv: list[str] | None = None) -> int:
             print(f"kitchen3d_models.py: {directory} holds no model.json", file=sys.stderr)
             return 2
     use_one_thread()
-    summaries = [bench_model(directory, args.contexts, args.seed) for directory in args.models]
+    summaries = [bench_model(directory, args.contexts, args.seed, args.log)
+                 for directory in args.models]
     print_table(summaries)
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps({"machine": platform.platform(), "models": summaries},
