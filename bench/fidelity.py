@@ -34,6 +34,13 @@ The summary is written to ``--out`` (default ``bench/results/fidelity.json``).
     OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 3d-pour-engine
     OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 2d-pour-reference --trials 50
 
+The committed 3D engine rows (``--settings pybullet`` / ``--settings sapien`` in two
+processes fill one side each; ``--settings`` naming none only summarises the cached pairs):
+
+    OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 3d-pour-engine \
+        3d-push-engine 3d-scoop-engine --cache docs/results/fidelity/engine_trials_v2.jsonl \
+        --out docs/results/fidelity/engine.json
+
 The 2D pour's committed run (resumable: the reference trials cost 10-15 s CPU each):
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 2d-pour-reference \
@@ -318,8 +325,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
     parser.add_argument("--shard", default="0/1", metavar="K/M",
                         help="run only inputs i with i %% M == K (others: from the cache)")
-    parser.add_argument("--settings", nargs="+", choices=sorted(SETTINGS), metavar="SETTING",
-                        help="run only these settings' trials (others: from the cache)")
+    parser.add_argument("--settings", nargs="*", choices=sorted(SETTINGS), metavar="SETTING",
+                        help="run only these settings' trials (others: from the cache); "
+                             "none named: only summarise the cached pairs")
     args = parser.parse_args(argv)
     if args.trials < 1:
         parser.error("--trials must be at least 1")
@@ -336,7 +344,7 @@ def main(argv: list[str] | None = None) -> int:
     by_name = {row.name: row for row in ROWS}
     chosen = [by_name[name] for name in dict.fromkeys(args.rows)]  # in the order given
     k, m = (int(v) for v in args.shard.split("/"))
-    only = frozenset(args.settings) if args.settings else None
+    only = frozenset(args.settings) if args.settings is not None else None
     summaries = [run_row(row, args.trials, args.seed, args.cache, cache, not args.quiet, (k, m),
                          only)
                  for row in chosen]
