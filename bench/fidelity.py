@@ -254,7 +254,7 @@ def run_row(row: Row, n: int, seed: int, cache_path: Path, cache: dict[str, dict
                                          or (only is not None and setting not in only)):
                     cache.update(load_cache(cache_path))  # another shard may have run it
                     if key not in cache:
-                        break
+                        continue  # the other setting may still run
                 if key not in cache:
                     record = {"key": key, "setting": setting, "skill": row.skill,
                               "seed": trial_seed, "context": context.tolist(),
