@@ -30,10 +30,21 @@ Rows (``--rows``, default all):
 Every trial is appended as one JSON line to ``--cache`` (default
 ``bench/results/fidelity_trials.jsonl``) as soon as it finishes; a rerun with the same
 arguments reuses the trials already there, so a long run can be stopped and resumed. The
-summary is written to ``--out`` (default ``bench/results/fidelity.json``).
+key of a 3D engine's trial carries that engine's physics version
+(:data:`SETTING_VERSIONS`), so trials simulated before an engine change are never reused.
+``--settings`` runs only the named settings' trials (the others are read from the cache
+when present): a slow engine's side of a row can start before the other engine is final.
+The summary is written to ``--out`` (default ``bench/results/fidelity.json``).
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 3d-pour-engine
     OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 2d-pour-reference --trials 50
+
+The committed 3D engine rows (``--settings pybullet`` / ``--settings sapien`` in two
+processes fill one side each; ``--settings`` naming none only summarises the cached pairs):
+
+    OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 3d-pour-engine \
+        3d-push-engine 3d-scoop-engine --cache docs/results/fidelity/engine_trials_v2.jsonl \
+        --out docs/results/fidelity/engine.json
 
 The robot row's committed run:
 
@@ -68,6 +79,8 @@ from ltamp_cli.backends import SkillBackend, load_backend
 from ltamp_cli.backends.box2d.backend import Kitchen2DBackend
 from ltamp_cli.backends.box2d.skills.pour import REFERENCE, PourConfig
 from ltamp_cli.backends.box2d.skills.scoop import reference_config as reference_scoop
+from ltamp_cli.backends.pybullet.world import PHYSICS_VERSION as PYBULLET_PHYSICS_VERSION
+from ltamp_cli.backends.sapien.world import PHYSICS_VERSION as SAPIEN_PHYSICS_VERSION
 
 RESULTS_DIR = Path(__file__).resolve().parent / "results"
 SKILLS_3D = ("pour", "scoop", "push", "stir")
@@ -108,6 +121,16 @@ SETTINGS: dict[str, Callable[[], SkillBackend]] = {
     ),
     "sapien": lambda: load_backend("sapien"),
     "pybullet-panda": lambda: load_backend("pybullet", robot="panda"),
+}
+
+#: Physics version of each versioned setting, part of its trial keys (see
+#: :func:`trial_key`). The Box2D settings are unversioned: their committed caches are keyed
+#: without one.
+SETTING_VERSIONS: dict[str, int] = {
+    "pybullet": PYBULLET_PHYSICS_VERSION,
+    "pybullet-solver-50": PYBULLET_PHYSICS_VERSION,
+    "pybullet-panda": PYBULLET_PHYSICS_VERSION,
+    "sapien": SAPIEN_PHYSICS_VERSION,
 }
 
 
@@ -165,9 +188,12 @@ def draw_inputs(fast: SkillBackend, reference: SkillBackend, skill: str, n: int,
 
 def trial_key(setting: str, skill: str, context: np.ndarray, control: np.ndarray,
               seed: int) -> str:
-    """The cache key of one trial (inputs rounded to 12 digits, so JSON round trips match)."""
+    """The cache key of one trial (inputs rounded to 12 digits, so JSON round trips match);
+    a versioned setting's name carries ``@v<physics version>``."""
     values = ",".join(f"{v:.12g}" for v in (*context, *control))
-    return f"{setting}|{skill}|{seed}|{values}"
+    version = SETTING_VERSIONS.get(setting)
+    name = setting if version is None else f"{setting}@v{version}"
+    return f"{name}|{skill}|{seed}|{values}"
 
 
 def load_cache(path: Path) -> dict[str, dict]:
@@ -222,11 +248,13 @@ def backends(names: tuple[str, ...]) -> Iterator[dict[str, SkillBackend]]:
 
 
 def run_row(row: Row, n: int, seed: int, cache_path: Path, cache: dict[str, dict],
-            progress: bool, shard: tuple[int, int] = (0, 1)) -> dict:
+            progress: bool, shard: tuple[int, int] = (0, 1),
+            only: frozenset[str] | None = None) -> dict:
     """Run (or reuse from the cache) the row's trials and summarise the agreement.
 
     ``shard = (k, m)`` runs only inputs ``i`` with ``i % m == k`` (several processes can
-    share a long row through one cache); the others count only once cached."""
+    share a long row through one cache); the others count only once cached. ``only``: run
+    the trials of these settings only (``None``: all); the others count only once cached."""
     with backends((row.fast, row.reference)) as built:
         fast, reference = built[row.fast], built[row.reference]
         inputs = draw_inputs(fast, reference, row.skill, n, seed)
@@ -236,10 +264,11 @@ def run_row(row: Row, n: int, seed: int, cache_path: Path, cache: dict[str, dict
             pair = []
             for setting, backend in ((row.fast, fast), (row.reference, reference)):
                 key = trial_key(setting, row.skill, context, control, trial_seed)
-                if key not in cache and index % shard[1] != shard[0]:
+                if key not in cache and (index % shard[1] != shard[0]
+                                         or (only is not None and setting not in only)):
                     cache.update(load_cache(cache_path))  # another shard may have run it
                     if key not in cache:
-                        break
+                        continue  # the other setting may still run
                 if key not in cache:
                     record = {"key": key, "setting": setting, "skill": row.skill,
                               "seed": trial_seed, "context": context.tolist(),
@@ -339,6 +368,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
     parser.add_argument("--shard", default="0/1", metavar="K/M",
                         help="run only inputs i with i %% M == K (others: from the cache)")
+    parser.add_argument("--settings", nargs="*", choices=sorted(SETTINGS), metavar="SETTING",
+                        help="run only these settings' trials (others: from the cache); "
+                             "none named: only summarise the cached pairs")
     args = parser.parse_args(argv)
     if args.trials < 1:
         parser.error("--trials must be at least 1")
@@ -355,7 +387,9 @@ def main(argv: list[str] | None = None) -> int:
     by_name = {row.name: row for row in ROWS}
     chosen = [by_name[name] for name in dict.fromkeys(args.rows)]  # in the order given
     k, m = (int(v) for v in args.shard.split("/"))
-    summaries = [run_row(row, args.trials, args.seed, args.cache, cache, not args.quiet, (k, m))
+    only = frozenset(args.settings) if args.settings is not None else None
+    summaries = [run_row(row, args.trials, args.seed, args.cache, cache, not args.quiet, (k, m),
+                         only)
                  for row in chosen]
     print_table(summaries, args.target)
     report = {"trials": args.trials, "seed": args.seed, "target": args.target,

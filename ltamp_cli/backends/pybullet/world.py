@@ -13,6 +13,9 @@ from types import TracebackType
 import pybullet as p
 
 GRAVITY_M_S2 = 9.81
+#: Bumped whenever a change to this engine's physics settings can change a trial's outcome;
+#: benchmark caches key their trials by it (``bench/fidelity.py``).
+PHYSICS_VERSION = 1
 
 
 @dataclass(frozen=True)
