@@ -143,24 +143,7 @@ def _trial_seed(seed: int, index: int) -> int:
 
 
 def _training_score(spec: SkillSpec, score: float) -> float:
-    """The value a learner is fitted to for a trial's ``score`` (skill units).
-
-    Non-finite scores become the skill's ``invalid_score`` ``f`` (−1 for every shipped skill).
-    Scores below ``f`` (worse than a control that cannot even run, e.g. a push that sends the
-    object 20 units past its goal: −22) are compressed logarithmically,
-    ``f − |f|·log(score/f)`` (−22 → −4.1 for ``f = −1``); scores ``≥ f`` are kept. The map is
-    continuous, strictly increasing and keeps the sign, so the level set ``g > 0`` that the
-    paper learns is unchanged, while a stationary GP is no longer fitted mostly to a far tail
-    that says nothing about where ``g`` crosses 0 (its RMS score scaling and marginal
-    likelihood were dominated by it). Every shipped skill except the push scores ``≥ −1``,
-    so for them the map is the identity.
-    """
-    if not math.isfinite(score):
-        return spec.invalid_score
-    floor = spec.invalid_score
-    if floor < 0.0 and score < floor:
-        return floor - abs(floor) * math.log(score / floor)
-    return score
+    return score if math.isfinite(score) else spec.invalid_score
 
 
 def _checkpoint(n: int, config: LearningConfig, eval_every: int) -> bool:

@@ -1,16 +1,14 @@
 """Issue #20: the learned push's θ* must succeed for goals over the whole box.
 
-Two general changes of the learning path, each checked against the old behaviour:
+The general change of the learning path, checked against the old behaviour: a deterministic
+skill's GP gets almost no noise (the marginal likelihood otherwise explains the push's
+needle-shaped success set as noise and ignores the push angle).
 
-* scores below the skill's invalid score are compressed logarithmically before fitting
-  (monotone, sign-preserving: the level set g > 0 is unchanged);
-* a deterministic skill's GP gets almost no noise (the marginal likelihood otherwise explains
-  the push's needle-shaped success set as noise and ignores the push angle).
-
-The end-to-end test fits the GP on the shipped push model's 300 recorded trials (real Box2D
+The end-to-end test fits the GP on the first 300 of the shipped push model's recorded trials (real Box2D
 trials) and runs θ* live for 24 goals more than 2 units from the object (where an unpushed
-object fails). Measured: with the old fit (raw scores, noise bound 0.5) θ* succeeded for
-7 of these 24 goals; with the current fit for 18 of 24.
+object fails). Measured: with the old fit (noise bound 0.5) θ* succeeded for
+7 of these 24 goals; with the current fit for 13 of 24 (on all 500 shipped trials the
+two fits come close, 17 vs 16: the aimed trials added later cover the far goals).
 """
 
 from __future__ import annotations
@@ -38,17 +36,6 @@ from ltamp_cli.learning.normalize import BoxNormalizer, join_inputs, joint_space
 from ltamp_cli.trials.record import TrialDataset
 
 TRIALS = Path(__file__).resolve().parents[2] / "models" / "kitchen2d" / "push" / "trials.jsonl"
-
-
-def test_training_score_keeps_the_sign_and_order_and_compresses_the_far_tail() -> None:
-    scores = np.array([-22.0, -5.0, -1.5, -1.0, -0.3, 0.0, 0.4, 1.9])
-    mapped = np.array([_training_score(SPEC, float(s)) for s in scores])
-    assert np.all(np.diff(mapped) > 0)
-    assert np.array_equal(np.sign(mapped), np.sign(scores))
-    # Identity from the invalid score (-1) up: pour, scoop and the 3D skills are unchanged.
-    assert np.allclose(mapped[3:], scores[3:])
-    assert -4.2 < mapped[0] < -4.0  # -1 - log 22
-    assert _training_score(SPEC, float("nan")) == SPEC.invalid_score
 
 
 def test_deterministic_skills_get_a_small_noise_bound_and_it_round_trips() -> None:
@@ -104,5 +91,5 @@ def test_push_theta_star_beats_the_old_fit_on_far_goals() -> None:
     finally:
         backend.close()
     # Random valid controls succeed for 0.05-1.4 % of far goals' controls (bench/push_reach.py).
-    assert new_wins >= 14, (new_wins, old_wins)
-    assert new_wins >= old_wins + 7, (new_wins, old_wins)
+    assert new_wins >= 11, (new_wins, old_wins)
+    assert new_wins >= old_wins + 4, (new_wins, old_wins)
