@@ -4,10 +4,10 @@ The general change of the learning path, checked against the old behaviour: a de
 skill's GP gets almost no noise (the marginal likelihood otherwise explains the push's
 needle-shaped success set as noise and ignores the push angle).
 
-The end-to-end test fits the GP on the first 300 of the shipped push model's recorded trials (real Box2D
-trials) and runs θ* live for 24 goals more than 2 units from the object (where an unpushed
-object fails). Measured: with the old fit (noise bound 0.5) θ* succeeded for
-7 of these 24 goals; with the current fit for 13 of 24 (on all 500 shipped trials the
+The end-to-end test fits the GP on the first 300 of the shipped push model's recorded
+trials (real Box2D trials) and runs θ* live for 24 goals more than 2 units from the object
+(where an unpushed object fails). Measured: with the old fit (noise bound 0.5) θ* succeeded
+for 7 of these 24 goals; with the current fit for 13 of 24 (on all 500 shipped trials the
 two fits come close, 17 vs 16: the aimed trials added later cover the far goals).
 """
 
