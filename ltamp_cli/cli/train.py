@@ -59,6 +59,14 @@ def train_command(
     ] = "lse2",
     budget: Annotated[int, typer.Option("--budget", help="Total number of trials.")] = 50,
     init: Annotated[int, typer.Option("--init", help="Random trials before active ones.")] = 10,
+    explore_until_success: Annotated[
+        bool,
+        typer.Option(
+            "--explore-until-success/--no-explore-until-success",
+            help="Active strategies: keep trials random after --init until one succeeds "
+            "(score > 0); without a success the straddle only chases uncertainty.",
+        ),
+    ] = True,
     kernel: Annotated[str, typer.Option("--kernel", help="rbf, matern52 or mlp.")] = "matern52",
     seed: Annotated[int, typer.Option("--seed", help="Seed of every random choice.")] = 0,
     data: Annotated[
@@ -109,7 +117,8 @@ def train_command(
     seed = usable_seed(seed)
     try:
         config = LearningConfig(
-            strategy=strategy, kernel=kernel, budget=budget, init=init, seed=seed
+            strategy=strategy, kernel=kernel, budget=budget, init=init, seed=seed,
+            explore_until_success=explore_until_success,
         )
     except ValueError as error:
         raise InputError(str(error)) from None

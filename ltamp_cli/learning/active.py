@@ -9,7 +9,12 @@ Strategies (``LearningConfig.strategy``):
 * ``random`` — uniformly random trials, no model (:class:`~.baselines.RandomModel`);
 * ``nn-c``, ``nn-r``, ``rf-c``, ``rf-r`` — scikit-learn baselines on uniformly random trials.
 
-The first ``init`` trials are always random; ``budget`` counts all trials. After every trial the
+The first ``init`` trials are always random, and so is every trial until one has scored above
+the level (``explore_until_success``): with no super-level point observed the GP's posterior
+mean lies below the level everywhere, so the straddle ψ has no boundary to refine and reduces
+to maximising σ, which the box's corners win — for physical skills those are extreme controls,
+worse than uniform ones (2D pour, seeds 0 and 2: 1 and 0 successes in 75 straddle trials
+where uniform ones find ~1 in 10). ``budget`` counts all trials. After every trial the
 GP is conditioned on the new data; its hyperparameters are re-optimised (warm-started) after
 every trial up to ``dense_refit`` trials and every ``refit_every`` trials after that, and fully
 (with random restarts) at the end. Online learning runs live trials through a
@@ -72,6 +77,8 @@ class LearningConfig:
     dense_refit: int = 40
     refit_every: int = 5
     pool_neighbourhood: float = 0.02
+    #: Keep drawing uniform trials after ``init`` until one scores above the level (> 0).
+    explore_until_success: bool = True
     threads: int | None = 1  # thread-pool limit while learning (ltamp_cli.threads)
 
     def __post_init__(self) -> None:
@@ -144,6 +151,14 @@ def _trial_seed(seed: int, index: int) -> int:
 
 def _training_score(spec: SkillSpec, score: float) -> float:
     return score if math.isfinite(score) else spec.invalid_score
+
+
+def goes_active(config: LearningConfig, scores: Sequence[float]) -> bool:
+    """Whether the next trial is chosen by the acquisition: an active strategy, past ``init``
+    trials and (with ``explore_until_success``) at least one score above the level."""
+    if config.strategy not in ACTIVE_STRATEGIES or len(scores) < config.init:
+        return False
+    return not config.explore_until_success or any(s > 0 for s in scores)
 
 
 def _checkpoint(n: int, config: LearningConfig, eval_every: int) -> bool:
@@ -251,8 +266,7 @@ def learn_online(
     )
     with bar:
         while len(records) < config.budget:
-            active = config.strategy in ACTIVE_STRATEGIES and len(records) >= config.init
-            model = learner.current() if active else None
+            model = learner.current() if goes_active(config, learner.y) else None
             context, control = _propose(backend, skill, spec, config, rng, model, is_valid)
             index = len(records)
             seed = _trial_seed(config.seed, index)
@@ -377,8 +391,7 @@ def learn_from_pool(
     )
     with bar:
         while len(chosen) < budget:
-            active = config.strategy in ACTIVE_STRATEGIES and len(chosen) >= config.init
-            model = learner.current() if active else None
+            model = learner.current() if goes_active(config, learner.y) else None
             if isinstance(model, LevelSetModel):
                 index = _pool_pick(model, config, spec, x_pool, available, rng)
             else:

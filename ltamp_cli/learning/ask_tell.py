@@ -21,12 +21,12 @@ from ltamp_cli.backends.protocol import SkillBackend
 from ltamp_cli.errors import InputError, location_in
 from ltamp_cli.jsondata import read_json_data
 from ltamp_cli.learning.active import (
-    ACTIVE_STRATEGIES,
     LearningConfig,
     _propose,
     _training_score,
     _trial_seed,
     fit_model,
+    goes_active,
 )
 from ltamp_cli.learning.baselines import RandomModel
 from ltamp_cli.learning.model import SkillModel
@@ -106,9 +106,9 @@ def ask(
         )
     rng = np.random.default_rng([config.seed, len(records), 7])
     model: SkillModel | None = None
-    if config.strategy in ACTIVE_STRATEGIES and len(records) >= config.init:
-        template = RandomModel(spec, 0.0)
-        x, y = _training_arrays(records, template)
+    template = RandomModel(spec, 0.0)
+    x, y = _training_arrays(records, template)
+    if goes_active(config, y.tolist()):
         previous = _previous_model(directory)
         model = fit_model(spec, config, x, y, previous, rng=rng)
 
