@@ -141,6 +141,7 @@ class PlannerState:
     stream_stats: dict[str, StreamStats] = field(default_factory=dict)
     start_time: float = field(default_factory=time.perf_counter)
     search_time: float = 0.0
+    search_cpu: float = 0.0  # CPU seconds of this thread in searches
     grounding_time: float = 0.0  # of the searches' tasks (part of search_time)
     sampling_time: float = 0.0
     # The stream call in progress and whether the caller abandoned this solve (see
@@ -340,6 +341,7 @@ class PlannerState:
         budget keeps them complete. ``guess``: a candidate plan checked before searching
         (see :func:`.plan_discrete`, also for ``skip_if_grounded_as``)."""
         start = time.perf_counter()
+        cpu_start = time.thread_time()
         self.searches += 1
         if budgeted:
             max_expansions = self.search_budget
@@ -351,10 +353,16 @@ class PlannerState:
                 context_blocks, guess, skip_if_grounded_as)
         finally:
             self.search_time += time.perf_counter() - start
+            self.search_cpu += time.thread_time() - cpu_start
         self.grounding_time += result.ground_time_s
         if budgeted and result.capped and not result.skipped:
             self.search_budget *= 2
         return result
+
+    def sampling_cpu(self) -> float:
+        """CPU seconds of the stream calls so far (estimated per stream from a sample of
+        timed calls, :class:`~ltamp_cli.planner.streams.StreamStats`)."""
+        return sum(stats.cpu_s for stats in self.stream_stats.values())
 
     def remember_skeleton(self, actions: list[str]) -> None:
         """Keep the last optimistic plans, to explain a failure."""

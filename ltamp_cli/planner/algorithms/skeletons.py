@@ -68,6 +68,20 @@ STEPS_PER_EVALUATION = 0.1
 # tamp2d_uniform_tight_8 0.18 -> 0.21 s (1.0: 0.35 s).
 CHEAP_STEP_COST = 0.25
 CHEAP_RETRY_FACTOR = 10
+# Adaptive: after a full search (one that may raise the bounds), the bindings within the
+# retry bound are processed as ``binding`` processes them (PDDLStream's process_complexity)
+# while the stream calls' CPU time stays below this times the searches' CPU time (both
+# totals since the start, PDDLStream's ``search_sample_ratio``, default 1), then the share
+# above. The share alone was often a single step: a search that follows the head binding's
+# guess or expands a handful of states evaluates almost nothing, however costly its
+# grounding. With successor-state samplers each step sampled one state that opened one more
+# short optimistic plan, so every search found a new skeleton and the bounds never grew
+# (PDDLStream's rmmp: 0 of 4 seeds in 60 s; own lock problem,
+# tests/pddlstream/test_sampled_levels.py: 0 of 8 seeds in 10 s). Processing every binding
+# within the bound (no CPU ratio) solved both but called Kitchen3D pour_blocked's learned
+# pour 11 times instead of 7 (seed 0, 18.0 vs 13.6 s CPU); processing only streams observed
+# to be cheap (< 0.25 ms a call) lost rmmp again, whose samplers cost more than that.
+SEARCH_SAMPLE_RATIO = 1.0
 # Expansion bound of a speculative search (see solve_with_skeletons): this many times the
 # most a solved optimistic search needed so far, at least SPECULATIVE_MIN_EXPANSIONS.
 SPECULATIVE_FACTOR = 4
@@ -353,6 +367,10 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                     if (complexity > state.config.max_complexity and not len(queue)
                             and not discrete.capped):
                         return state.result(INFEASIBLE, None)
+            if adaptive and stalled:
+                result = _process_within_bound(state, queue, retry_threshold, sampling)
+                if result is not None:
+                    return result
             steps = max(1, round(last_search_work * STEPS_PER_EVALUATION))
             result = _process(state, queue, adaptive, steps, retry_threshold, sampling)
             if result is not None:
@@ -403,6 +421,24 @@ class SamplingRound:
     failures: int = 0  # binding steps that failed (a test, an exhausted or empty stream)
 
 
+def _process_within_bound(state: PlannerState, queue: BindingQueue, retry_threshold: int,
+                          sampling: SamplingRound) -> PlanResult | None:
+    """Adaptive, after a full search: process bindings within the retry bound, as
+    ``binding`` does (PDDLStream's process_complexity), while the CPU time of all stream
+    calls so far is below :data:`SEARCH_SAMPLE_RATIO` times that of all searches so far
+    (PDDLStream's ``search_sample_ratio``)."""
+    while len(queue) and not state.timed_out():
+        head = queue.peek()
+        assert head is not None
+        if head.attempts > retry_threshold or (
+                state.sampling_cpu() >= SEARCH_SAMPLE_RATIO * state.search_cpu):
+            return None
+        result = _process_one(state, queue, queue.pop(), sampling)
+        if result is not None:
+            return result
+    return None
+
+
 def _process(state: PlannerState, queue: BindingQueue, adaptive: bool, steps: int,
              retry_threshold: int, sampling: SamplingRound) -> PlanResult | None:
     done = 0.0
@@ -415,20 +451,29 @@ def _process(state: PlannerState, queue: BindingQueue, adaptive: bool, steps: in
         done += CHEAP_STEP_COST if cheap else 1.0
         if head.attempts > retry_limit(state, head, retry_threshold, adaptive):
             return None
-        binding = queue.pop()
-        children = advance(state, binding)
-        if children is not None and (not children
-                                     or (len(children) == 1 and children[0] is binding)):
-            sampling.failures += 1  # a dead end, or nothing this call (a local repair and
-            # an ordinary output go on)
-        if children is None:
-            real = state.search(state.facts.members, state.object_types,
-                                state.function_values, REAL_SEARCH_EXPANSIONS,
-                                guess=bound_plan(binding.skeleton.steps, binding.mapping))
-            if real.solved:
-                facts, terms = plan_preimage(real)
-                return state.result(SOLVED, real, facts | terms)
-            continue
-        for child in children:
-            queue.push(child)
+        result = _process_one(state, queue, queue.pop(), sampling)
+        if result is not None:
+            return result
+    return None
+
+
+def _process_one(state: PlannerState, queue: BindingQueue, binding: Binding,
+                 sampling: SamplingRound) -> PlanResult | None:
+    """Advance ``binding`` one step and queue what follows; a complete binding's plan is
+    checked over the real facts (the result when it is a plan)."""
+    children = advance(state, binding)
+    if children is not None and (not children
+                                 or (len(children) == 1 and children[0] is binding)):
+        sampling.failures += 1  # a dead end, or nothing this call (a local repair and
+        # an ordinary output go on)
+    if children is None:
+        real = state.search(state.facts.members, state.object_types,
+                            state.function_values, REAL_SEARCH_EXPANSIONS,
+                            guess=bound_plan(binding.skeleton.steps, binding.mapping))
+        if real.solved:
+            facts, terms = plan_preimage(real)
+            return state.result(SOLVED, real, facts | terms)
+        return None
+    for child in children:
+        queue.push(child)
     return None
