@@ -68,23 +68,23 @@ STEPS_PER_EVALUATION = 0.1
 # tamp2d_uniform_tight_8 0.18 -> 0.21 s (1.0: 0.35 s).
 CHEAP_STEP_COST = 0.25
 CHEAP_RETRY_FACTOR = 10
-# Adaptive: after a full search (one that may raise the bounds), once searches have found
-# two skeletons or more, the bindings within the retry bound are processed as ``binding``
-# processes them (PDDLStream's process_complexity) while the stream calls' CPU time stays
-# below this times the searches' CPU time (both totals since the start, PDDLStream's
-# ``search_sample_ratio``, default 1), then the share above. The share alone was often a
-# single step: a search that follows the head binding's guess or expands a handful of
-# states evaluates almost nothing, however costly its grounding. With successor-state
-# samplers each step sampled one state that opened one more short optimistic plan, so every
-# search found a new skeleton and the bounds never grew (PDDLStream's rmmp: timeouts;
-# own lock problem, tests/pddlstream/test_sampled_levels.py: 5 of seeds 0-7 timed out at
-# 10 s). Processing every binding within the bound (no CPU ratio) solved both but called
-# Kitchen3D pour_blocked's learned pour 11 times instead of 7 (seed 0, 18.0 vs 13.6 s CPU);
-# processing only streams observed to be cheap (< 0.25 ms a call) lost rmmp again. With the
-# first skeleton the share alone stays: it is often bound within the share or a speculative
-# search, and processing it within the bound sampled poses a fixed obstacle rejects
-# (tamp2d_uniform_blocked_8 seed 1: 10 poses and 7 searches instead of 3 and 5, 0.13 vs
-# 0.09 s CPU).
+# Adaptive: after a full search (one that may raise the bounds) whose share above is its
+# floor of one step, once searches have found two skeletons or more, the bindings within
+# the retry bound are processed as ``binding`` processes them (PDDLStream's
+# process_complexity) while the stream calls' CPU time stays below this times the searches'
+# CPU time (both totals since the start, PDDLStream's ``search_sample_ratio``, default 1),
+# then the share. At its floor the share says nothing: a search that follows the head
+# binding's guess or expands a handful of states evaluates almost nothing, however costly
+# its grounding. With successor-state samplers each step sampled one state that opened one
+# more short optimistic plan, so every search found a new skeleton and the bounds never
+# grew (PDDLStream's rmmp: timeouts, its shares were 0-1 step; own lock problem,
+# tests/pddlstream/test_sampled_levels.py: 5 of seeds 0-7 timed out at 10 s). Measured
+# variants: every binding within the bound, no CPU ratio: Kitchen3D pour_blocked seed 0
+# called its learned pour 11 times instead of 7 (18.0 vs 13.6 s CPU); only streams observed
+# cheap (< 0.25 ms a call): rmmp lost again; also after the first skeleton:
+# tamp2d_uniform_blocked_8 seed 1 sampled poses a fixed obstacle rejects (10 poses and 7
+# searches instead of 3 and 5); also when the share is larger: kitchen_fluent (shares of
+# 15-17 steps) made one more search on seeds 1 and 2 (11 vs 10, 9 vs 8).
 SEARCH_SAMPLE_RATIO = 1.0
 # Expansion bound of a speculative search (see solve_with_skeletons): this many times the
 # most a solved optimistic search needed so far, at least SPECULATIVE_MIN_EXPANSIONS.
@@ -371,11 +371,11 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                     if (complexity > state.config.max_complexity and not len(queue)
                             and not discrete.capped):
                         return state.result(INFEASIBLE, None)
-            if adaptive and stalled and len(seen_skeletons) >= 2:
+            steps = max(1, round(last_search_work * STEPS_PER_EVALUATION))
+            if adaptive and stalled and len(seen_skeletons) >= 2 and steps == 1:
                 result = _process_within_bound(state, queue, retry_threshold, sampling)
                 if result is not None:
                     return result
-            steps = max(1, round(last_search_work * STEPS_PER_EVALUATION))
             result = _process(state, queue, adaptive, steps, retry_threshold, sampling)
             if result is not None:
                 return result
