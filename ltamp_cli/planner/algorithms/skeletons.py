@@ -319,7 +319,8 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                 # not searched again (kitchen_symbolic seed 6: three searches of the same
                 # real task with 600, 1,200 and 2,400 expansions while the complexity
                 # grew): the complexity grows until it changes, up to the bound.
-                skip = capped_task if complexity < state.config.max_complexity else None
+                skip = (capped_task if complexity < state.config.max_complexity
+                        + state.max_object_level() else None)
                 limit = (min(state.search_budget, max(
                     SPECULATIVE_MIN_EXPANSIONS, SPECULATIVE_FACTOR * solved_expansions))
                     if speculative else None)
@@ -371,8 +372,8 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                         return state.result(INFEASIBLE, None)
                     retry_threshold += 1
                     complexity += 1
-                    if (complexity > state.config.max_complexity and not len(queue)
-                            and not discrete.capped):
+                    if (complexity > state.config.max_complexity + state.max_object_level()
+                            and not len(queue) and not discrete.capped):
                         return state.result(INFEASIBLE, None)
             steps = max(1, round(last_search_work * STEPS_PER_EVALUATION))
             if adaptive and stalled and len(seen_skeletons) >= 2 and steps == 1:
