@@ -282,8 +282,8 @@ def _planner_info(info: Info | None) -> PlannerStreamInfo:
 
 def _partial_inputs(info: Info) -> PlannerPartialInputs | None:
     """``StreamInfo(opt_gen_fn=PartialInputs(inputs, unique))`` as the planner's; no
-    ``opt_gen_fn``: the planner's default (one output shared by the instances with a
-    placeholder input, where PDDLStream shares it with all); another callable (a custom
+    ``opt_gen_fn``: the planner's default (one output shared by the instances with the same
+    placeholder inputs, where PDDLStream shares it with all); another callable (a custom
     optimistic generator, which ltamp does not call): unique outputs."""
     opt_gen_fn = getattr(info, "opt_gen_fn", None)
     if opt_gen_fn is None:

@@ -51,10 +51,11 @@ class PartialInputs:
     shares one placeholder per output, so the optimistic task does not grow with the number
     of instances; ``inputs="?o"`` shares one per value of ``?o``; ``unique=True`` (or
     naming every input) gives each instance its own. Without a policy
-    (``StreamInfo.opt_gen_fn=None``, the default) the instances over real values, the first
-    ``UNSHARED_PER_STREAM`` (16) over placeholders, and all instances of a stream whose
-    outputs never reach a fact that actions change keep their own; the other instances
-    share one (see :mod:`ltamp_cli.planner.algorithms.optimistic`).
+    (``StreamInfo.opt_gen_fn=None``, the default) the instances over real values only, and
+    all instances of a stream whose outputs never reach a fact that actions change, keep
+    their own; the other instances share one with those that have the same placeholder
+    inputs (PDDLStream's ``PartialInputs`` over the inputs holding placeholders; see
+    :mod:`ltamp_cli.planner.algorithms.optimistic`).
     A plan that needs a shared placeholder from two instances is refined before it is bound
     (see :mod:`ltamp_cli.planner.algorithms.optimistic`). ``inputs``: space-separated input
     parameters of the stream, e.g. ``"?o ?r"``.
@@ -80,8 +81,8 @@ class StreamInfo:
     seconds per call (both order stream plans); ``eager``: call as soon as inputs exist
     (cheap tests); ``opt_cost``: optimistic lower bound of a ``:function``;
     ``opt_gen_fn``: which inputs the stream's optimistic outputs depend on
-    (:class:`PartialInputs`; ``None``: shared only beyond the first instances over
-    placeholders).
+    (:class:`PartialInputs`; ``None``: shared by the instances with the same placeholder
+    inputs).
     """
 
     p_success: float = 1.0

@@ -1,9 +1,10 @@
 """Shared optimistic outputs (PDDLStream's ``PartialInputs``, issue #19).
 
 A domain shaped like kitchen_fluent's growth: ``n`` objects each get a placeholder pose
-(``sample-pose`` over a real object), each placeholder pose a configuration (``ik``), and a
-test connects every pair of configurations (``reach``, like the motions). Without sharing,
-the optimistic task holds ``n`` placeholder configurations and ``(n + 1)**2`` reach facts.
+(``sample-pose`` over a real object), each placeholder pose a configuration for each of
+``m`` hands (``ik``, like kitchen_fluent's ``skill-conf`` per tool), and a test connects
+every pair of configurations (``reach``, like the motions). Without sharing, the optimistic
+task holds ``n * m`` placeholder configurations and ``(n * m + 1)**2`` reach facts.
 """
 
 from __future__ import annotations
@@ -12,11 +13,7 @@ import pytest
 
 from ltamp_cli.errors import InputError
 from ltamp_cli.planner.algorithms.common import PlannerConfig, initial_state
-from ltamp_cli.planner.algorithms.optimistic import (
-    UNSHARED_PER_STREAM,
-    Placeholders,
-    optimistic_evaluation,
-)
+from ltamp_cli.planner.algorithms.optimistic import Placeholders, optimistic_evaluation
 from ltamp_cli.planner.api import solve
 from ltamp_cli.planner.problem import PlanningProblem, load_problem
 from ltamp_cli.planner.validate import validate_plan
@@ -42,8 +39,8 @@ STREAMS = """
     :outputs (?p)
     :certified (Pose ?o ?p))
   (:stream ik
-    :inputs (?o ?p)
-    :domain (Pose ?o ?p)
+    :inputs (?h ?o ?p)
+    :domain (and (Hand ?h) (Pose ?o ?p))
     :outputs (?q)
     :certified (and (Conf ?q) (Kin ?o ?p ?q)))
   (:stream reach
@@ -60,7 +57,7 @@ def make_streams(world, rng):
     def sample_pose(o):
         for i in range(3):
             yield (("pose", o, i),)
-    def ik(o, p):
+    def ik(h, o, p):
         yield (("conf", o, p[2]),)
     ik_info = StreamInfo(opt_gen_fn=None if world["policy"] is None
                          else PartialInputs(**world["policy"]))
@@ -69,15 +66,17 @@ def make_streams(world, rng):
 """
 
 
-def touch_problem(make_problem, n: int, policy: str = "null") -> PlanningProblem:  # type: ignore[no-untyped-def]
+def touch_problem(make_problem, n: int, policy: str = "null", hands: int = 1) -> PlanningProblem:  # type: ignore[no-untyped-def]
     objects = [f"o{i}" for i in range(n)]
-    init = ", ".join([*(f'"(Obj {o})"' for o in objects), '"(Conf home)"', '"(AtConf home)"'])
+    init = ", ".join([*(f'"(Obj {o})"' for o in objects), '"(Conf home)"', '"(AtConf home)"',
+                      *(f'"(Hand h{i})"' for i in range(hands))])
+    names = [*objects, *(f"h{i}" for i in range(hands))]
     goal = "(and " + " ".join(f"(Touched {o})" for o in objects) + ")"
     path = make_problem(DOMAIN,
                         f"domain: dom\nbindings: bindings.py\nworld: {{policy: {policy}}}\n"
-                        f"objects: {{home: home, {', '.join(f'{o}: null' for o in objects)}}}\n"
+                        f"objects: {{home: home, {', '.join(f'{o}: null' for o in names)}}}\n"
                         f"init: [{init}]\ngoal: {goal}\n",
-                        STREAMS, BINDINGS, name=f"touch{n}.yaml")
+                        STREAMS, BINDINGS, name=f"touch{n}_{hands}.yaml")
     return load_problem(path)
 
 
@@ -90,17 +89,16 @@ def optimistic_size(problem: PlanningProblem) -> tuple[int, int]:
     return len(confs), sum(1 for f in facts if f[0] == "reach")
 
 
-def test_optimistic_task_does_not_grow_with_the_optimistic_inputs(make_problem) -> None:  # type: ignore[no-untyped-def]
-    # 20 and 30 objects: 20 and 30 placeholder poses feed ik. Unshared, the task had 20 and
-    # 30 placeholder configurations and 441 and 961 reach facts. By default the first
-    # UNSHARED_PER_STREAM instances keep their own, the others share one.
-    assert UNSHARED_PER_STREAM < 20
-    small = optimistic_size(touch_problem(make_problem, 20))
-    large = optimistic_size(touch_problem(make_problem, 30))
-    confs = UNSHARED_PER_STREAM + 1
-    assert small == large == (confs, (confs + 1) ** 2)
-    # Below that many, nothing is shared (small tasks stay as they were).
-    assert optimistic_size(touch_problem(make_problem, 3)) == (3, 16)
+def test_optimistic_task_does_not_grow_with_real_inputs_beside_a_placeholder(make_problem) -> None:  # type: ignore[no-untyped-def]
+    # 3 objects, each with one placeholder pose, and 2 or 6 hands: 6 or 18 ik instances over
+    # placeholder poses. By default they share one configuration per placeholder pose: 3
+    # either way (and (3 + 1)**2 reach facts), where one per instance gives 18 (and 19**2).
+    assert optimistic_size(touch_problem(make_problem, 3, hands=2)) == (3, 16)
+    assert optimistic_size(touch_problem(make_problem, 3, hands=6)) == (3, 16)
+    assert optimistic_size(touch_problem(make_problem, 3, "{unique: true}", hands=6)) == (
+        18, 19 ** 2)
+    # Instances whose placeholder inputs differ keep their own: one per object here.
+    assert optimistic_size(touch_problem(make_problem, 5, hands=1)) == (5, 36)
 
 
 def test_unique_policy_keeps_one_output_per_instance(make_problem) -> None:  # type: ignore[no-untyped-def]
@@ -134,7 +132,7 @@ def test_a_plan_over_one_shared_output_is_refined_before_binding(make_problem, m
     problem = touch_problem(make_problem, 3, "{inputs: ''}")
     result = solve(problem, PlannerConfig(algorithm=algorithm, seed=0, max_time=20))
     assert result.solved
-    assert [sorted(key[1][0] for key in keys if key[0] == "ik") for keys in refined] == [
+    assert [sorted(key[1][1] for key in keys if key[0] == "ik") for keys in refined] == [
         ["o0", "o1", "o2"]]
     assert validate_plan(problem, result).valid
     touches = [step for step in result.plan if step.name == "touch"]

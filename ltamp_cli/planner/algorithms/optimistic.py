@@ -8,15 +8,18 @@ instances whose calls would make its optimistic facts real.
 Shared placeholders (PDDLStream's shared optimistic objects, ``StreamInfo(opt_gen_fn=
 PartialInputs(...))``, see :func:`_share_group`): with an explicit policy, PDDLStream's
 rule (``PartialInputs()``: one placeholder per output shared by all the stream's instances;
-``PartialInputs("?o")``: by the instances with the same ``?o``). By default, the instances
-of a stream that have a placeholder among their inputs share one placeholder per output
-once :data:`UNSHARED_PER_STREAM` of them have their own, so the objects of the optimistic
-task, and the actions over them, stop growing with the number of optimistic inputs
+``PartialInputs("?o")``: by the instances with the same ``?o``). By default, an instance
+with placeholders among its inputs shares its output placeholders with the instances of
+its stream that have the same placeholder inputs, whatever their real inputs (PDDLStream's
+``PartialInputs`` over the inputs that hold placeholders): the optimistic task then gets one
+output per stream and tuple of optimistic inputs, so its objects, and the actions over
+them, grow with the placeholders rather than with their products with the real objects
 (kitchen_fluent: 64 ``skill-conf`` instances, one per tool, container and placeholder pose,
 gave 64 configurations, and the moves between all configurations were most of its ~1,800
-actions). Instances over real values only keep their own (as many as the real facts give
-anyway), and so do all instances of a stream whose outputs never reach a fact that actions
-change (:func:`stateful_streams`), and of ``:fluents`` streams: what failed in a context is
+actions; now one per placeholder pose). Instances over real values only keep their own (as many as
+the real facts give anyway), and so do all instances of a stream whose outputs never reach
+a fact that actions change (:func:`stateful_streams`), and of ``:fluents`` streams: what
+failed in a context is
 recorded per instance and blocks its output facts in that context (``context_blocks``),
 which a shared output would wrongly carry to the other instances. An instance becomes
 *refined* (its own placeholders) once a plan needed it in a way sharing cannot bind
@@ -79,26 +82,12 @@ class Placeholders:
     shared: dict[InstanceKey, tuple[str, ...]] = field(default_factory=dict)
     # Streams whose outputs may be shared (see :func:`stateful_streams`); set on first use.
     stateful: frozenset[str] | None = None
-    # Stream -> how many of its instances over placeholders kept their own placeholders
-    # under the default policy (at most UNSHARED_PER_STREAM).
-    unshared: dict[str, int] = field(default_factory=dict)
 
     def new(self, stream: Stream) -> tuple[str, ...]:
         number = len(self.unique) + len(self.shared)
         return tuple(f"#{v[1:]}{number}" for v in stream.outputs)
 
 
-# Default policy: the first this many instances of a stream over placeholders (in the order
-# the optimistic evaluations meet them, the least complex first) keep their own placeholders
-# and only the later ones share, so small tasks stay as they were. Sharing from the first
-# instance cost tamp2d_4blocks (adaptive, 10 seeds, median CPU) 0.086 -> 0.21 s: its tasks
-# are small anyway (8 kinematics instances over placeholder poses), and each plan that
-# exploited the sharing needed a refining search and drew new samples, which its eager
-# motions square. kitchen_fluent (16 kinematics and 64 skill-conf instances over
-# placeholders), adaptive, 10 seeds, median CPU, one interleaved run on a loaded machine:
-# 12 -> 0.60 s, 16 -> 0.61 s, 24 -> 0.67 s, no sharing 1.11 s (6 seeds: 0 -> 0.69 s,
-# 4 -> 0.75 s, 8 -> 0.94 s). 16 keeps every tamp2d example's tasks unshared.
-UNSHARED_PER_STREAM = 16
 
 
 def stateful_streams(domain: Domain, streams: Iterable[Stream]) -> frozenset[str]:
@@ -241,23 +230,27 @@ def _share_group(key: InstanceKey, policy: PartialInputs | None,
     """The key of the shared placeholders of instance ``key`` (``None``: its own).
 
     With an explicit ``PartialInputs`` policy, PDDLStream's rule: shared by the instances
-    that agree on the selected inputs. By default (no policy), PDDLStream's default
-    (``PartialInputs()``, one shared output) for the instances with a placeholder among
-    their inputs, whose number grows with the optimistic task (the caller keeps the first
-    :data:`UNSHARED_PER_STREAM` of them apart); instances over real values only keep their
-    own, as many as the real facts give anyway. kitchen_fluent, adaptive,
-    seeds 0-5, median CPU on a loaded machine: 0.67 s; sharing all instances' outputs
-    (PDDLStream's default everywhere: plans then put several objects at one pose, refined
-    one search at a time) 0.96 s; sharing per value of the real inputs (~1,000 actions per
-    task instead of ~300) 1.27 s; no sharing ~0.91 s.
+    that agree on the selected inputs. By default (no policy): instances over real values
+    only keep their own (as many as the real facts give anyway); an instance with
+    placeholder inputs shares with those that have the same placeholder inputs (its outputs
+    are taken to depend on its optimistic inputs only). Measured against the alternatives
+    (adaptive, seeds 0-5, median CPU s, interleaved on a loaded machine; tamp2d_4blocks /
+    kitchen_fluent): this rule 0.077 / 0.69; the first 16 instances over placeholders
+    unique, the rest sharing one (the rule this replaced) 0.081 / 0.56; one shared by all
+    instances over placeholders (PDDLStream's ``PartialInputs()`` default) 0.19 / 0.68,
+    since nearly every 4blocks plan needs two blocks' kinematics from the one shared
+    configuration and is refined, one search per pair; that, with the whole stream made
+    unique at its first refinement 0.085 / 1.01, or split by real inputs 0.075 / 1.08; one
+    unique instance per real-input tuple, the rest sharing, 0.16 / 0.85; no sharing 0.077
+    / 0.93. tamp2d_uniform_tight_8 and kitchen_symbolic: no change (their instances over
+    placeholders do not share a placeholder input).
     """
     name, inputs = key
     if policy is not None:
         selected = policy.selected(parameters)
         return None if selected is None else (name, tuple(inputs[i] for i in selected))
-    if not any(x.startswith("#") for x in inputs):
-        return None
-    return (name, ())
+    optimistic = tuple(x for x in inputs if x.startswith("#"))
+    return (name, optimistic) if optimistic else None
 
 
 def _pending_test(instance: StreamInstance) -> bool:
@@ -285,11 +278,6 @@ def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: 
         policy = state.bindings[name].info.opt_gen_fn
         group = None if external.fluents or name not in placeholders.stateful else (
             _share_group(key, policy, external.inputs))
-        if group is not None and policy is None and not outputs:
-            used = placeholders.unshared.get(name, 0)
-            if used < UNSHARED_PER_STREAM:
-                placeholders.unshared[name] = used + 1
-                group = None
         if outputs or group is None:
             if not outputs:
                 outputs = placeholders.unique[key] = placeholders.new(external)
