@@ -131,21 +131,18 @@ def bridge_detours(task: Task, plan: list[int], states: list[frozenset[int]]
     position = 0
     while position < len(plan):
         before = states[position]
+        # What each segment from here changes that the rest of the plan needs.
+        changed = [(states[end + 1] ^ before) & needed[end + 1]
+                   for end in range(position, len(plan))]
         dropped = next((end for end in range(len(plan) - 1, position - 1, -1)
-                        if not (states[end + 1] ^ before) & needed[end + 1]), None)
+                        if not changed[end - position]), None)
         if dropped is not None:
             del plan[position:dropped + 1]
             del needed[position:dropped + 1]
             states[position:] = _states_from(task, before, plan[position:])
             continue
         if position + 1 < len(plan):
-            vector = task.state_vector(before)
-            reached: dict[frozenset[int], int] = {}
-            for op in task.applicable(vector).tolist():
-                successor = task.successor(before, vector, op)
-                if successor not in reached or costs[op] < costs[reached[successor]]:
-                    reached[successor] = op
-            replaced = _bridge(task, plan, states, needed, position, reached, costs)
+            replaced = _bridge(task, plan, needed, position, before, changed, costs)
             if replaced is not None:
                 end, op, successor = replaced
                 plan[position:end + 1] = [op]
@@ -155,38 +152,37 @@ def bridge_detours(task: Task, plan: list[int], states: list[frozenset[int]]
     return plan, states
 
 
-def _bridge(task: Task, plan: list[int], states: list[frozenset[int]],
-            needed: list[frozenset[int]], position: int, reached: dict[frozenset[int], int],
-            costs: list[float]) -> tuple[int, int, frozenset[int]] | None:
+def _bridge(task: Task, plan: list[int], needed: list[frozenset[int]], position: int,
+            before: frozenset[int], changed: list[frozenset[int]], costs: list[float]
+            ) -> tuple[int, int, frozenset[int]] | None:
     """The longest segment ``plan[position:end + 1]`` (two actions or more) that one action
-    of ``reached`` (successor -> action) gets across: ``(end, action, its successor)``."""
+    applicable in ``before`` gets across, costing no more: ``(end, action, its successor)``.
+    An action does when, of the facts the rest of the plan needs, it changes exactly those
+    the segment changes (``changed[end - position]``)."""
+    vector = task.state_vector(before)
+    candidates: list[tuple[float, int, frozenset[int], frozenset[int]]] = []
+    for op in task.applicable(vector).tolist():
+        successor = task.successor(before, vector, op)
+        candidates.append((costs[op], op, successor, successor ^ before))
+    if not candidates:
+        return None
+    candidates.sort(key=lambda candidate: candidate[0])
+    most = max(len(candidate[3]) for candidate in candidates)
     segment_cost = 0.0
     cumulative = []
     for op in plan[position:]:
         segment_cost += costs[op]
         cumulative.append(segment_cost)
     for end in range(len(plan) - 1, position, -1):
-        target, relevant = states[end + 1], needed[end + 1]
-        if end + 1 < len(plan):
-            # Cheap necessary test first: the next action's basic preconditions.
-            following = task.operators[plan[end + 1]]
-            positive = [f for f in following.pre_pos if not task.is_derived[f]]
-            negative = [f for f in following.pre_neg if not task.is_derived[f]]
-        else:
-            positive, negative = [], []
-        best: tuple[float, int, frozenset[int]] | None = None
-        for successor, op in reached.items():
-            if costs[op] > cumulative[end - position] + 1e-9:
-                continue
-            if not all(f in successor for f in positive) or any(
-                    f in successor for f in negative):
-                continue
-            if (successor ^ target) & relevant:
-                continue
-            if best is None or costs[op] < best[0]:
-                best = (costs[op], op, successor)
-        if best is not None:
-            return end, best[1], best[2]
+        target = changed[end - position]
+        if len(target) > most:
+            continue
+        relevant = needed[end + 1]
+        for cost, op, successor, change in candidates:
+            if cost > cumulative[end - position] + 1e-9:
+                break
+            if target <= change and len(change & relevant) == len(target):
+                return end, op, successor
     return None
 
 
