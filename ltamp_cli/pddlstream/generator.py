@@ -88,10 +88,11 @@ class StreamInfo:
     """Hints for a stream, named as in PDDLStream.
 
     ``p_success`` (prior probability that a call yields an output), ``overhead`` (expected
-    seconds per call) and ``eager`` (evaluate as soon as inputs exist) steer ltamp's
-    planner. The other fields are accepted so that scripts run unchanged, and ignored:
-    ltamp's optimistic outputs are placeholders (``opt_gen_fn``), and it neither defers
-    streams (``defer_fn``) nor negates or batches them by these flags.
+    seconds per call), ``eager`` (evaluate as soon as inputs exist) and ``opt_gen_fn`` (a
+    ``PartialInputs``: which inputs the optimistic outputs are shared over; any other
+    callable: one placeholder per instance) steer ltamp's planner. The other fields are
+    accepted so that scripts run unchanged, and ignored: ltamp neither defers streams
+    (``defer_fn``) nor negates or batches them by these flags.
     """
 
     opt_gen_fn: Callable[..., Any] | None = None

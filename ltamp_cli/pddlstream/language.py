@@ -122,8 +122,10 @@ def Fact(predicate: str, args: Iterable[Any]) -> Fact:
 
 
 class PartialInputs(NamedTuple):
-    """PDDLStream's optimistic-output policy for ``StreamInfo(opt_gen_fn=...)``; accepted
-    and ignored (ltamp's optimistic outputs are always placeholders)."""
+    """PDDLStream's optimistic-output policy for ``StreamInfo(opt_gen_fn=...)``: which
+    inputs a stream's optimistic placeholders depend on (``""``: one shared by all
+    instances; ``unique``: one per instance), as :class:`ltamp_cli.planner.streams.
+    PartialInputs`. ``test`` is accepted and ignored."""
 
     inputs: str = ""
     unique: bool = False

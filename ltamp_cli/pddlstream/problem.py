@@ -16,7 +16,7 @@ import numpy as np
 
 from ltamp_cli.errors import InputError
 from ltamp_cli.pddlstream.generator import FunctionInfo, StreamInfo, fn_from_constant
-from ltamp_cli.pddlstream.language import DEBUG, SHARED_DEBUG, PDDLProblem
+from ltamp_cli.pddlstream.language import DEBUG, SHARED_DEBUG, PartialInputs, PDDLProblem
 from ltamp_cli.planner.objects import ObjectTable
 from ltamp_cli.planner.pddl import syntax
 from ltamp_cli.planner.pddl.check import (
@@ -36,6 +36,7 @@ from ltamp_cli.planner.pddl.syntax import (
 )
 from ltamp_cli.planner.problem import PlanningProblem
 from ltamp_cli.planner.streams import Binding, External, Stream, WildOutput
+from ltamp_cli.planner.streams import PartialInputs as PlannerPartialInputs
 from ltamp_cli.planner.streams import StreamInfo as PlannerStreamInfo
 
 Info = StreamInfo | FunctionInfo
@@ -276,7 +277,20 @@ def _planner_info(info: Info | None) -> PlannerStreamInfo:
     return PlannerStreamInfo(
         p_success=defaults.p_success if info.p_success is None else float(info.p_success),
         overhead=defaults.overhead if info.overhead is None else float(info.overhead),
-        eager=bool(info.eager))
+        eager=bool(info.eager), opt_gen_fn=_partial_inputs(info))
+
+
+def _partial_inputs(info: Info) -> PlannerPartialInputs | None:
+    """``StreamInfo(opt_gen_fn=PartialInputs(inputs, unique))`` as the planner's; no
+    ``opt_gen_fn``: the planner's default (one output shared by the instances with the same
+    placeholder inputs, where PDDLStream shares it with all); another callable (a custom
+    optimistic generator, which ltamp does not call): unique outputs."""
+    opt_gen_fn = getattr(info, "opt_gen_fn", None)
+    if opt_gen_fn is None:
+        return None
+    if isinstance(opt_gen_fn, PartialInputs):
+        return PlannerPartialInputs(opt_gen_fn.inputs, opt_gen_fn.unique)
+    return PlannerPartialInputs(unique=True)
 
 
 def _adapt(external: External, procedure: Callable[..., Any]) -> Callable[..., Any]:

@@ -43,18 +43,53 @@ from ltamp_cli.planner.pddl.syntax import (
 
 
 @dataclass(frozen=True)
+class PartialInputs:
+    """Which inputs a stream's optimistic outputs depend on (PDDLStream's ``PartialInputs``).
+
+    The focused, binding and adaptive algorithms give the instances of a stream
+    placeholder outputs. ``PartialInputs()`` (``inputs=""``): every instance of the stream
+    shares one placeholder per output, so the optimistic task does not grow with the number
+    of instances; ``inputs="?o"`` shares one per value of ``?o``; ``unique=True`` (or
+    naming every input) gives each instance its own. Without a policy
+    (``StreamInfo.opt_gen_fn=None``, the default) the instances over real values only, and
+    all instances of a stream whose outputs never reach a fact that actions change, keep
+    their own; the other instances share one with those that have the same placeholder
+    inputs (PDDLStream's ``PartialInputs`` over the inputs holding placeholders; see
+    :mod:`ltamp_cli.planner.algorithms.optimistic`).
+    A plan that needs a shared placeholder from two instances is refined before it is bound
+    (see :mod:`ltamp_cli.planner.algorithms.optimistic`). ``inputs``: space-separated input
+    parameters of the stream, e.g. ``"?o ?r"``.
+    """
+
+    inputs: str = ""
+    unique: bool = False
+
+    def selected(self, stream_inputs: tuple[str, ...]) -> tuple[int, ...] | None:
+        """Positions of the inputs the shared outputs depend on; ``None``: unique outputs
+        (``unique`` or every input selected)."""
+        names = [name.lower() for name in self.inputs.split()]
+        if self.unique or set(names) >= set(stream_inputs):
+            return None
+        return tuple(i for i, name in enumerate(stream_inputs) if name in names)
+
+
+@dataclass(frozen=True)
 class StreamInfo:
     """Planner hints for a stream (PDDLStream's ``StreamInfo``).
 
     ``p_success``: prior probability a call yields a usable output; ``overhead``: expected
     seconds per call (both order stream plans); ``eager``: call as soon as inputs exist
-    (cheap tests); ``opt_cost``: optimistic lower bound of a ``:function``.
+    (cheap tests); ``opt_cost``: optimistic lower bound of a ``:function``;
+    ``opt_gen_fn``: which inputs the stream's optimistic outputs depend on
+    (:class:`PartialInputs`; ``None``: shared by the instances with the same placeholder
+    inputs).
     """
 
     p_success: float = 1.0
     overhead: float = 1.0
     eager: bool = False
     opt_cost: float = 0.0
+    opt_gen_fn: PartialInputs | None = None
 
 
 @dataclass(frozen=True)
@@ -127,6 +162,15 @@ def resolve_bindings(stream_file: StreamFile, provided: Mapping[str, Any], sourc
         else:
             raise InputError(f"the binding of {kind} {name!r} in {source} is not callable",
                              external.location)
+        policy = bindings[name].info.opt_gen_fn
+        if isinstance(external, Stream) and policy is not None:
+            unknown = [name for name in policy.inputs.split()
+                       if name.lower() not in external.inputs]
+            if unknown:
+                raise InputError(
+                    f"StreamInfo(opt_gen_fn=PartialInputs({' '.join(unknown)!r})) of stream "
+                    f"{name!r} in {source} names no input of it (inputs: "
+                    f"{' '.join(external.inputs) or 'none'})", external.location)
         returns_value = not isinstance(external, Stream) or external.is_test
         function = bindings[name].function
         if returns_value and (inspect.isgeneratorfunction(function)

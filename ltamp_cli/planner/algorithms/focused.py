@@ -14,14 +14,15 @@ from ltamp_cli.planner.algorithms.optimistic import (
     MAX_LOCAL_REPAIRS,
     InstanceKey,
     OptimisticEvaluation,
+    Placeholders,
     bind_context,
+    bindable_stream_plan,
     evaluate_eager,
     fluent_contexts,
     optimistic_evaluation,
     repairable,
     report_unusable,
     sampled_inputs,
-    stream_plan,
 )
 from ltamp_cli.planner.algorithms.preimage import plan_preimage
 from ltamp_cli.planner.pddl.syntax import StreamFunction
@@ -137,7 +138,7 @@ def solve_focused(state: PlannerState) -> PlanResult:
     from ltamp_cli.planner.search.engine import SearchTimeout
 
     complexity = state.config.initial_complexity
-    placeholders: dict[InstanceKey, tuple[str, ...]] = {}
+    placeholders = Placeholders()
     capped_task: frozenset[object] | None = None
     try:
         while not state.timed_out():
@@ -171,7 +172,9 @@ def solve_focused(state: PlannerState) -> PlanResult:
                     return state.result(INFEASIBLE, None)
                 continue
             facts, terms = plan_preimage(discrete)
-            plan = stream_plan(state, evaluation, facts | terms)
+            plan = bindable_stream_plan(state, evaluation, facts | terms, placeholders)
+            if plan is None:
+                continue  # shared placeholders refined: search again
             if not plan:
                 return state.result(SOLVED, discrete, facts | terms)
             contexts = fluent_contexts(state, evaluation, discrete)

@@ -4,6 +4,41 @@ Instances not yet (fully) called certify their facts with placeholder objects ``
 a complexity bound (complexity of an instance = summed complexity of its inputs + calls
 made); a plan over real and optimistic facts is then retraced to the *stream plan* of
 instances whose calls would make its optimistic facts real.
+
+Shared placeholders (PDDLStream's shared optimistic objects, ``StreamInfo(opt_gen_fn=
+PartialInputs(...))``, see :func:`_share_group`): with an explicit policy, PDDLStream's
+rule (``PartialInputs()``: one placeholder per output shared by all the stream's instances;
+``PartialInputs("?o")``: by the instances with the same ``?o``). By default, an instance
+with placeholders among its inputs shares its output placeholders with the instances of
+its stream that have the same placeholder inputs, whatever their real inputs (PDDLStream's
+``PartialInputs`` over the inputs that hold placeholders): the optimistic task then gets one
+output per stream and tuple of optimistic inputs, so its objects, and the actions over
+them, grow with the placeholders rather than with their products with the real objects
+(kitchen_fluent: 64 ``skill-conf`` instances, one per tool, container and placeholder pose,
+gave 64 configurations, and the moves between all configurations were most of its ~1,800
+actions; now one per placeholder pose). Instances over real values only keep their own (as many as
+the real facts give anyway), and so do all instances of a stream whose outputs never reach
+a fact that actions change (:func:`stateful_streams`), and of ``:fluents`` streams: what
+failed in a context is
+recorded per instance and blocks its output facts in that context (``context_blocks``),
+which a shared output would wrongly carry to the other instances. An instance becomes
+*refined* (its own placeholders) once a plan needed it in a way sharing cannot bind
+(:func:`bindable_stream_plan`).
+
+Correctness of binding a plan over shared placeholders. A shared placeholder ``X`` stands
+for the output of any of its producing instances; different instances' real outputs differ,
+so ``X`` may be bound only if a single instance ``k`` certifies every fact the plan needs
+that holds ``X`` as an output of its certifier (a fact over ``X`` as an *input*, e.g. a
+motion from ``X``, comes from an instance whose inputs contain ``X`` and is re-instantiated
+on the bound value like any placeholder input). Then renaming ``X`` to ``k``'s own
+placeholder maps every needed fact to one the unique evaluation has too, so the plan is one
+of that task and the stream plan binds ``X`` from ``k``'s call alone. When no single
+instance certifies them all (one placeholder serving as two different grasps, poses or
+configurations: a plan that exploits the sharing), :func:`bindable_stream_plan` refines a
+set of instances that certify them and the plan is discarded: the next search sees those
+instances with distinct placeholders. Each such round refines at least one more instance,
+so refinement ends (at worst with every instance unique, the behaviour without sharing),
+and every plan returned is still validated against the real facts.
 """
 
 from __future__ import annotations
@@ -17,18 +52,97 @@ from ltamp_cli.planner.algorithms.common import (
     instantiate_atoms,
 )
 from ltamp_cli.planner.algorithms.effort import observed_cheap, order_by_effort
+from ltamp_cli.planner.pddl.check import fluent_predicates
 from ltamp_cli.planner.pddl.syntax import (
     OBJECT_TYPE,
+    Domain,
     ExternalPredicate,
     Stream,
     StreamFunction,
+    effect_atoms,
+    formula_atoms,
 )
 from ltamp_cli.planner.search.clock import check_deadline
 from ltamp_cli.planner.search.ground import Context, CostBound, Fact, FactIndex
 from ltamp_cli.planner.search.solve import DiscreteResult
-from ltamp_cli.planner.streams import StreamInstance
+from ltamp_cli.planner.streams import PartialInputs, StreamInstance
 
 InstanceKey = tuple[str, tuple[str, ...]]
+
+
+@dataclass
+class Placeholders:
+    """The placeholder outputs of one solve, kept across its optimistic evaluations (the
+    same instance gets the same placeholders each time, so skeletons stay comparable).
+
+    ``unique``: refined instances -> their own placeholders; ``shared``: share-group key
+    (see :func:`_share_group`) -> the placeholders its instances share."""
+
+    unique: dict[InstanceKey, tuple[str, ...]] = field(default_factory=dict)
+    shared: dict[InstanceKey, tuple[str, ...]] = field(default_factory=dict)
+    # Streams whose outputs may be shared (see :func:`stateful_streams`); set on first use.
+    stateful: frozenset[str] | None = None
+
+    def new(self, stream: Stream) -> tuple[str, ...]:
+        number = len(self.unique) + len(self.shared)
+        return tuple(f"#{v[1:]}{number}" for v in stream.outputs)
+
+
+
+
+def stateful_streams(domain: Domain, streams: Iterable[Stream]) -> frozenset[str]:
+    """The streams an output of which can become an argument of a fact that actions change
+    (directly, or through the inputs of other streams: a configuration feeds the motions
+    whose endpoints a move makes the robot's). Only their outputs are shared: an output
+    that only certifies (a trajectory in ``(Motion ?q1 ?t ?q2)``) saves no action when
+    shared, every instance still certifying its own facts over its inputs, and every plan
+    with two of them would need refining (tamp2d_blocked: all its motions, each search).
+
+    Computed on argument positions: ``(P, i)`` is stateful when an action's precondition
+    has at position ``i`` of ``P`` a parameter that its effect mentions (or a derived
+    predicate's body one of its head's parameters), or, to a fixpoint, when a stream's
+    domain has there an input that the stream certifies at a stateful position or in a
+    fluent predicate."""
+    fluent = fluent_predicates(domain)
+    positions: set[tuple[str, int]] = set()
+    for action in domain.actions:
+        changed = {arg for atom, _ in effect_atoms(action.effect) for arg in atom.args}
+        for atom in formula_atoms(action.precondition):
+            positions.update((atom.predicate, i) for i, arg in enumerate(atom.args)
+                             if arg in changed)
+    for axiom in domain.axioms:
+        head = {parameter.name for parameter in axiom.head.parameters}
+        for atom in formula_atoms(axiom.body):
+            positions.update((atom.predicate, i) for i, arg in enumerate(atom.args)
+                             if arg in head)
+    streams = list(streams)
+
+    def stateful_arguments(stream: Stream) -> set[str]:
+        return {arg for atom in stream.certified for i, arg in enumerate(atom.args)
+                if atom.predicate in fluent or (atom.predicate, i) in positions}
+
+    while True:
+        before = len(positions)
+        for stream in streams:
+            found = stateful_arguments(stream)
+            for atom in (*stream.domain, *stream.fluent_domain):
+                positions.update((atom.predicate, i) for i, arg in enumerate(atom.args)
+                                 if arg in found)
+        if len(positions) == before:
+            break
+    return frozenset(stream.name for stream in streams
+                     if not stateful_arguments(stream).isdisjoint(stream.outputs))
+
+
+def _refine(state: PlannerState, placeholders: Placeholders, keys: list[InstanceKey]) -> None:
+    """Give instances ``keys``, which one plan needed from one shared placeholder, their
+    own placeholders from now on. (Splitting a default-policy group by real input values
+    first, so that e.g. the kinematics of one object and grasp at any placeholder pose
+    share, took kitchen_fluent adaptive seeds 0-5 from 0.67 to 0.87 s median CPU.)"""
+    for key in keys:
+        if key not in placeholders.unique:
+            placeholders.unique[key] = placeholders.new(_stream(state, key))
+
 
 # Local repair: when a test of a stream plan fails on two (or more) values that streams
 # sampled, the cheap generator that sampled the later one for this stream plan is asked for
@@ -57,11 +171,12 @@ class OptimisticEvaluation:
     cut: bool = False  # an instance was left out by the complexity bound
     # Optimistic facts of :fluents streams -> contexts where the stream already failed.
     context_blocks: dict[Fact, list[Context]] = field(default_factory=dict)
+    # Shared placeholder tuple -> the instances that share it (in evaluation order).
+    sharing: dict[tuple[str, ...], list[InstanceKey]] = field(default_factory=dict)
 
 
 def optimistic_evaluation(state: PlannerState, complexity: int,
-                          placeholders: dict[InstanceKey, tuple[str, ...]]
-                          ) -> OptimisticEvaluation:
+                          placeholders: Placeholders) -> OptimisticEvaluation:
     index = FactIndex()
     for fact in sorted(state.facts.members):  # a hash-independent order
         index.add(fact)
@@ -113,12 +228,40 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
         since = before
 
 
+def _share_group(key: InstanceKey, policy: PartialInputs | None,
+                 parameters: tuple[str, ...]) -> InstanceKey | None:
+    """The key of the shared placeholders of instance ``key`` (``None``: its own).
+
+    With an explicit ``PartialInputs`` policy, PDDLStream's rule: shared by the instances
+    that agree on the selected inputs. By default (no policy): instances over real values
+    only keep their own (as many as the real facts give anyway); an instance with
+    placeholder inputs shares with those that have the same placeholder inputs (its outputs
+    are taken to depend on its optimistic inputs only). Measured against the alternatives
+    (adaptive, seeds 0-5, median CPU s, interleaved on a loaded machine; tamp2d_4blocks /
+    kitchen_fluent): this rule 0.077 / 0.69; the first 16 instances over placeholders
+    unique, the rest sharing one (the rule this replaced) 0.081 / 0.56; one shared by all
+    instances over placeholders (PDDLStream's ``PartialInputs()`` default) 0.19 / 0.68,
+    since nearly every 4blocks plan needs two blocks' kinematics from the one shared
+    configuration and is refined, one search per pair; that, with the whole stream made
+    unique at its first refinement 0.085 / 1.01, or split by real inputs 0.075 / 1.08; one
+    unique instance per real-input tuple, the rest sharing, 0.16 / 0.85; no sharing 0.077
+    / 0.93. tamp2d_uniform_tight_8 and kitchen_symbolic: no change (their instances over
+    placeholders do not share a placeholder input).
+    """
+    name, inputs = key
+    if policy is not None:
+        selected = policy.selected(parameters)
+        return None if selected is None else (name, tuple(inputs[i] for i in selected))
+    optimistic = tuple(x for x in inputs if x.startswith("#"))
+    return (name, optimistic) if optimistic else None
+
+
 def _pending_test(instance: StreamInstance) -> bool:
     return instance.is_test and instance.num_calls == 0
 
 
 def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: InstanceKey,
-                    level: int, placeholders: dict[InstanceKey, tuple[str, ...]]) -> bool:
+                    level: int, placeholders: Placeholders) -> bool:
     name, inputs = key
     external = state.externals[name]
     mapping = dict(zip(external_inputs(external), inputs, strict=True))
@@ -130,16 +273,35 @@ def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: 
         return False
     outputs: tuple[str, ...] = ()
     if isinstance(external, Stream) and external.outputs:
-        outputs = placeholders.get(key, ())
-        if not outputs:
-            number = len(placeholders)
-            outputs = tuple(f"#{v[1:]}{number}" for v in external.outputs)
-            placeholders[key] = outputs
+        outputs = placeholders.unique.get(key, ())
+        if placeholders.stateful is None:
+            placeholders.stateful = stateful_streams(
+                state.problem.domain,
+                (x for x in state.externals.values() if isinstance(x, Stream)))
+        policy = state.bindings[name].info.opt_gen_fn
+        group = None if external.fluents or name not in placeholders.stateful else (
+            _share_group(key, policy, external.inputs))
+        if outputs or group is None:
+            if not outputs:
+                outputs = placeholders.unique[key] = placeholders.new(external)
+            for placeholder in outputs:
+                evaluation.level[placeholder] = level + 1
+                evaluation.object_producer[placeholder] = key
+        else:
+            outputs = placeholders.shared.get(group, ())
+            if not outputs:
+                outputs = placeholders.shared[group] = placeholders.new(external)
+            sharers = evaluation.sharing.setdefault(outputs, [])
+            sharers.append(key)
+            for placeholder in outputs:
+                # The least level of its producers (the level a unique one would have).
+                known = evaluation.level.get(placeholder)
+                evaluation.level[placeholder] = level + 1 if known is None else min(
+                    known, level + 1)
+                evaluation.object_producer.setdefault(placeholder, key)
         evaluation.outputs[key] = outputs
         for placeholder in outputs:
-            evaluation.level[placeholder] = level + 1
             evaluation.object_types[placeholder] = OBJECT_TYPE
-            evaluation.object_producer[placeholder] = key
         mapping.update(zip(external.outputs, outputs, strict=True))
         facts = instantiate_atoms(external.certified, mapping)
     elif isinstance(external, ExternalPredicate):
@@ -172,6 +334,82 @@ def stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
             _visit_producers(state, evaluation, key, dependencies, found)
     effort = {name: state.effort(name) for name in {key[0] for key in found}}
     return order_by_effort(found, dependencies, effort)
+
+
+def bindable_stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
+                         needed: Iterable[Fact], placeholders: Placeholders
+                         ) -> list[InstanceKey] | None:
+    """The stream plan of an optimistic plan whose preimage is ``needed``, with each shared
+    placeholder bound from one instance; ``None`` when sharing made the plan unbindable:
+    the instances it needed from one shared placeholder are refined (given their own
+    placeholders) and the caller searches again (see the module docstring)."""
+    needed = sorted(needed)
+    if evaluation.sharing and not _attribute_shared(state, evaluation, needed, placeholders):
+        return None
+    plan = stream_plan(state, evaluation, needed)
+    if evaluation.sharing:
+        # Two instances of one shared placeholder can still be in the plan for facts that do
+        # not hold it (a certified fact over inputs only): each would bind it.
+        users: dict[tuple[str, ...], list[InstanceKey]] = {}
+        for key in plan:
+            outputs = evaluation.outputs.get(key, ())
+            if outputs in evaluation.sharing:
+                users.setdefault(outputs, []).append(key)
+        clashing = [key for keys in users.values() if len(keys) > 1 for key in keys]
+        if clashing:
+            _refine(state, placeholders, clashing)
+            return None
+    return plan
+
+
+def _stream(state: PlannerState, key: InstanceKey) -> Stream:
+    external = state.externals[key[0]]
+    assert isinstance(external, Stream)
+    return external
+
+
+def _attribute_shared(state: PlannerState, evaluation: OptimisticEvaluation,
+                      needed: list[Fact], placeholders: Placeholders) -> bool:
+    """Make one instance the producer of each shared placeholder tuple the plan needs: the
+    one that certifies every needed fact holding it as an output. Where no single instance
+    does, refine a greedy smallest set of instances that do, and return False."""
+    shared_of = {p: outputs for outputs in evaluation.sharing for p in outputs}
+    pins: dict[tuple[str, ...], list[Fact]] = {}
+    for fact in needed:
+        if fact in state.facts.members or fact not in evaluation.fact_producer:
+            continue
+        for group in dict.fromkeys(shared_of[a] for a in fact[1:] if a in shared_of):
+            pins.setdefault(group, []).append(fact)
+    certified: dict[InstanceKey, set[Fact]] = {}
+    split = False
+    for group, facts in pins.items():
+        sharers = evaluation.sharing[group]
+        for key in sharers:
+            if key not in certified:
+                stream = _stream(state, key)
+                mapping = dict(zip(stream.inputs, key[1], strict=True))
+                mapping.update(zip(stream.outputs, group, strict=True))
+                certified[key] = set(instantiate_atoms(stream.certified, mapping))
+        # Facts holding the placeholder as an input come from other instances.
+        remaining = [f for f in facts if any(f in certified[k] for k in sharers)]
+        chosen: list[InstanceKey] = []
+        while remaining:
+            best = max(sharers, key=lambda k: sum(f in certified[k] for f in remaining))
+            chosen.append(best)
+            remaining = [f for f in remaining if f not in certified[best]]
+        if len(chosen) == 1:
+            producer = chosen[0]
+            # All its facts, also those the plan needs only as the domain of a stream that
+            # takes the placeholder as input (a motion's (Conf #q)).
+            for fact in certified[producer]:
+                if fact in evaluation.fact_producer:
+                    evaluation.fact_producer[fact] = producer
+            for placeholder in group:
+                evaluation.object_producer[placeholder] = producer
+        elif chosen:
+            split = True
+            _refine(state, placeholders, chosen)
+    return not split
 
 
 def _visit_producers(state: PlannerState, evaluation: OptimisticEvaluation, key: InstanceKey,

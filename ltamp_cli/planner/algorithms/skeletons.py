@@ -34,14 +34,15 @@ from ltamp_cli.planner.algorithms.effort import observed_cheap
 from ltamp_cli.planner.algorithms.optimistic import (
     MAX_LOCAL_REPAIRS,
     InstanceKey,
+    Placeholders,
     bind_context,
+    bindable_stream_plan,
     evaluate_eager,
     fluent_contexts,
     optimistic_evaluation,
     repairable,
     report_unusable,
     sampled_inputs,
-    stream_plan,
 )
 from ltamp_cli.planner.algorithms.preimage import plan_preimage
 from ltamp_cli.planner.pddl.syntax import Stream, StreamFunction
@@ -275,7 +276,7 @@ def _local_repair(state: PlannerState, failed: Binding, consumed: tuple[str, ...
 
 def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
     complexity = state.config.initial_complexity
-    placeholders: dict[InstanceKey, tuple[str, ...]] = {}
+    placeholders = Placeholders()
     queue = BindingQueue()
     seen_skeletons: set[tuple[object, ...]] = set()
     last_search_work = 0
@@ -285,6 +286,9 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
     capped_task: frozenset[object] | None = None
     sampling = SamplingRound()
     speculative_in_a_row = 0
+    # After a plan whose shared placeholders were refined: whether the search that found it
+    # was a full one (the next iteration searches again, as that one would have).
+    refining: bool | None = None
     try:
         while not state.timed_out():
             state.iterations += 1
@@ -292,13 +296,15 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
             head = queue.peek()
             stalled = (head is None
                        or head.attempts > retry_limit(state, head, retry_threshold, adaptive)
-                       or speculative_in_a_row >= MAX_SPECULATIVE_IN_A_ROW)
+                       or speculative_in_a_row >= MAX_SPECULATIVE_IN_A_ROW
+                       or refining is True)
             learned = len(state.facts.members) != facts_at_search
             # A speculative search only after a stream plan met a failure since the last
             # search: while the queue's bindings progress, their skeleton is on track, and a
             # search of the larger task would mostly find it again (kitchen_fluent: five
             # optimistic searches of ~1,500 actions, each as costly as the whole sampling).
-            if stalled or (adaptive and learned and sampling.failures):
+            if stalled or refining is not None or (adaptive and learned
+                                                    and sampling.failures):
                 # Adaptive also searches when sampling taught it new facts although the
                 # queue could go on: a speculative search, bounded by a few times what the
                 # last successful one needed and never raising the budget, the complexity
@@ -307,6 +313,7 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                 # queue has sampled more, and a search that fails explores everything
                 # within its budget: 600, then 1,200 expansions (2 s) each time.
                 speculative = not stalled
+                refining = None
                 speculative_in_a_row = speculative_in_a_row + 1 if speculative else 0
                 facts_at_search = len(state.facts.members)
                 sampling.failures = 0
@@ -350,7 +357,12 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                 state.diagnose(discrete, evaluation.index.members)
                 if discrete.solved:
                     facts, terms = plan_preimage(discrete)
-                    plan = tuple(stream_plan(state, evaluation, facts | terms))
+                    found = bindable_stream_plan(state, evaluation, facts | terms,
+                                                 placeholders)
+                    if found is None:
+                        refining = not speculative  # shared placeholders refined
+                        continue
+                    plan = tuple(found)
                     if not plan:
                         return state.result(SOLVED, discrete, facts | terms)
                     state.remember_skeleton([str(a) for a in discrete.actions or []])
@@ -359,7 +371,8 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                     if signature not in seen_skeletons:
                         seen_skeletons.add(signature)
                         queue.push(Binding(Skeleton(
-                            plan, dict(evaluation.outputs),
+                            plan, {key: evaluation.outputs[key] for key in plan
+                                   if key in evaluation.outputs},
                             tuple(str(a) for a in discrete.actions or []), contexts,
                             steps=tuple((a.name, a.args) for a in discrete.actions or []))))
                     elif stalled:

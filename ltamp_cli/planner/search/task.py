@@ -134,6 +134,7 @@ class Task:
                  np.array([heads[i] for i in members], dtype=np.int64)))
         self.axiom_heads = heads
         self.axiom_positive = positive
+        self.axiom_negative = negative
 
     def state_vector(self, state: frozenset[int]) -> np.ndarray:
         """Truth vector (read-only, ``(num_facts,)`` uint8) of a basic state, extended with
