@@ -21,11 +21,13 @@ Rows (``--rows``, default all):
 * ``3d-<skill>-engine`` (pour, scoop, push, stir): PyBullet vs SAPIEN, both as shipped.
 * ``3d-<skill>-solver``: PyBullet with 5 solver iterations (shipped) vs 50 (the reference
   implementation's).
-* ``3d-pour-robot``: PyBullet pour with the free-floating cup (fast) vs the Panda in the loop
-  (``robot="panda"``: grasp with a force-limited constraint, IK + joint position control;
-  reach, arm collisions and slip fail). The summary adds the cost ratio (robot CPU / free
-  CPU per trial), the robot's failure reasons, and the agreement on the inputs the robot
-  carried out.
+* ``3d-<skill>-robot`` (pour, scoop, push, stir): PyBullet with the free-floating tool
+  (fast) vs the Panda in the loop (``robot="panda"``: grasp with a force-limited
+  constraint, IK + joint position control at the skill's timing; reach, arm collisions and
+  slip fail). The summary adds the cost ratio (robot CPU / free CPU per trial), the
+  robot's failure reasons, and the agreement on the inputs the robot carried out. The
+  free-floating side of the scoop and push rows is the ``3d-<skill>-engine`` rows' PyBullet
+  side (same inputs, seeds and keys: its records were copied into the robot cache).
 
 Every trial is appended as one JSON line to ``--cache`` (default
 ``bench/results/fidelity_trials.jsonl``) as soon as it finishes; a rerun with the same
@@ -46,9 +48,10 @@ processes fill one side each; ``--settings`` naming none only summarises the cac
         3d-push-engine 3d-scoop-engine --cache docs/results/fidelity/engine_trials_v2.jsonl \
         --out docs/results/fidelity/engine.json
 
-The robot row's committed run:
+The robot rows' committed run (robot setup 1's pour row is kept in ``robot_v1.json``):
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 3d-pour-robot \
+        3d-scoop-robot 3d-push-robot 3d-stir-robot \
         --trials 200 --cache docs/results/fidelity/robot_trials.jsonl \
         --out docs/results/fidelity/robot.json
 
@@ -79,6 +82,7 @@ from ltamp_cli.backends import SkillBackend, load_backend
 from ltamp_cli.backends.box2d.backend import Kitchen2DBackend
 from ltamp_cli.backends.box2d.skills.pour import REFERENCE, PourConfig
 from ltamp_cli.backends.box2d.skills.scoop import reference_config as reference_scoop
+from ltamp_cli.backends.pybullet.skills.robot import ROBOT_SETUP_VERSION
 from ltamp_cli.backends.pybullet.world import PHYSICS_VERSION as PYBULLET_PHYSICS_VERSION
 from ltamp_cli.backends.sapien.world import PHYSICS_VERSION as SAPIEN_PHYSICS_VERSION
 
@@ -125,11 +129,13 @@ SETTINGS: dict[str, Callable[[], SkillBackend]] = {
 
 #: Physics version of each versioned setting, part of its trial keys (see
 #: :func:`trial_key`). The Box2D settings are unversioned: their committed caches are keyed
-#: without one.
-SETTING_VERSIONS: dict[str, int] = {
+#: without one. The Panda's also names its robot setup version (``1r2``; setup 1's keys
+#: were ``pybullet-panda@v1``).
+SETTING_VERSIONS: dict[str, int | str] = {
     "pybullet": PYBULLET_PHYSICS_VERSION,
     "pybullet-solver-50": PYBULLET_PHYSICS_VERSION,
-    "pybullet-panda": PYBULLET_PHYSICS_VERSION,
+    "pybullet-panda": (PYBULLET_PHYSICS_VERSION if ROBOT_SETUP_VERSION == 1
+                       else f"{PYBULLET_PHYSICS_VERSION}r{ROBOT_SETUP_VERSION}"),
     "sapien": SAPIEN_PHYSICS_VERSION,
 }
 
@@ -151,7 +157,7 @@ ROWS: tuple[Row, ...] = (
     Row("2d-scoop-reference", "scoop", "box2d", "box2d-reference-scoop"),
     *(Row(f"3d-{skill}-engine", skill, "pybullet", "sapien") for skill in SKILLS_3D),
     *(Row(f"3d-{skill}-solver", skill, "pybullet", "pybullet-solver-50") for skill in SKILLS_3D),
-    Row("3d-pour-robot", "pour", "pybullet", "pybullet-panda"),
+    *(Row(f"3d-{skill}-robot", skill, "pybullet", "pybullet-panda") for skill in SKILLS_3D),
 )
 
 
