@@ -184,8 +184,9 @@ def spoon_grasps(geometry: KitchenwareGeometry, along: float = 0.75) -> tuple[Gr
 
 def tool_grasps(geometry: KitchenwareGeometry, settings: RobotSettings) -> tuple[Grasp, ...]:
     """The grasps tried for a tool, by its kind: a cup (:func:`cup_grasps`), a spoon's
-    handle (:func:`spoon_grasps`), the push's fingertip pad (from above, the fingers
-    around it) or a stirrer rod (side grasps 85 % up it)."""
+    handle (:func:`spoon_grasps`), the push's fingertip pad (from above, the closed
+    fingertips at the pad: the pad is their contact shape, the finger meshes do not touch
+    the pushed block) or a stirrer rod (side grasps 85 % up it)."""
     if geometry.kind == "cup":
         return cup_grasps(geometry, settings.grasp_heights, settings.rim_grasps)
     if geometry.kind == "spoon":
@@ -193,7 +194,10 @@ def tool_grasps(geometry: KitchenwareGeometry, settings: RobotSettings) -> tuple
     points = np.concatenate(geometry.pieces)
     low, high = points.min(axis=0), points.max(axis=0)
     if geometry.kind == "pusher":
-        return box_top_grasps((high - low) / 2.0)
+        # The pad stands in for the closed fingertips: held from above, fingers closed on
+        # it (kind "fingertips", see RobotTrialPhysics._attach).
+        return tuple(Grasp("fingertips", grasp.tool_in_gripper, 0.0)
+                     for grasp in box_top_grasps((high - low) / 2.0))
     if geometry.kind == "stirrer":
         radius = float(max(high[0] - low[0], high[1] - low[1]) / 2.0)
         return cylinder_side_grasps(radius, float(high[2] - low[2]), base_z=float(low[2]),
@@ -302,6 +306,7 @@ class RobotState:
     plan: ArmPlan | None = None
     tool: KitchenwareBody | None = None
     obstacles: list[int] = field(default_factory=list)
+    free: list[KitchenwareBody] = field(default_factory=list)
     command: np.ndarray | None = None
 
 
@@ -334,6 +339,7 @@ class RobotTrialPhysics(BulletTrialPhysics):
         super().reset()
         self.state.arm = self.state.plan = self.state.tool = self.state.command = None
         self.state.obstacles = [self.world.table]
+        self.state.free = []
 
     def add_body(
         self,
@@ -348,6 +354,8 @@ class RobotTrialPhysics(BulletTrialPhysics):
         body = super().add_body(geometry, material, role, position, quaternion)
         if role == "fixed":
             self.state.obstacles.append(body.body)
+        elif role == "free":
+            self.state.free.append(body)
         elif role == "tool" and self._at_preview_start(position, quaternion):
             if self.state.tool is not None:
                 raise ValueError("the Panda holds one tool per trial")
@@ -455,8 +463,9 @@ class RobotTrialPhysics(BulletTrialPhysics):
         client = self.world.client
         first = plan.configurations[0]
         arm.set_configuration(first)
-        arm.set_finger_opening(plan.grasp.width + 0.002)
-        arm.command_gripper(plan.grasp.width + 0.002)
+        opening = plan.grasp.width + 0.002 if plan.grasp.kind != "fingertips" else 0.0
+        arm.set_finger_opening(opening)
+        arm.command_gripper(opening)
         self.state.command = first
         arm.command_configuration(first, position_gain=self.settings.position_gain)
         tool_pose = arm.end_effector_pose() @ plan.grasp.tool_in_gripper
@@ -465,6 +474,14 @@ class RobotTrialPhysics(BulletTrialPhysics):
             for piece in tool.links:
                 p.setCollisionFilterPair(arm.body_id, tool.body, link, piece, 0,
                                          physicsClientId=client)
+        if plan.grasp.kind == "fingertips":
+            # The pad is the closed fingertips' contact shape (as in the free-floating
+            # skill): the finger meshes around it do not touch the free bodies.
+            for link in PANDA_HAND_LINKS[1:]:
+                for body in self.state.free:
+                    for piece in body.links:
+                        p.setCollisionFilterPair(arm.body_id, body.body, link, piece, 0,
+                                                 physicsClientId=client)
         hand = p.getLinkState(arm.body_id, PANDA_HAND_LINK, computeForwardKinematics=True,
                               physicsClientId=client)
         hand_com = Pose(np.asarray(hand[0]), np.asarray(hand[1]))
