@@ -184,14 +184,16 @@ def bar_grasps(
     return tuple(grasps)
 
 
-def box_top_grasps(half_extents: np.ndarray) -> tuple[Grasp, ...]:
+def box_top_grasps(half_extents: np.ndarray, pitch: float = 0.0) -> tuple[Grasp, ...]:
     """Grasps from above of a box centred on its frame (a fingertip pad), grasp target at
     its centre, fingers closing along ``y`` then ``x`` (each side that fits), hand both
-    ways round. ``half_extents`` ``(3,)`` metres."""
+    ways round. ``half_extents`` ``(3,)`` metres. With ``pitch`` (radians, ``0 < pitch <
+    π/2``) only the fingers closing along ``y`` are used and the approach leans towards
+    ``+x`` (``(sin pitch, 0, -cos pitch)``): the palm stays behind the box's ``+x`` face."""
     half = np.asarray(half_extents, dtype=float)
-    down = np.array([0.0, 0.0, -1.0])
+    down = np.array([np.sin(pitch), 0.0, -np.cos(pitch)])
     grasps: list[Grasp] = []
-    for axis in (1, 0):
+    for axis in ((1,) if pitch else (1, 0)):
         if 2.0 * half[axis] > MAX_GRASP_WIDTH:
             continue
         closing = np.eye(3)[axis]
