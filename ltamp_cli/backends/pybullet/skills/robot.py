@@ -3,20 +3,27 @@
 :class:`RobotTrialPhysics` implements :class:`~ltamp_cli.backends.skills3d.physics.TrialPhysics`
 like :class:`~.physics.BulletTrialPhysics`, except that the *tool* is not moved kinematically:
 
-1. When the tool body is added (:meth:`RobotTrialPhysics.add_body` with role ``"tool"``), a
-   fixed-base Panda is loaded on the table ``settings.base_distance`` m from the tool's start
-   pose along ``-y`` (facing ``+y``, across the skill's ``x``-``z`` plane of motion; then at
-   ``+y`` facing ``-y`` if that fails), a side grasp approaching along ``±y`` is chosen
-   (:func:`~..robot.grasps.cylinder_side_grasps`: the pour's tilt about ``y`` is then a
-   roll of the wrist), and the skill's whole tool path
-   (``preview``, the untimed waypoints) is solved by :func:`~..robot.cartesian.follow_tool_path`
-   (verified IK, joint continuity, collision checks against the table, the bowl and the held
-   tool). No solution: :class:`RobotFailure` ``"reach"``; a colliding one: ``"collision"``;
-   no grasp narrower than the gripper: ``"grasp"``. Failing here costs no bead simulation.
+1. When the tool body is added (:meth:`RobotTrialPhysics.add_body` with role ``"tool"``
+   at the first pose of ``preview``, the skill's untimed tool path), a fixed-base Panda is
+   loaded on the table ``settings.base_distance`` m from the tool's start (the push: from
+   the middle of its path) at the skill's bearings (pour, push, stir: ``-y`` then ``+y``;
+   scoop: ``+y``, ``+x``, ``-x``), facing it. The tool's grasps (:func:`tool_grasps`: a cup's
+   side grasps when it fits the 8 cm gripper, then rim grasps pinching its wall from above;
+   the spoon's handle; the push's pad held as the closed fingertips; the stirrer rod) are
+   ranked per base (palm not facing the base, hand nearest the base first) and the first
+   ``max_grasps`` are tried: the whole path is solved by
+   :func:`~..robot.cartesian.follow_tool_path` (verified IK, joint continuity, collision
+   checks against the table, the fixed bowl and the held tool), the first grasp and base
+   that carry it out win. No solution: :class:`RobotFailure` ``"reach"``; only colliding
+   ones: ``"collision"``; no grasp fits the gripper: ``"grasp"``. Failing here costs no
+   bead simulation. A tool added elsewhere (the scoop's spoon-capacity measurement) is not
+   grasped and moves free-floating.
 2. The tool is held by a fixed constraint from the hand whose force is limited to
    ``settings.grasp_force`` newtons, so a heavy or shaken tool can slip out of the grasp.
 3. :meth:`follow` drives the joints by position control along the solved configurations,
-   timed by a rest-to-rest trapezoid over the path's joint-space length
+   one target per step of the skill's own timed path (:func:`skill_timed_configurations`:
+   the arm keeps the skill's speeds), or (``skill_timing=False``) timed by a rest-to-rest
+   trapezoid over the path's joint-space length
    (:func:`~ltamp_cli.motion.timing.trapezoid_fraction`: every joint's speed stays below
    ``joint_speed`` rad/s); :meth:`hold` keeps commanding the current configuration.
 4. After every simulated step the trial fails with :class:`RobotFailure` when the arm (any
