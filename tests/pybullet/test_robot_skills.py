@@ -137,3 +137,35 @@ def test_an_unreachable_setup_fails_with_reach(skill: str) -> None:
     finally:
         robot.close()
         near.close()
+
+
+#: Inputs of the fidelity bench's robot rows (seed 0, ``bench/fidelity.py``) on which the
+#: free-floating tool succeeded: (skill, context, control, trial seed). The push's cube is
+#: pushed by the Panda's closed fingertips; the pour's 8.7 cm cup is wider than the
+#: gripper, so the Panda holds it by the rim.
+SUCCEEDED_FREE = {
+    "push": ([0.0728490642431169, 0.25933422043929416, 0.4470381800841422,
+              0.10542417788739156],
+             [0.3748742832455157, 0.2392249043841796, 0.02782007811247733,
+              -0.014465081882730373], 7),
+    "pour": ([0.20112964554605928, 0.09981306125834216, 0.10875560143890388,
+              0.08686765286710112, 0.08897368865765463, 0.07171284518973498],
+             [-1.967520095061813, -0.004259871117171854, -0.20895120455377236,
+              0.6391332526566073, 0.1308194384158791], 24),
+}
+
+
+@pytest.mark.parametrize("skill", sorted(SUCCEEDED_FREE))
+def test_a_free_floating_success_succeeds_with_the_robot(skill: str) -> None:
+    context, control, seed = (np.asarray(v) if i < 2 else v
+                              for i, v in enumerate(SUCCEEDED_FREE[skill]))
+    free = load_backend("pybullet")
+    robot = load_backend("pybullet", robot="panda")
+    try:
+        assert free.run_trial(skill, context, control, seed).score > 0
+        result = robot.run_trial(skill, context, control, seed)
+        assert result.valid and "reason" not in result.info, result.info
+        assert result.score > 0, result.info
+    finally:
+        free.close()
+        robot.close()
