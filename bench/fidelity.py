@@ -82,7 +82,7 @@ from ltamp_cli.backends import SkillBackend, load_backend
 from ltamp_cli.backends.box2d.backend import Kitchen2DBackend
 from ltamp_cli.backends.box2d.skills.pour import REFERENCE, PourConfig
 from ltamp_cli.backends.box2d.skills.scoop import reference_config as reference_scoop
-from ltamp_cli.backends.pybullet.skills.robot import ROBOT_SETUP_VERSION
+from ltamp_cli.backends.pybullet.skills.robot import ROBOT_SETUP_VERSIONS
 from ltamp_cli.backends.pybullet.world import PHYSICS_VERSION as PYBULLET_PHYSICS_VERSION
 from ltamp_cli.backends.sapien.world import PHYSICS_VERSION as SAPIEN_PHYSICS_VERSION
 
@@ -129,13 +129,12 @@ SETTINGS: dict[str, Callable[[], SkillBackend]] = {
 
 #: Physics version of each versioned setting, part of its trial keys (see
 #: :func:`trial_key`). The Box2D settings are unversioned: their committed caches are keyed
-#: without one. The Panda's also names its robot setup version (``1r2``; setup 1's keys
-#: were ``pybullet-panda@v1``).
-SETTING_VERSIONS: dict[str, int | str] = {
+#: without one. The Panda's key also names the skill's robot setup version
+#: (:data:`ROBOT_SETUP_VERSIONS`, e.g. ``1r3``; setup 1's keys were ``pybullet-panda@v1``).
+SETTING_VERSIONS: dict[str, int] = {
     "pybullet": PYBULLET_PHYSICS_VERSION,
     "pybullet-solver-50": PYBULLET_PHYSICS_VERSION,
-    "pybullet-panda": (PYBULLET_PHYSICS_VERSION if ROBOT_SETUP_VERSION == 1
-                       else f"{PYBULLET_PHYSICS_VERSION}r{ROBOT_SETUP_VERSION}"),
+    "pybullet-panda": PYBULLET_PHYSICS_VERSION,
     "sapien": SAPIEN_PHYSICS_VERSION,
 }
 
@@ -199,6 +198,9 @@ def trial_key(setting: str, skill: str, context: np.ndarray, control: np.ndarray
     values = ",".join(f"{v:.12g}" for v in (*context, *control))
     version = SETTING_VERSIONS.get(setting)
     name = setting if version is None else f"{setting}@v{version}"
+    robot_version = ROBOT_SETUP_VERSIONS.get(skill, 1)
+    if setting == "pybullet-panda" and robot_version > 1:
+        name += f"r{robot_version}"
     return f"{name}|{skill}|{seed}|{values}"
 
 

@@ -135,6 +135,7 @@ def rim_grasps(
     *,
     depth: float = 0.015,
     n_yaw: int = 8,
+    lean: float = 0.0,
 ) -> tuple[Grasp, ...]:
     """Grasps pinching a vessel's wall at its rim from above (one finger inside, one outside),
     for a vessel of any diameter; object frame: base centre at the origin, axis ``+z``.
@@ -142,19 +143,27 @@ def rim_grasps(
     ``top_radius`` is the outer radius at the rim, ``thickness`` the wall's (the finger gap),
     ``depth`` how far below the rim the grasp target sits. ``n_yaw`` points around the rim,
     each with the hand both ways round: ``2 * n_yaw`` grasps, approach ``-z``, fingers
-    closing radially. Units: metres.
+    closing radially. ``lean`` (radians, ``[0, π/2)``) tilts the hand outwards about the
+    rim's tangent: the approach comes from above and outside (``-cos(lean) z - sin(lean)
+    radial``) and the fingers close across the wall's top corner, so the hand sticks out
+    sideways rather than along the cup's axis. Units: metres.
     """
     if min(top_radius, height, thickness) <= 0 or not 0 <= depth < height or n_yaw < 1:
         raise ValueError("rim grasps need positive sizes, 0 <= depth < height, n_yaw >= 1")
-    if thickness > MAX_GRASP_WIDTH:
-        raise ValueError(f"wall {thickness:.3f} m exceeds the gripper's {MAX_GRASP_WIDTH} m")
-    down = np.array([0.0, 0.0, -1.0])
+    if not 0.0 <= lean < np.pi / 2:
+        raise ValueError("lean must be in [0, π/2)")
+    width = thickness / np.cos(lean)
+    if width > MAX_GRASP_WIDTH:
+        raise ValueError(f"wall {width:.3f} m exceeds the gripper's {MAX_GRASP_WIDTH} m")
+    up = np.array([0.0, 0.0, 1.0])
     middle = top_radius - thickness / 2.0
     grasps: list[Grasp] = []
     for yaw in np.linspace(0.0, 2 * np.pi, n_yaw, endpoint=False):
         radial = np.array([np.cos(yaw), np.sin(yaw), 0.0])
         position = middle * radial + np.array([0.0, 0.0, height - depth])
-        grasps.extend(_both_hands("rim", position, down, radial, thickness))
+        approach = -np.cos(lean) * up - np.sin(lean) * radial
+        closing = np.cos(lean) * radial - np.sin(lean) * up
+        grasps.extend(_both_hands("rim", position, approach, closing, width))
     return tuple(grasps)
 
 

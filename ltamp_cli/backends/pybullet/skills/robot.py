@@ -37,8 +37,9 @@ the control was executed and failed). Units: metres, radians, seconds, newtons.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from types import MappingProxyType
 
 import numpy as np
 import pybullet as p
@@ -73,10 +74,12 @@ from ltamp_cli.motion.timing import trapezoid_duration, trapezoid_fraction
 
 #: Values of the ``robot`` trial setting: ``none`` (free-floating tool) or ``panda``.
 ROBOTS = ("none", "panda")
-#: Version of the robot trial setup (grasps, base placement, timing): part of the fidelity
-#: bench's cache keys of robot trials. 1: side grasps only, trapezoidal timing (pour only);
-#: 2: rim grasps too, per-skill base bearings, the skill's own timing, every skill.
-ROBOT_SETUP_VERSION = 2
+#: Version of the robot trial setup (grasps, base placement, timing) per skill: part of the
+#: fidelity bench's cache keys of robot trials. 1: side grasps only, trapezoidal timing
+#: (pour only); 2: rim grasps straight down, per-skill base bearings, the skill's own
+#: timing, every skill; 3 (pour): rim grasps leaning out by π/4.
+ROBOT_SETUP_VERSIONS: Mapping[str, int] = MappingProxyType(
+    {"pour": 3, "scoop": 2, "push": 2, "stir": 2})
 #: Why a robot trial failed (``info["reason"]``).
 FAILURE_REASONS = ("reach", "collision", "slip", "grasp")
 
@@ -107,7 +110,9 @@ class RobotSettings:
     ``grasp_heights``: fractions of the cup's height tried for the side grasp, the first
     whose outer diameter fits the gripper wins; ``rim_grasps``: also pinch the cup's wall at
     its rim from above (any cup diameter; the reference LTAMP code grasps cups by their
-    side, top or edge). ``push_pitch`` (rad): how far the hand holding the push's
+    side, top or edge), the hand leaning out by each of ``rim_leans`` (radians; π/4: on
+    5 bench pours that collided with the hand straight down, 3 were carried out, as with
+    1.1 rad; with (π/4, 0) 2). ``push_pitch`` (rad): how far the hand holding the push's
     fingertip pad leans back from vertical (``0``, the default: straight down; the palm
     then reaches 2.8 cm past the pad and can touch a tall block pushed low; ``π/4`` agreed
     with the free pad on 54 of the fidelity bench's first 60 push inputs, ``0`` on 55).
@@ -128,6 +133,7 @@ class RobotSettings:
     base_bearings: tuple[float, ...] | None = None
     grasp_heights: tuple[float, ...] = (0.45, 0.3, 0.15)
     rim_grasps: bool = True
+    rim_leans: tuple[float, ...] = (np.pi / 4,)
     push_pitch: float = 0.0
     max_grasps: int = 6
     skill_timing: bool = True
@@ -158,11 +164,12 @@ class RobotSettings:
 
 
 def cup_grasps(geometry: KitchenwareGeometry, heights: Sequence[float],
-               rim: bool = True) -> tuple[Grasp, ...]:
+               leans: Sequence[float] = (0.0,)) -> tuple[Grasp, ...]:
     """Grasps of a vessel (base centre at its origin): side grasps approaching along ``±x``
     and ``±y`` (hand upright and flipped) at the first fraction of ``heights`` where the
-    outer diameter fits the gripper (none for a wider cup), then, with ``rim``, grasps
-    pinching the wall at the rim from above at 8 points around it."""
+    outer diameter fits the gripper (none for a wider cup), then, for each of ``leans``
+    (radians), grasps pinching the wall at the rim from above at 8 points around it
+    (:func:`~..robot.grasps.rim_grasps`)."""
     dims = geometry.vessel
     if dims is None:
         raise RobotFailure("grasp", f"a {geometry.kind} has no side grasp")
@@ -174,8 +181,9 @@ def cup_grasps(geometry: KitchenwareGeometry, heights: Sequence[float],
         grasps = cylinder_side_grasps(radius, dims.height, base_z=0.0, grasp_height=fraction,
                                       n_yaw=4)
         break
-    if rim and dims.thickness < MAX_GRASP_WIDTH:
-        grasps += rim_grasps(dims.top_radius, dims.height, dims.thickness)
+    for lean in leans:
+        if dims.thickness / np.cos(lean) < MAX_GRASP_WIDTH:
+            grasps += rim_grasps(dims.top_radius, dims.height, dims.thickness, lean=lean)
     return grasps
 
 
@@ -202,7 +210,8 @@ def tool_grasps(geometry: KitchenwareGeometry, settings: RobotSettings) -> tuple
     fingertips at the pad: the pad is their contact shape, the finger meshes do not touch
     the pushed block) or a stirrer rod (side grasps 85 % up it)."""
     if geometry.kind == "cup":
-        return cup_grasps(geometry, settings.grasp_heights, settings.rim_grasps)
+        return cup_grasps(geometry, settings.grasp_heights,
+                          settings.rim_leans if settings.rim_grasps else ())
     if geometry.kind == "spoon":
         return spoon_grasps(geometry)
     points = np.concatenate(geometry.pieces)
