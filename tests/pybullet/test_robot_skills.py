@@ -43,6 +43,15 @@ def test_rim_grasps_pinch_the_wall_from_above() -> None:
         assert grasp.width == 0.004
     with pytest.raises(ValueError):
         rim_grasps(0.05, 0.1, 0.09)  # a wall wider than the gripper opens
+    # Leaning out by π/4: the approach comes from above and outside, the fingers close
+    # across the wall's top corner (a wider gap), the grasp point is unchanged.
+    for grasp in rim_grasps(0.05, 0.1, 0.004, n_yaw=4, lean=math.pi / 4):
+        gripper = grasp.gripper_pose(Pose())
+        radial = np.append(gripper.position[:2], 0.0) / 0.048
+        expected = -(np.array([0.0, 0.0, 1.0]) + radial) / math.sqrt(2.0)
+        np.testing.assert_allclose(gripper.rotation()[:, 2], expected, atol=1e-12)
+        assert gripper.position[2] == pytest.approx(0.085)
+        assert grasp.width == pytest.approx(0.004 * math.sqrt(2.0))
 
 
 def test_spoon_grasps_hold_the_handle_near_its_end() -> None:
