@@ -77,9 +77,11 @@ ROBOTS = ("none", "panda")
 #: Version of the robot trial setup (grasps, base placement, timing) per skill: part of the
 #: fidelity bench's cache keys of robot trials. 1: side grasps only, trapezoidal timing
 #: (pour only); 2: rim grasps straight down, per-skill base bearings, the skill's own
-#: timing, every skill; 3 (pour): rim grasps leaning out by π/4.
+#: timing, every skill; 3 (pour): rim grasps leaning out by π/4; 3 (stir): the planner's
+#: collision check places the held tool at its centre of mass (it was displaced by the
+#: kitchenware's com_offset: the stirrer rod 10 cm into the table, a cup or spoon ~2 mm).
 ROBOT_SETUP_VERSIONS: Mapping[str, int] = MappingProxyType(
-    {"pour": 3, "scoop": 2, "push": 2, "stir": 2})
+    {"pour": 3, "scoop": 2, "push": 2, "stir": 3})
 #: Why a robot trial failed (``info["reason"]``).
 FAILURE_REASONS = ("reach", "collision", "slip", "grasp")
 
@@ -457,8 +459,11 @@ class RobotTrialPhysics(BulletTrialPhysics):
                                                   physicsClientId=client)
                 arm.base_pose = base
             for grasp in self._candidates(grasps, start, base, towards):
-                checker = ArmCollisionChecker(arm, self.state.obstacles,
-                                              AttachedBody(tool.body, grasp.tool_in_gripper))
+                # The checker re-poses the held body by its base, which PyBullet puts at
+                # the centre of mass: the body's pose in the gripper is the tool frame's
+                # shifted by the kitchenware's com_offset (10 cm along a stirrer rod).
+                checker = ArmCollisionChecker(arm, self.state.obstacles, AttachedBody(
+                    tool.body, grasp.tool_in_gripper @ Pose(np.asarray(tool.com_offset))))
                 found = follow_tool_path(
                     arm, poses, grasp.tool_in_gripper, rng,
                     is_valid=checker if self.settings.plan_collisions else None,
