@@ -48,11 +48,14 @@ processes fill one side each; ``--settings`` naming none only summarises the cac
         3d-push-engine 3d-scoop-engine --cache docs/results/fidelity/engine_trials_v2.jsonl \
         --out docs/results/fidelity/engine.json
 
-The robot rows' committed run (robot setup 1's pour row is kept in ``robot_v1.json``):
+The robot rows' committed runs (robot setup 1's pour row is kept in ``robot_v1.json``,
+setup 2's in ``robot_pour_setup2.json``): pour and push with ``--trials 200``, scoop with
+``--trials 100`` and stir with ``--trials 50`` (each resumable, two ``--shard``s for pour
+and scoop), then the summary of the cached pairs (``--settings`` naming none runs nothing):
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 3d-pour-robot \
-        3d-scoop-robot 3d-push-robot 3d-stir-robot \
-        --trials 200 --cache docs/results/fidelity/robot_trials.jsonl \
+        3d-scoop-robot 3d-push-robot 3d-stir-robot --trials 200 --settings \
+        --cache docs/results/fidelity/robot_trials.jsonl \
         --out docs/results/fidelity/robot.json
 
 The 2D pour's committed run (resumable: the reference trials cost 10-15 s CPU each):
