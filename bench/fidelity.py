@@ -21,11 +21,13 @@ Rows (``--rows``, default all):
 * ``3d-<skill>-engine`` (pour, scoop, push, stir): PyBullet vs SAPIEN, both as shipped.
 * ``3d-<skill>-solver``: PyBullet with 5 solver iterations (shipped) vs 50 (the reference
   implementation's).
-* ``3d-pour-robot``: PyBullet pour with the free-floating cup (fast) vs the Panda in the loop
-  (``robot="panda"``: grasp with a force-limited constraint, IK + joint position control;
-  reach, arm collisions and slip fail). The summary adds the cost ratio (robot CPU / free
-  CPU per trial), the robot's failure reasons, and the agreement on the inputs the robot
-  carried out.
+* ``3d-<skill>-robot`` (pour, scoop, push, stir): PyBullet with the free-floating tool
+  (fast) vs the Panda in the loop (``robot="panda"``: grasp with a force-limited
+  constraint, IK + joint position control at the skill's timing; reach, arm collisions and
+  slip fail). The summary adds the cost ratio (robot CPU / free CPU per trial), the
+  robot's failure reasons, and the agreement on the inputs the robot carried out. The
+  free-floating side of the scoop and push rows is the ``3d-<skill>-engine`` rows' PyBullet
+  side (same inputs, seeds and keys: its records were copied into the robot cache).
 
 Every trial is appended as one JSON line to ``--cache`` (default
 ``bench/results/fidelity_trials.jsonl``) as soon as it finishes; a rerun with the same
@@ -46,10 +48,14 @@ processes fill one side each; ``--settings`` naming none only summarises the cac
         3d-push-engine 3d-scoop-engine --cache docs/results/fidelity/engine_trials_v2.jsonl \
         --out docs/results/fidelity/engine.json
 
-The robot row's committed run:
+The robot rows' committed runs (robot setup 1's pour row is kept in ``robot_v1.json``,
+setup 2's in ``robot_pour_setup2.json``): pour and push with ``--trials 200``, scoop with
+``--trials 100`` and stir with ``--trials 50`` (each resumable, two ``--shard``s for pour
+and scoop), then the summary of the cached pairs (``--settings`` naming none runs nothing):
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 3d-pour-robot \
-        --trials 200 --cache docs/results/fidelity/robot_trials.jsonl \
+        3d-scoop-robot 3d-push-robot 3d-stir-robot --trials 200 --settings \
+        --cache docs/results/fidelity/robot_trials.jsonl \
         --out docs/results/fidelity/robot.json
 
 The 2D pour's committed run (resumable: the reference trials cost 10-15 s CPU each):
@@ -79,6 +85,7 @@ from ltamp_cli.backends import SkillBackend, load_backend
 from ltamp_cli.backends.box2d.backend import Kitchen2DBackend
 from ltamp_cli.backends.box2d.skills.pour import REFERENCE, PourConfig
 from ltamp_cli.backends.box2d.skills.scoop import reference_config as reference_scoop
+from ltamp_cli.backends.pybullet.skills.robot import ROBOT_SETUP_VERSIONS
 from ltamp_cli.backends.pybullet.world import PHYSICS_VERSION as PYBULLET_PHYSICS_VERSION
 from ltamp_cli.backends.sapien.world import PHYSICS_VERSION as SAPIEN_PHYSICS_VERSION
 
@@ -125,7 +132,8 @@ SETTINGS: dict[str, Callable[[], SkillBackend]] = {
 
 #: Physics version of each versioned setting, part of its trial keys (see
 #: :func:`trial_key`). The Box2D settings are unversioned: their committed caches are keyed
-#: without one.
+#: without one. The Panda's key also names the skill's robot setup version
+#: (:data:`ROBOT_SETUP_VERSIONS`, e.g. ``1r3``; setup 1's keys were ``pybullet-panda@v1``).
 SETTING_VERSIONS: dict[str, int] = {
     "pybullet": PYBULLET_PHYSICS_VERSION,
     "pybullet-solver-50": PYBULLET_PHYSICS_VERSION,
@@ -151,7 +159,7 @@ ROWS: tuple[Row, ...] = (
     Row("2d-scoop-reference", "scoop", "box2d", "box2d-reference-scoop"),
     *(Row(f"3d-{skill}-engine", skill, "pybullet", "sapien") for skill in SKILLS_3D),
     *(Row(f"3d-{skill}-solver", skill, "pybullet", "pybullet-solver-50") for skill in SKILLS_3D),
-    Row("3d-pour-robot", "pour", "pybullet", "pybullet-panda"),
+    *(Row(f"3d-{skill}-robot", skill, "pybullet", "pybullet-panda") for skill in SKILLS_3D),
 )
 
 
@@ -193,6 +201,9 @@ def trial_key(setting: str, skill: str, context: np.ndarray, control: np.ndarray
     values = ",".join(f"{v:.12g}" for v in (*context, *control))
     version = SETTING_VERSIONS.get(setting)
     name = setting if version is None else f"{setting}@v{version}"
+    robot_version = ROBOT_SETUP_VERSIONS.get(skill, 1)
+    if setting == "pybullet-panda" and robot_version > 1:
+        name += f"r{robot_version}"
     return f"{name}|{skill}|{seed}|{values}"
 
 

@@ -12,11 +12,11 @@ from ltamp_cli.errors import InputError
 #: ``--robot`` values, and the (backend, skills) that take a robot.
 ROBOT_CHOICES = ("none", "panda")
 ROBOT_BACKEND = "pybullet"
-ROBOT_SKILLS = ("pour",)
+ROBOT_SKILLS = ("pour", "scoop", "push", "stir")
 
 
 def check_robot(robot: str, backend: str, skill: str) -> None:
-    """``--robot`` must name a known robot, and a robot needs a PyBullet pour."""
+    """``--robot`` must name a known robot, and a robot needs a PyBullet Kitchen3D skill."""
     if robot not in ROBOT_CHOICES:
         raise InputError(f"--robot: expected one of {', '.join(ROBOT_CHOICES)}, got {robot!r}")
     if robot != "none" and (backend != ROBOT_BACKEND or skill not in ROBOT_SKILLS):
@@ -62,10 +62,12 @@ def collect_command(
         typer.Option(
             "--robot",
             help="Who moves the tool in a trial: 'none' (free-floating along the skill's path) "
-            "or 'panda' (pybullet pour only: a Panda grasps the cup with a force-limited "
-            "grasp and follows the path by IK and joint position control; unreachable "
-            "poses, arm collisions and slip fail the trial). Records are tagged "
-            "pybullet+panda, so the two never mix in one file.",
+            "or 'panda' (pybullet pour, scoop, push, stir: a Panda grasps the cup, spoon, "
+            "fingertip pad or stirrer with a force-limited grasp and follows the path by IK "
+            "and joint position control at the skill's speeds; unreachable poses, arm "
+            "collisions and slip fail the trial; opt-in, see models/README.md for its "
+            "label agreement and cost). Records are tagged pybullet+panda, so the two "
+            "never mix in one file.",
         ),
     ] = "none",
 ) -> None:

@@ -92,9 +92,9 @@ def train_command(
         str,
         typer.Option(
             "--robot",
-            help="Live trials' robot: 'none' (free-floating tool) or 'panda' (pybullet pour "
-            "only: the Panda grasps and carries the cup; reach, arm collisions and slip "
-            "fail). The model and its trials are tagged pybullet+panda.",
+            help="Live trials' robot: 'none' (free-floating tool) or 'panda' (pybullet "
+            "pour, scoop, push, stir: the Panda grasps and carries the tool; reach, arm "
+            "collisions and slip fail). The model and its trials are tagged pybullet+panda.",
         ),
     ] = "none",
 ) -> None:

@@ -89,7 +89,7 @@ def test_an_unreachable_pose_fails_with_reach(world: PhysicsWorld) -> None:
 def test_a_path_into_the_table_fails_with_collision(world: PhysicsWorld, planned: bool) -> None:
     # The hand 1.5 cm above the cup's base; without the planner's collision checks the
     # contact met while simulating fails the trial.
-    low = RobotSettings(grasp_heights=(0.15,), plan_collisions=planned)
+    low = RobotSettings(grasp_heights=(0.15,), rim_grasps=False, plan_collisions=planned)
     down = tilt_path(np.array([0.0, 0.0, 0.2]), np.array([0.0, 0.0, -0.2]), 0.0)
     with pytest.raises(RobotFailure) as failure:
         carry(world, down, low)
@@ -122,20 +122,24 @@ def test_timed_configurations_respect_the_joint_speed_and_end_exactly() -> None:
 
 def test_the_robot_is_part_of_the_backend_identity() -> None:
     free, robot = load_backend("pybullet"), load_backend("pybullet", robot="panda")
+    side_only = load_backend("pybullet", robot="panda",
+                             robot_settings=RobotSettings(rim_grasps=False))
     try:
         assert free.name == "pybullet" and robot.name == "pybullet+panda"
-        with pytest.raises(ValueError, match="pour"):
-            robot.run_trial("scoop", robot.sample_context("scoop", np.random.default_rng(0)),
-                            np.zeros(5), 0)
-        # A 10 cm cup is wider than the gripper at every height: a failed (valid) trial.
+        # A 10 cm cup is wider than the gripper at every height: with side grasps only, a
+        # failed (valid) trial; the rim grasp holds it and the pour is carried out.
         context = np.array([0.2, 0.08, 0.12, 0.10, 0.10, 0.10])
         control = np.array([-3 * math.pi / 4, -0.5, 0.5, 0.15, 0.12])
         assert robot.is_valid("pour", context, control[None])[0]
-        result = robot.run_trial("pour", context, control, 0)
+        result = side_only.run_trial("pour", context, control, 0)
         assert (result.score, result.valid, result.info["reason"]) == (-1.0, True, "grasp")
+        result = robot.run_trial("pour", context, control, 0)
+        assert result.valid and "reason" not in result.info, result.info
+        assert result.info["beads_in_cup_start"] > 0
     finally:
         free.close()
         robot.close()
+        side_only.close()
     with pytest.raises(ValueError, match="robot"):
         load_backend("pybullet", robot="kuka")
 
@@ -159,9 +163,8 @@ def run_cli(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str]:
 def test_collect_robot_option(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = str(tmp_path / "pour.jsonl")
     for bad in (["--backend", "box2d", "--robot", "panda"], ["--robot", "kuka"],
-                ["--backend", "pybullet", "--robot", "panda", "--skill-is-push"]):
-        args = ["collect", "push" if "--skill-is-push" in bad else "pour", "-n", "1",
-                "--out", out, *(a for a in bad if a != "--skill-is-push")]
+                ["--backend", "sapien", "--robot", "panda"]):
+        args = ["collect", "pour", "-n", "1", "--out", out, *bad]
         code, err = run_cli(capsys, *args)
         assert code == 2 and len(err.strip().splitlines()) == 1 and "--robot" in err, err
     code, err = run_cli(capsys, "collect", "pour", "-n", "1", "--out", out, "--backend",

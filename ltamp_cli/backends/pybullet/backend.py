@@ -13,6 +13,7 @@ import numpy as np
 
 from ltamp_cli.backends.protocol import SkillSpec, TrialResult, as_batch
 from ltamp_cli.backends.pybullet.guard import bullet_guard
+from ltamp_cli.backends.pybullet.paths import PosePath
 from ltamp_cli.backends.pybullet.render import Camera, FrameRecorder
 from ltamp_cli.backends.pybullet.skills.physics import BulletTrialPhysics
 from ltamp_cli.backends.pybullet.skills.robot import (
@@ -37,6 +38,7 @@ from ltamp_cli.backends.skills3d.push import (
     PUSH_SPEC,
     PushSettings,
     check_push,
+    prepare_push,
     push_is_valid,
     sample_push_context,
 )
@@ -44,6 +46,7 @@ from ltamp_cli.backends.skills3d.scoop import (
     SCOOP_SPEC,
     ScoopSettings,
     check_scoop,
+    prepare_scoop,
     sample_scoop_context,
     scoop_is_valid,
 )
@@ -51,6 +54,7 @@ from ltamp_cli.backends.skills3d.stir import (
     STIR_SPEC,
     StirSettings,
     check_stir,
+    prepare_stir,
     sample_stir_context,
     stir_is_valid,
 )
@@ -78,7 +82,25 @@ _CONTEXTS: Mapping[str, Callable[[np.random.Generator], np.ndarray]] = MappingPr
 )
 KNOWN_SKILLS = ", ".join(_SPECS)
 #: Skills whose trials can run with the Panda in the loop (``robot="panda"``).
-ROBOT_SKILLS = ("pour",)
+ROBOT_SKILLS = ("pour", "scoop", "push", "stir")
+#: The untimed tool path of a skill's trial (what the Panda plans before it grasps).
+_PREVIEWS: Mapping[str, Callable[[np.ndarray, np.ndarray], PosePath]] = MappingProxyType({
+    "pour": lambda context, control: prepare_pour(context, control, check=False).path,
+    "scoop": lambda context, control: prepare_scoop(context, control, check=False).path,
+    "push": lambda context, control: prepare_push(context, control, check=False).path,
+    "stir": lambda context, control: prepare_stir(context, control, check=False).path,
+})
+#: Where the Panda's base stands around the tool, per skill (radians about z from +x, tried
+#: in turn) and from which point: a pour tilts about y, so its base is at -y or +y of the
+#: cup; the scoop's spoon moves along y with its handle up towards +y, so its base is at +y
+#: first; the push runs along +x, so its base is at -y or +y of the push's middle; the
+#: stirrer circles in a cup at the origin.
+SKILL_BEARINGS: Mapping[str, tuple[tuple[float, ...], str]] = MappingProxyType({
+    "pour": ((-np.pi / 2, np.pi / 2), "start"),
+    "scoop": ((np.pi / 2, 0.0, np.pi), "start"),
+    "push": ((-np.pi / 2, np.pi / 2), "middle"),
+    "stir": ((-np.pi / 2, np.pi / 2), "start"),
+})
 
 
 def backend_tag(robot: str) -> str:
@@ -113,8 +135,9 @@ class Kitchen3DBackend:
     Options: ``gui`` (open a PyBullet window instead of ``DIRECT``), ``solver_iterations``,
     per-skill timing via ``pour_settings``/``scoop_settings``/``push_settings``/
     ``stir_settings``, and ``robot``: ``"none"`` (the tool moves free-floating along the
-    skill's path) or ``"panda"`` (pour only: a Panda grasps the cup and follows the path by
-    IK and joint position control; reach, arm collisions and slip fail the trial, see
+    skill's path) or ``"panda"`` (every skill: a Panda grasps the cup, the spoon, the
+    fingertip pad or the stirrer and follows the path by IK and joint position control at
+    the skill's timing; reach, arm collisions and slip fail the trial, see
     :mod:`.skills.robot`; ``robot_settings`` tunes it). The robot is part of the trial
     records' identity: :attr:`name` is ``pybullet+panda`` then.
     """
@@ -236,8 +259,10 @@ class Kitchen3DBackend:
         if skill not in ROBOT_SKILLS:
             raise ValueError(f"robot {self.robot!r} runs {', '.join(ROBOT_SKILLS)} trials only, "
                              f"not {skill}")
-        preview = prepare_pour(context, control, check=False).path
-        return RobotTrialPhysics(self.world, preview, self.robot_settings, seed)
+        preview = _PREVIEWS[skill](context, control)
+        bearings, anchor = SKILL_BEARINGS[skill]
+        return RobotTrialPhysics(self.world, preview, self.robot_settings, seed, bearings,
+                                 anchor)
 
     def close(self) -> None:
         if self._world is not None:

@@ -3,20 +3,27 @@
 :class:`RobotTrialPhysics` implements :class:`~ltamp_cli.backends.skills3d.physics.TrialPhysics`
 like :class:`~.physics.BulletTrialPhysics`, except that the *tool* is not moved kinematically:
 
-1. When the tool body is added (:meth:`RobotTrialPhysics.add_body` with role ``"tool"``), a
-   fixed-base Panda is loaded on the table ``settings.base_distance`` m from the tool's start
-   pose along ``-y`` (facing ``+y``, across the skill's ``x``-``z`` plane of motion; then at
-   ``+y`` facing ``-y`` if that fails), a side grasp approaching along ``±y`` is chosen
-   (:func:`~..robot.grasps.cylinder_side_grasps`: the pour's tilt about ``y`` is then a
-   roll of the wrist), and the skill's whole tool path
-   (``preview``, the untimed waypoints) is solved by :func:`~..robot.cartesian.follow_tool_path`
-   (verified IK, joint continuity, collision checks against the table, the bowl and the held
-   tool). No solution: :class:`RobotFailure` ``"reach"``; a colliding one: ``"collision"``;
-   no grasp narrower than the gripper: ``"grasp"``. Failing here costs no bead simulation.
+1. When the tool body is added (:meth:`RobotTrialPhysics.add_body` with role ``"tool"``
+   at the first pose of ``preview``, the skill's untimed tool path), a fixed-base Panda is
+   loaded on the table ``settings.base_distance`` m from the tool's start (the push: from
+   the middle of its path) at the skill's bearings (pour, push, stir: ``-y`` then ``+y``;
+   scoop: ``+y``, ``+x``, ``-x``), facing it. The tool's grasps (:func:`tool_grasps`: a cup's
+   side grasps when it fits the 8 cm gripper, then rim grasps pinching its wall from above;
+   the spoon's handle; the push's pad held as the closed fingertips; the stirrer rod) are
+   ranked per base (palm not facing the base, hand nearest the base first) and the first
+   ``max_grasps`` are tried: the whole path is solved by
+   :func:`~..robot.cartesian.follow_tool_path` (verified IK, joint continuity, collision
+   checks against the table, the fixed bowl and the held tool), the first grasp and base
+   that carry it out win. No solution: :class:`RobotFailure` ``"reach"``; only colliding
+   ones: ``"collision"``; no grasp fits the gripper: ``"grasp"``. Failing here costs no
+   bead simulation. A tool added elsewhere (the scoop's spoon-capacity measurement) is not
+   grasped and moves free-floating.
 2. The tool is held by a fixed constraint from the hand whose force is limited to
    ``settings.grasp_force`` newtons, so a heavy or shaken tool can slip out of the grasp.
 3. :meth:`follow` drives the joints by position control along the solved configurations,
-   timed by a rest-to-rest trapezoid over the path's joint-space length
+   one target per step of the skill's own timed path (:func:`skill_timed_configurations`:
+   the arm keeps the skill's speeds), or (``skill_timing=False``) timed by a rest-to-rest
+   trapezoid over the path's joint-space length
    (:func:`~ltamp_cli.motion.timing.trapezoid_fraction`: every joint's speed stays below
    ``joint_speed`` rad/s); :meth:`hold` keeps commanding the current configuration.
 4. After every simulated step the trial fails with :class:`RobotFailure` when the arm (any
@@ -30,8 +37,9 @@ the control was executed and failed). Units: metres, radians, seconds, newtons.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from types import MappingProxyType
 
 import numpy as np
 import pybullet as p
@@ -45,9 +53,20 @@ from ltamp_cli.backends.pybullet.robot.arm import (
     PANDA_HAND_LINKS,
     PandaArm,
 )
-from ltamp_cli.backends.pybullet.robot.cartesian import CartesianConfig, follow_tool_path
+from ltamp_cli.backends.pybullet.robot.cartesian import (
+    CartesianConfig,
+    densify_tool_path,
+    follow_tool_path,
+)
 from ltamp_cli.backends.pybullet.robot.collision import ArmCollisionChecker, AttachedBody
-from ltamp_cli.backends.pybullet.robot.grasps import MAX_GRASP_WIDTH, Grasp, cylinder_side_grasps
+from ltamp_cli.backends.pybullet.robot.grasps import (
+    MAX_GRASP_WIDTH,
+    Grasp,
+    bar_grasps,
+    box_top_grasps,
+    cylinder_side_grasps,
+    rim_grasps,
+)
 from ltamp_cli.backends.pybullet.robot.pose import Pose, rotation_distance
 from ltamp_cli.backends.pybullet.skills.physics import BulletTrialPhysics
 from ltamp_cli.backends.skills3d.physics import IDENTITY_QUAT, BodyRole, SimBody, StepCallback
@@ -55,6 +74,14 @@ from ltamp_cli.motion.timing import trapezoid_duration, trapezoid_fraction
 
 #: Values of the ``robot`` trial setting: ``none`` (free-floating tool) or ``panda``.
 ROBOTS = ("none", "panda")
+#: Version of the robot trial setup (grasps, base placement, timing) per skill: part of the
+#: fidelity bench's cache keys of robot trials. 1: side grasps only, trapezoidal timing
+#: (pour only); 2: rim grasps straight down, per-skill base bearings, the skill's own
+#: timing, every skill; 3 (pour): rim grasps leaning out by π/4; 3 (stir): the planner's
+#: collision check places the held tool at its centre of mass (it was displaced by the
+#: kitchenware's com_offset: the stirrer rod 10 cm into the table, a cup or spoon ~2 mm).
+ROBOT_SETUP_VERSIONS: Mapping[str, int] = MappingProxyType(
+    {"pour": 3, "scoop": 2, "push": 2, "stir": 3})
 #: Why a robot trial failed (``info["reason"]``).
 FAILURE_REASONS = ("reach", "collision", "slip", "grasp")
 
@@ -78,13 +105,24 @@ class RobotSettings:
     """How the Panda holds and moves the tool.
 
     ``grasp_force`` (N): largest force of the grasp constraint (the tool slips beyond it).
-    ``base_distance`` (m): horizontal distance from the tool's start position to the arm's
-    base; ``base_bearings``: where the base stands around the tool's start (radians about
-    ``z`` from ``+x``: ``-π/2`` at ``-y``, ``0`` at ``+x``), tried in turn until the path
-    is solved. ``grasp_heights``: fractions of the cup's
-    height tried for the side grasp, the first whose outer diameter fits the gripper wins.
-    ``joint_speed`` (rad/s) and
-    ``joint_acceleration`` (rad/s²): limits of the trapezoidal timing. ``position_gain``:
+    ``base_distance`` (m): horizontal distance from the tool's start position (the path's
+    middle for a push) to the arm's base; ``base_bearings``: where the base stands around it
+    (radians about ``z`` from ``+x``: ``-π/2`` at ``-y``, ``0`` at ``+x``), tried in turn
+    until the path is solved (``None``: the skill's :data:`SKILL_BEARINGS`).
+    ``grasp_heights``: fractions of the cup's height tried for the side grasp, the first
+    whose outer diameter fits the gripper wins; ``rim_grasps``: also pinch the cup's wall at
+    its rim from above (any cup diameter; the reference LTAMP code grasps cups by their
+    side, top or edge), the hand leaning out by each of ``rim_leans`` (radians; π/4: on
+    5 bench pours that collided with the hand straight down, 3 were carried out, as with
+    1.1 rad; with (π/4, 0) 2). ``push_pitch`` (rad): how far the hand holding the push's
+    fingertip pad leans back from vertical (``0``, the default: straight down; the palm
+    then reaches 2.8 cm past the pad and can touch a tall block pushed low; ``π/4`` agreed
+    with the free pad on 54 of the fidelity bench's first 60 push inputs, ``0`` on 55).
+    ``max_grasps``: grasps tried per base bearing (those whose hand
+    is nearest the base, its palm not facing the base). ``skill_timing``: the arm follows
+    the skill's own timing of the tool path (its speeds; ``False``: a rest-to-rest
+    trapezoid over the joint path limited by ``joint_speed`` rad/s and
+    ``joint_acceleration`` rad/s²). ``position_gain``:
     PyBullet's joint position-control gain. ``slip_position_m`` / ``slip_angle_rad``: how far
     the tool may drift from the grasp before the trial counts as slipped.
     ``contact_tolerance_m``: penetration depth an arm contact needs to count (0: any
@@ -94,8 +132,13 @@ class RobotSettings:
 
     grasp_force: float = 200.0
     base_distance: float = 0.5
-    base_bearings: tuple[float, ...] = (-np.pi / 2, np.pi / 2)
+    base_bearings: tuple[float, ...] | None = None
     grasp_heights: tuple[float, ...] = (0.45, 0.3, 0.15)
+    rim_grasps: bool = True
+    rim_leans: tuple[float, ...] = (np.pi / 4,)
+    push_pitch: float = 0.0
+    max_grasps: int = 6
+    skill_timing: bool = True
     joint_speed: float = 2.0
     joint_acceleration: float = 8.0
     position_gain: float = 0.3
@@ -114,23 +157,78 @@ class RobotSettings:
             raise ValueError("contact_tolerance_m must be >= 0")
         if not self.grasp_heights or not all(0.0 < h < 1.0 for h in self.grasp_heights):
             raise ValueError("grasp_heights must be fractions in (0, 1)")
+        if self.max_grasps < 1:
+            raise ValueError("max_grasps must be >= 1")
+        if not 0.0 <= self.push_pitch < np.pi / 2:
+            raise ValueError("push_pitch must be in [0, π/2)")
+        if self.base_bearings is not None and not self.base_bearings:
+            raise ValueError("base_bearings must name at least one bearing (or be None)")
 
 
-def cup_grasps(geometry: KitchenwareGeometry, heights: Sequence[float]) -> tuple[Grasp, ...]:
-    """Side grasps of a vessel approaching along ``±x`` and ``±y`` (hand upright and
-    flipped), at the
-    first fraction of ``heights`` where the outer diameter fits the gripper; empty if none."""
+def cup_grasps(geometry: KitchenwareGeometry, heights: Sequence[float],
+               leans: Sequence[float] = (0.0,)) -> tuple[Grasp, ...]:
+    """Grasps of a vessel (base centre at its origin): side grasps approaching along ``±x``
+    and ``±y`` (hand upright and flipped) at the first fraction of ``heights`` where the
+    outer diameter fits the gripper (none for a wider cup), then, for each of ``leans``
+    (radians), grasps pinching the wall at the rim from above at 8 points around it
+    (:func:`~..robot.grasps.rim_grasps`)."""
     dims = geometry.vessel
     if dims is None:
         raise RobotFailure("grasp", f"a {geometry.kind} has no side grasp")
+    grasps: tuple[Grasp, ...] = ()
     for fraction in heights:
         radius = float(dims.outer_radius_at(dims.height * fraction))
         if 2.0 * radius > MAX_GRASP_WIDTH - 0.002:
             continue
         grasps = cylinder_side_grasps(radius, dims.height, base_z=0.0, grasp_height=fraction,
                                       n_yaw=4)
-        return grasps
-    return ()
+        break
+    for lean in leans:
+        if dims.thickness / np.cos(lean) < MAX_GRASP_WIDTH:
+            grasps += rim_grasps(dims.top_radius, dims.height, dims.thickness, lean=lean)
+    return grasps
+
+
+def spoon_grasps(geometry: KitchenwareGeometry, along: float = 0.75) -> tuple[Grasp, ...]:
+    """Grasps of a spoon's handle (its last piece, a thin box) ``along`` its length from
+    the head: :func:`~..robot.grasps.bar_grasps` (fingers across the 4 mm thickness or the
+    12 mm width, from either side)."""
+    handle = geometry.pieces[-1]
+    centre = handle.mean(axis=0)
+    # The box's axes from its 8 corners: principal directions of the centred vertices.
+    _, _, rows = np.linalg.svd(handle - centre)
+    axes = rows.T
+    half = np.abs((handle - centre) @ axes).max(axis=0)
+    long = int(np.argmax(half))
+    # The handle leaves the head towards +y: its axis pointing away from the head.
+    direction = axes[:, long] * (1.0 if axes[1, long] >= 0 else -1.0)
+    point = centre + direction * half[long] * (2.0 * along - 1.0)
+    return bar_grasps(point, axes, half)
+
+
+def tool_grasps(geometry: KitchenwareGeometry, settings: RobotSettings) -> tuple[Grasp, ...]:
+    """The grasps tried for a tool, by its kind: a cup (:func:`cup_grasps`), a spoon's
+    handle (:func:`spoon_grasps`), the push's fingertip pad (from above, the closed
+    fingertips at the pad: the pad is their contact shape, the finger meshes do not touch
+    the pushed block) or a stirrer rod (side grasps 85 % up it)."""
+    if geometry.kind == "cup":
+        return cup_grasps(geometry, settings.grasp_heights,
+                          settings.rim_leans if settings.rim_grasps else ())
+    if geometry.kind == "spoon":
+        return spoon_grasps(geometry)
+    points = np.concatenate(geometry.pieces)
+    low, high = points.min(axis=0), points.max(axis=0)
+    if geometry.kind == "pusher":
+        # The pad stands in for the closed fingertips: held from above, fingers closed on
+        # it (kind "fingertips", see RobotTrialPhysics._attach), the hand leaning back by
+        # settings.push_pitch.
+        return tuple(Grasp("fingertips", grasp.tool_in_gripper, 0.0)
+                     for grasp in box_top_grasps((high - low) / 2.0, settings.push_pitch))
+    if geometry.kind == "stirrer":
+        radius = float(max(high[0] - low[0], high[1] - low[1]) / 2.0)
+        return cylinder_side_grasps(radius, float(high[2] - low[2]), base_z=float(low[2]),
+                                    grasp_height=0.85, n_yaw=4)
+    raise RobotFailure("grasp", f"no grasp for a {geometry.kind}")
 
 
 def timed_configurations(configurations: np.ndarray, speed: float, acceleration: float,
@@ -157,6 +255,65 @@ def timed_configurations(configurations: np.ndarray, speed: float, acceleration:
     return np.stack([np.interp(s, arc, q[:, j]) for j in range(q.shape[1])], axis=1)
 
 
+def path_progress(preview: PosePath, timed: PosePath) -> np.ndarray:
+    """Where each pose of ``timed`` ``(m, ·)`` lies along ``preview`` ``(n, ·)``, as a
+    fractional waypoint index ``(m,)`` in ``[0, n - 1]``.
+
+    ``timed`` must be ``preview`` resampled segment by segment, each pose interpolated
+    between two consecutive waypoints with one fraction for position and rotation (as
+    :func:`~..paths.timed_poses` does): the fraction is recovered from the position
+    (from the rotation on a segment that only turns)."""
+    rotations = preview.rotations()
+    timed_rotations = timed.rotations()
+    last = len(preview) - 1
+    progress = np.zeros(len(timed))
+    segment = 0
+    for j in range(len(timed)):
+        if last == 0:
+            continue
+        # A segment's samples end at its last waypoint; the next pose is on the next one.
+        if j > 0 and progress[j - 1] >= segment + 1.0 - 1e-9 and segment < last - 1:
+            segment += 1
+        a, b = preview.positions[segment], preview.positions[segment + 1]
+        shift = b - a
+        turn = float((rotations[segment].inv() * rotations[segment + 1]).magnitude())
+        if float(shift @ shift) > 1e-18:
+            fraction = float((timed.positions[j] - a) @ shift / (shift @ shift))
+        elif turn > 1e-12:
+            fraction = float((rotations[segment].inv() * timed_rotations[j]).magnitude()
+                             / turn)
+        else:
+            fraction = 1.0
+        fraction = min(max(fraction, 0.0), 1.0)
+        progress[j] = segment + fraction
+    return progress
+
+
+def skill_timed_configurations(configurations: np.ndarray, preview: PosePath,
+                               timed: PosePath, cartesian: CartesianConfig) -> np.ndarray:
+    """Joint targets ``(m, 7)``, one per pose of the skill's ``timed`` tool path: the
+    solved ``configurations`` ``(n, 7)`` (one per pose of ``preview`` densified with
+    ``cartesian``'s step limits) interpolated at each timed pose's place along the path
+    (:func:`path_progress`), so the arm keeps the skill's speeds."""
+    q = np.asarray(configurations, dtype=float)
+    counts = [len(densify_tool_path([Pose(preview.positions[i], preview.quaternions[i]),
+                                     Pose(preview.positions[i + 1], preview.quaternions[i + 1])],
+                                    cartesian.max_translation, cartesian.max_rotation)) - 1
+              for i in range(len(preview) - 1)]
+    offsets = np.concatenate([[0.0], np.cumsum(counts)]).astype(float)
+    if int(offsets[-1]) + 1 != len(q):
+        raise ValueError(f"{len(q)} configurations do not match the densified preview "
+                         f"({int(offsets[-1]) + 1} poses)")
+    progress = path_progress(preview, timed)
+    segment = np.minimum(np.floor(progress).astype(int), max(len(counts) - 1, 0))
+    if counts:
+        index = offsets[segment] + (progress - segment) * np.asarray(counts)[segment]
+    else:
+        index = np.zeros(len(progress))
+    grid = np.arange(len(q), dtype=float)
+    return np.stack([np.interp(index, grid, q[:, j]) for j in range(q.shape[1])], axis=1)
+
+
 @dataclass(frozen=True)
 class ArmPlan:
     """A solved carry: the arm's base pose, the grasp, and configurations ``(n, 7)``."""
@@ -175,6 +332,7 @@ class RobotState:
     plan: ArmPlan | None = None
     tool: KitchenwareBody | None = None
     obstacles: list[int] = field(default_factory=list)
+    free: list[KitchenwareBody] = field(default_factory=list)
     command: np.ndarray | None = None
 
 
@@ -183,18 +341,31 @@ class RobotTrialPhysics(BulletTrialPhysics):
     """Trial physics with the tool in a Panda's hand (see the module docstring).
 
     ``preview`` is the skill's untimed tool path (the same poses :meth:`follow` will be
-    given, before timing); ``seed`` seeds the IK restarts. One instance runs one trial.
+    given, before timing); ``seed`` seeds the IK restarts. ``bearings``: where the base
+    stands (see :class:`RobotSettings`; the settings' ``base_bearings`` win when given);
+    ``anchor``: ``"start"`` (the base stands ``base_distance`` from the tool's start) or
+    ``"middle"`` (from the middle of the path's horizontal extent). A tool added anywhere but
+    the preview's first pose (the scoop's spoon-capacity measurement, which no robot runs)
+    is not grasped: it moves free-floating as in :class:`BulletTrialPhysics`. One instance
+    runs one trial.
     """
 
     preview: PosePath | None = None
     settings: RobotSettings = field(default_factory=RobotSettings)
     seed: int = 0
+    bearings: tuple[float, ...] = (-np.pi / 2, np.pi / 2)
+    anchor: str = "start"
     state: RobotState = field(default_factory=RobotState, init=False)
+
+    def __post_init__(self) -> None:
+        if self.anchor not in ("start", "middle"):
+            raise ValueError(f"anchor must be 'start' or 'middle', got {self.anchor!r}")
 
     def reset(self) -> None:
         super().reset()
         self.state.arm = self.state.plan = self.state.tool = self.state.command = None
         self.state.obstacles = [self.world.table]
+        self.state.free = []
 
     def add_body(
         self,
@@ -209,36 +380,76 @@ class RobotTrialPhysics(BulletTrialPhysics):
         body = super().add_body(geometry, material, role, position, quaternion)
         if role == "fixed":
             self.state.obstacles.append(body.body)
-        elif role == "tool":
+        elif role == "free":
+            self.state.free.append(body)
+        elif role == "tool" and self._at_preview_start(position, quaternion):
             if self.state.tool is not None:
                 raise ValueError("the Panda holds one tool per trial")
             self.state.tool = body
             self._grasp(body, Pose(np.asarray(position), np.asarray(quaternion)))
         return body
 
+    def _at_preview_start(self, position: Sequence[float] | np.ndarray,
+                          quaternion: Sequence[float] | np.ndarray) -> bool:
+        if self.preview is None:
+            raise ValueError("a robot trial needs the tool's path (preview) before the tool")
+        start_q = np.asarray(self.preview.quaternions[0], dtype=float)
+        return bool(np.linalg.norm(np.asarray(position, dtype=float)
+                                   - self.preview.positions[0]) < 1e-9
+                    and abs(abs(float(np.dot(np.asarray(quaternion, dtype=float), start_q)))
+                            - 1.0) < 1e-9)
+
     # Planning ----------------------------------------------------------------------------
+
+    def _base_poses(self, start: Pose) -> list[tuple[Pose, np.ndarray]]:
+        """Base poses (facing the anchor) and the unit vector from the anchor to the base,
+        one per bearing."""
+        assert self.preview is not None
+        if self.anchor == "middle":
+            xy = self.preview.positions[:, :2]
+            centre = np.append((xy.min(axis=0) + xy.max(axis=0)) / 2.0, 0.0)
+        else:
+            centre = start.position * np.array([1.0, 1.0, 0.0])
+        bearings = self.settings.base_bearings or self.bearings
+        poses = []
+        for bearing in bearings:
+            towards = np.array([np.cos(bearing), np.sin(bearing), 0.0])
+            poses.append((Pose.from_euler(centre + self.settings.base_distance * towards,
+                                          yaw=bearing + np.pi), towards))
+        return poses
+
+    def _candidates(self, grasps: Sequence[Grasp], start: Pose, base: Pose,
+                    towards: np.ndarray) -> list[Grasp]:
+        """At most ``max_grasps`` grasps for this base: the palm must not face the base
+        (approach · (from base to tool) ≥ -0.1); kinds in the order given (a cup's side
+        grasps before its rim grasps), nearest hand to the base first."""
+        kinds = list(dict.fromkeys(grasp.kind for grasp in grasps))
+        ranked = []
+        for grasp in grasps:
+            gripper = grasp.gripper_pose(start)
+            approach = gripper.rotation()[:, 2]
+            if float(approach @ -towards) < -0.1:
+                continue
+            distance = float(np.linalg.norm((gripper.position - base.position)[:2]))
+            ranked.append((kinds.index(grasp.kind), distance, len(ranked), grasp))
+        ranked.sort(key=lambda item: item[:3])
+        return [grasp for *_, grasp in ranked[:self.settings.max_grasps]]
 
     def _grasp(self, tool: KitchenwareBody, start: Pose) -> None:
         if self.preview is None:
             raise ValueError("a robot trial needs the tool's path (preview) before the tool")
         client = self.world.client
-        grasps = cup_grasps(tool.geometry, self.settings.grasp_heights)
+        grasps = tool_grasps(tool.geometry, self.settings)
         if not grasps:
-            raise RobotFailure("grasp", "the cup is wider than the gripper at every grasp height")
+            raise RobotFailure("grasp", f"the {tool.geometry.kind} fits no grasp of the "
+                               f"gripper")
         poses = [Pose(position, quaternion) for position, quaternion
                  in zip(self.preview.positions, self.preview.quaternions, strict=True)]
         rng = np.random.default_rng(self.seed)
         arm: PandaArm | None = None
         plan = None
         reasons = []
-        for bearing in self.settings.base_bearings:
-            # The arm stands base_distance from the tool's start at this bearing (radians
-            # about z from +x), facing it; the palm approaches the tool towards the base's
-            # opposite side.
-            towards = np.array([np.cos(bearing), np.sin(bearing), 0.0])
-            base = Pose.from_euler(start.position * np.array([1.0, 1.0, 0.0])
-                                   + self.settings.base_distance * towards,
-                                   yaw=bearing + np.pi)
+        for base, towards in self._base_poses(start):
             if arm is None:
                 arm = PandaArm(client, base)
                 self.state.arm = arm
@@ -247,12 +458,12 @@ class RobotTrialPhysics(BulletTrialPhysics):
                 p.resetBasePositionAndOrientation(arm.body_id, position, quaternion,
                                                   physicsClientId=client)
                 arm.base_pose = base
-            for grasp in grasps:
-                approach = grasp.tool_in_gripper.inverse().rotation()[:, 2]
-                if float(approach @ -towards) < 0.999:
-                    continue
-                checker = ArmCollisionChecker(arm, self.state.obstacles,
-                                              AttachedBody(tool.body, grasp.tool_in_gripper))
+            for grasp in self._candidates(grasps, start, base, towards):
+                # The checker re-poses the held body by its base, which PyBullet puts at
+                # the centre of mass: the body's pose in the gripper is the tool frame's
+                # shifted by the kitchenware's com_offset (10 cm along a stirrer rod).
+                checker = ArmCollisionChecker(arm, self.state.obstacles, AttachedBody(
+                    tool.body, grasp.tool_in_gripper @ Pose(np.asarray(tool.com_offset))))
                 found = follow_tool_path(
                     arm, poses, grasp.tool_in_gripper, rng,
                     is_valid=checker if self.settings.plan_collisions else None,
@@ -267,6 +478,8 @@ class RobotTrialPhysics(BulletTrialPhysics):
         assert arm is not None
         tool.set_pose(start.position, start.quaternion)
         if plan is None:
+            if not reasons:
+                raise RobotFailure("grasp", "no grasp with the palm away from the base")
             index, status = max(reasons)
             reason = "collision" if status == "collision" else "reach"
             raise RobotFailure(reason, f"{status} at pose {index} of the densified tool path")
@@ -279,8 +492,9 @@ class RobotTrialPhysics(BulletTrialPhysics):
         client = self.world.client
         first = plan.configurations[0]
         arm.set_configuration(first)
-        arm.set_finger_opening(plan.grasp.width + 0.002)
-        arm.command_gripper(plan.grasp.width + 0.002)
+        opening = plan.grasp.width + 0.002 if plan.grasp.kind != "fingertips" else 0.0
+        arm.set_finger_opening(opening)
+        arm.command_gripper(opening)
         self.state.command = first
         arm.command_configuration(first, position_gain=self.settings.position_gain)
         tool_pose = arm.end_effector_pose() @ plan.grasp.tool_in_gripper
@@ -289,6 +503,14 @@ class RobotTrialPhysics(BulletTrialPhysics):
             for piece in tool.links:
                 p.setCollisionFilterPair(arm.body_id, tool.body, link, piece, 0,
                                          physicsClientId=client)
+        if plan.grasp.kind == "fingertips":
+            # The pad is the closed fingertips' contact shape (as in the free-floating
+            # skill): the finger meshes around it do not touch the free bodies.
+            for link in PANDA_HAND_LINKS[1:]:
+                for body in self.state.free:
+                    for piece in body.links:
+                        p.setCollisionFilterPair(arm.body_id, body.body, link, piece, 0,
+                                                 physicsClientId=client)
         hand = p.getLinkState(arm.body_id, PANDA_HAND_LINK, computeForwardKinematics=True,
                               physicsClientId=client)
         hand_com = Pose(np.asarray(hand[0]), np.asarray(hand[1]))
@@ -310,14 +532,22 @@ class RobotTrialPhysics(BulletTrialPhysics):
         self, tool: SimBody, path: PosePath, on_step: StepCallback | None = None,
         step_offset: int = 0,
     ) -> int:
-        """Drive the arm along the planned configurations (position control, trapezoidal
-        timing); ``path`` must end where the preview ends."""
+        """Drive the arm along the planned configurations by position control, one target
+        per pose of ``path`` (the skill's timing, see :func:`skill_timed_configurations`)
+        or trapezoidally timed (``skill_timing=False``); ``path`` must end where the preview
+        ends. A tool the arm did not grasp moves free-floating."""
+        if tool is not self.state.tool or self.state.plan is None:
+            return super().follow(tool, path, on_step, step_offset)
         arm, plan = self._holding(tool)
-        if self.preview is not None and np.linalg.norm(
-                path.positions[-1] - self.preview.positions[-1]) > 1e-6:
+        assert self.preview is not None
+        if np.linalg.norm(path.positions[-1] - self.preview.positions[-1]) > 1e-6:
             raise ValueError("the robot follows the tool path it planned (the preview)")
-        targets = timed_configurations(plan.configurations, self.settings.joint_speed,
-                                       self.settings.joint_acceleration, self.time_step)
+        if self.settings.skill_timing:
+            targets = skill_timed_configurations(plan.configurations, self.preview, path,
+                                                 self.settings.cartesian)
+        else:
+            targets = timed_configurations(plan.configurations, self.settings.joint_speed,
+                                           self.settings.joint_acceleration, self.time_step)
 
         def command(i: int) -> None:
             self.state.command = targets[i]
@@ -330,7 +560,10 @@ class RobotTrialPhysics(BulletTrialPhysics):
         on_step: StepCallback | None = None, step_offset: int = 0,
     ) -> int:
         """Keep commanding the arm's last target for ``steps`` steps (the tool stays where
-        the arm holds it; ``position``/``quaternion`` are where the skill expects it)."""
+        the arm holds it; ``position``/``quaternion`` are where the skill expects it). A
+        tool the arm did not grasp is held free-floating."""
+        if tool is not self.state.tool or self.state.plan is None:
+            return super().hold(tool, position, quaternion, steps, on_step, step_offset)
         arm, _ = self._holding(tool)
         assert self.state.command is not None
         target = self.state.command
