@@ -66,7 +66,7 @@ def rate(count: int, n: int) -> dict:
 
 def engine_summary(labels: np.ndarray, shifts_mm: tuple[float, ...]) -> dict:
     """Robustness of one engine's labels ``(n, 1 + k)`` (column 0: as drawn, then one
-    column per shift in ``shifts_mm``)."""
+    column per shift in ``shifts_mm``); the labels themselves are kept as 0/1 lists."""
     robust = (labels == labels[:, :1]).all(axis=1)
     return {
         "robust": rate(int(robust.sum()), len(labels)),
@@ -74,6 +74,7 @@ def engine_summary(labels: np.ndarray, shifts_mm: tuple[float, ...]) -> dict:
                             for j, s in enumerate(shifts_mm)},
         "success_as_drawn": float(labels[:, 0].mean()),
         "unstable_inputs": [int(i) for i in np.flatnonzero(~robust)],
+        "labels": labels.astype(int).tolist(),
     }
 
 
