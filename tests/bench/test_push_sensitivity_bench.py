@@ -47,7 +47,8 @@ def test_cross_summary_restricts_agreement_to_the_robust_inputs() -> None:
 
 
 def test_bad_arguments_exit_with_status_2() -> None:
-    for argv in (["--trials", "0"], ["--shifts-mm", "0"], ["--shifts-mm", "9"]):
+    for argv in (["--trials", "0"], ["--shifts-mm", "0"], ["--shifts-mm", "9"],
+                 ["--pybullet-breaking-m", "0"]):
         with pytest.raises(SystemExit) as stop:
             push_sensitivity.parse_args(argv)
         assert stop.value.code == 2
