@@ -22,12 +22,14 @@ on PyBullet, and between the majority labels. The summary is written to ``--out`
     OMP_NUM_THREADS=1 .venv/bin/python bench/push_sensitivity.py \
         --out docs/results/fidelity/push_sensitivity.json
 
-``--pybullet-breaking-m`` is a what-if, not a shipped setting: PyBullet with another contact
-breaking threshold (shipped 4 mm, chosen for bead piles; Bullet's default is 2 cm, with which
-the pad keeps 2-3 contact points on the block instead of 1). Its committed run:
+``--pybullet-breaking-m`` is a what-if: PyBullet's push world with another contact breaking
+threshold. Since issue #20 the push world ships with Bullet's default 2 cm
+(:data:`ltamp_cli.backends.pybullet.world.SKILL_CONTACT_BREAKING_M`: the pad keeps 2-3 contact
+points on the block); with the 4 mm the bead worlds keep it had one, and its labels were
+chaotic. The committed run of the push as it was before:
 
-    OMP_NUM_THREADS=1 .venv/bin/python bench/push_sensitivity.py --pybullet-breaking-m 0.02 \
-        --out docs/results/fidelity/push_sensitivity_breaking_2cm.json
+    OMP_NUM_THREADS=1 .venv/bin/python bench/push_sensitivity.py --pybullet-breaking-m 0.004 \
+        --out docs/results/fidelity/push_sensitivity_breaking_4mm.json
 """
 
 from __future__ import annotations
@@ -39,21 +41,20 @@ import sys
 import time
 from collections.abc import Iterator
 from contextlib import ExitStack, contextmanager
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from bench.fidelity import (
     RESULTS_DIR,
-    SETTING_VERSIONS,
     SETTINGS,
     draw_inputs,
     is_success,
     run_trial,
+    setting_version,
     wilson_interval,
 )
-from ltamp_cli.backends import SkillBackend
+from ltamp_cli.backends import SkillBackend, load_backend
 
 ENGINES = ("pybullet", "sapien")
 SKILL = "push"
@@ -118,16 +119,15 @@ def cross_summary(bullet: np.ndarray, sapien: np.ndarray) -> dict:
 @contextmanager
 def engine_backends(breaking_m: float | None) -> Iterator[dict[str, SkillBackend]]:
     """Both engines' backends as shipped, closed on exit; with ``breaking_m`` PyBullet's
-    contact breaking threshold (m, shipped: 0.004) is replaced (a what-if, not shipped)."""
+    push world's contact breaking threshold (m, shipped: 0.02) is replaced (a what-if)."""
     with ExitStack() as stack:
         built = {}
         for engine in ENGINES:
-            backend = SETTINGS[engine]()
-            stack.callback(backend.close)
             if engine == "pybullet" and breaking_m is not None:
-                config = backend.config  # type: ignore[attr-defined]
-                backend.config = replace(  # type: ignore[attr-defined]
-                    config, contact_breaking_threshold=breaking_m)
+                backend = load_backend("pybullet", contact_breaking_m={SKILL: breaking_m})
+            else:
+                backend = SETTINGS[engine]()
+            stack.callback(backend.close)
             built[engine] = backend
         yield built
 
@@ -156,8 +156,10 @@ def measure(n: int, seed: int, shifts_mm: tuple[float, ...], progress: bool,
             cpu[engine] = (time.process_time() - start) / (n * table.shape[1])
     return {
         "skill": SKILL, "trials": n, "seed": seed, "shifts_mm": list(shifts_mm),
-        "physics_versions": {e: SETTING_VERSIONS[e] for e in ENGINES},
-        "pybullet_contact_breaking_m": breaking_m,
+        "physics_versions": {e: setting_version(e, SKILL) for e in ENGINES},
+        "pybullet_contact_breaking_m": (built["pybullet"].world_config(SKILL)  # type: ignore[attr-defined]
+                                        .contact_breaking_threshold),
+        "what_if": breaking_m is not None,
         "cpu_s_per_trial": cpu, "machine": platform.platform(),
         "engines": {e: engine_summary(labels[e], shifts_mm) for e in ENGINES},
         "cross": cross_summary(labels["pybullet"], labels["sapien"]),
@@ -174,7 +176,8 @@ def _fmt(r: dict) -> str:
 def print_table(summary: dict) -> None:
     shifts = ", ".join(f"{s:+g}" for s in summary["shifts_mm"])
     breaking = summary["pybullet_contact_breaking_m"]
-    what_if = "" if breaking is None else f" (PyBullet contact breaking {breaking} m)"
+    marker = ", what-if" if summary["what_if"] else ""
+    what_if = f" (PyBullet contact breaking {breaking} m{marker})"
     print(f"3D push, {summary['trials']} inputs, pad shifted by {shifts} mm{what_if}")
     print(f"{'engine':<9} {'robust (Wilson 95%)':<30} flips per shift (mm)")
     for engine, s in summary["engines"].items():
@@ -196,8 +199,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--shifts-mm", type=float, nargs="+", default=list(DEFAULT_SHIFTS_MM),
                         help="sideways pad shifts in millimetres")
     parser.add_argument("--pybullet-breaking-m", type=float, default=None, metavar="M",
-                        help="what-if: PyBullet's contact breaking threshold in metres "
-                             "(shipped 0.004; Bullet's own default 0.02)")
+                        help="what-if: PyBullet's push world's contact breaking threshold in "
+                             "metres (shipped 0.02, Bullet's default; the bead worlds' 0.004)")
     parser.add_argument("--out", type=Path, default=RESULTS_DIR / "push_sensitivity.json")
     parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
     args = parser.parse_args(argv)
