@@ -15,7 +15,7 @@ pytest.importorskip("sapien")
 
 from ltamp_cli.backends.kitchenware_geometry import block_geometry
 from ltamp_cli.backends.pybullet.skills.physics import BulletTrialPhysics
-from ltamp_cli.backends.pybullet.world import PhysicsWorld
+from ltamp_cli.backends.pybullet.world import PhysicsWorld, skill_world_config
 from ltamp_cli.backends.sapien.skills import SapienTrialPhysics
 from ltamp_cli.backends.sapien.world import SapienWorld
 from ltamp_cli.backends.skills3d.physics import TrialPhysics
@@ -34,7 +34,7 @@ PLACED_XY = (SCENE.distance - 0.012, 0.016)
 
 @pytest.fixture(scope="module")
 def engines() -> Iterator[dict[str, TrialPhysics]]:
-    bullet, sapien = PhysicsWorld(), SapienWorld()
+    bullet, sapien = PhysicsWorld(skill_world_config("push")), SapienWorld()
     try:
         yield {"pybullet": BulletTrialPhysics(bullet), "sapien": SapienTrialPhysics(sapien)}
     finally:
