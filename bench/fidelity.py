@@ -32,8 +32,11 @@ Rows (``--rows``, default all):
 Every trial is appended as one JSON line to ``--cache`` (default
 ``bench/results/fidelity_trials.jsonl``) as soon as it finishes; a rerun with the same
 arguments reuses the trials already there, so a long run can be stopped and resumed. The
-key of a 3D engine's trial carries that engine's physics version
-(:data:`SETTING_VERSIONS`), so trials simulated before an engine change are never reused.
+key of a 3D engine's trial carries that engine's physics version for the skill
+(:func:`setting_version`: PyBullet's per-skill :func:`physics_version`, e.g. ``pybullet@v1``
+for pour and scoop and ``pybullet@v1.1`` for the push since its world's 2 cm contact breaking
+threshold; SAPIEN's ``sapien@v2``), so trials simulated before an engine change are never
+reused, and a change to one skill's world leaves the other skills' cached trials valid.
 ``--settings`` runs only the named settings' trials (the others are read from the cache
 when present): a slow engine's side of a row can start before the other engine is final.
 The summary is written to ``--out`` (default ``bench/results/fidelity.json``).
@@ -86,7 +89,7 @@ from ltamp_cli.backends.box2d.backend import Kitchen2DBackend
 from ltamp_cli.backends.box2d.skills.pour import REFERENCE, PourConfig
 from ltamp_cli.backends.box2d.skills.scoop import reference_config as reference_scoop
 from ltamp_cli.backends.pybullet.skills.robot import ROBOT_SETUP_VERSIONS
-from ltamp_cli.backends.pybullet.world import PHYSICS_VERSION as PYBULLET_PHYSICS_VERSION
+from ltamp_cli.backends.pybullet.world import physics_version as pybullet_physics_version
 from ltamp_cli.backends.sapien.world import PHYSICS_VERSION as SAPIEN_PHYSICS_VERSION
 
 RESULTS_DIR = Path(__file__).resolve().parent / "results"
@@ -130,16 +133,28 @@ SETTINGS: dict[str, Callable[[], SkillBackend]] = {
     "pybullet-panda": lambda: load_backend("pybullet", robot="panda"),
 }
 
-#: Physics version of each versioned setting, part of its trial keys (see
-#: :func:`trial_key`). The Box2D settings are unversioned: their committed caches are keyed
-#: without one. The Panda's key also names the skill's robot setup version
+#: The versioned settings' engines: a setting's physics version is its engine's for the
+#: skill (see :func:`setting_version`). The Box2D settings are unversioned: their committed
+#: caches are keyed without one. The Panda's key also names the skill's robot setup version
 #: (:data:`ROBOT_SETUP_VERSIONS`, e.g. ``1r3``; setup 1's keys were ``pybullet-panda@v1``).
-SETTING_VERSIONS: dict[str, int] = {
-    "pybullet": PYBULLET_PHYSICS_VERSION,
-    "pybullet-solver-50": PYBULLET_PHYSICS_VERSION,
-    "pybullet-panda": PYBULLET_PHYSICS_VERSION,
-    "sapien": SAPIEN_PHYSICS_VERSION,
+SETTING_ENGINES: dict[str, str] = {
+    "pybullet": "pybullet",
+    "pybullet-solver-50": "pybullet",
+    "pybullet-panda": "pybullet",
+    "sapien": "sapien",
 }
+
+
+def setting_version(setting: str, skill: str) -> str | None:
+    """The physics version of ``setting``'s ``skill`` trials (part of their cache keys):
+    PyBullet's per-skill version (``"1"``; the push ``"1.1"``), SAPIEN's, or ``None`` for
+    an unversioned (Box2D) setting."""
+    engine = SETTING_ENGINES.get(setting)
+    if engine == "pybullet":
+        return pybullet_physics_version(skill)
+    if engine == "sapien":
+        return str(SAPIEN_PHYSICS_VERSION)
+    return None
 
 
 @dataclass(frozen=True)
@@ -197,9 +212,9 @@ def draw_inputs(fast: SkillBackend, reference: SkillBackend, skill: str, n: int,
 def trial_key(setting: str, skill: str, context: np.ndarray, control: np.ndarray,
               seed: int) -> str:
     """The cache key of one trial (inputs rounded to 12 digits, so JSON round trips match);
-    a versioned setting's name carries ``@v<physics version>``."""
+    a versioned setting's name carries ``@v<physics version>`` (:func:`setting_version`)."""
     values = ",".join(f"{v:.12g}" for v in (*context, *control))
-    version = SETTING_VERSIONS.get(setting)
+    version = setting_version(setting, skill)
     name = setting if version is None else f"{setting}@v{version}"
     robot_version = ROBOT_SETUP_VERSIONS.get(skill, 1)
     if setting == "pybullet-panda" and robot_version > 1:

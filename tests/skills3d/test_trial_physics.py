@@ -19,7 +19,7 @@ from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial
 from ltamp_cli.backends.pybullet.particles import BeadSpec
 from ltamp_cli.backends.pybullet.paths import PosePath
 from ltamp_cli.backends.pybullet.skills.physics import BulletTrialPhysics
-from ltamp_cli.backends.pybullet.world import PhysicsWorld
+from ltamp_cli.backends.pybullet.world import PhysicsWorld, skill_world_config
 from ltamp_cli.backends.skills3d.physics import (
     IDENTITY_QUAT,
     BeadSet,
@@ -97,11 +97,14 @@ def world() -> PhysicsWorld:
     ],
 )
 def test_a_skill_uses_only_the_interface_and_matches_the_backend(
-    world: PhysicsWorld, skill: str, context: np.ndarray, control: np.ndarray,
+    skill: str, context: np.ndarray, control: np.ndarray,
     roles: list[tuple[str, str]], filled: list[str],
 ) -> None:
-    recording = RecordingPhysics(BulletTrialPhysics(world))
-    result = run_skill_trial(recording, skill, context, control, seed=3)
+    # The backend runs each skill in a world of the skill's settings (the push's contact
+    # breaking threshold is 2 cm, the pour's 4 mm).
+    with PhysicsWorld(skill_world_config(skill)) as skill_world:
+        recording = RecordingPhysics(BulletTrialPhysics(skill_world))
+        result = run_skill_trial(recording, skill, context, control, seed=3)
     backend = load_backend("pybullet")
     try:
         expected = backend.run_trial(skill, context, control, 3)

@@ -1,7 +1,10 @@
 """The Kitchen3D :class:`~ltamp_cli.backends.protocol.SkillBackend` (PyBullet).
 
-One backend owns one :class:`~.world.PhysicsWorld` (its own headless client), created on
-first use and reset, not recreated, for every trial.
+One backend owns one :class:`~.world.PhysicsWorld` (its own headless client) per world
+setting its skills use: each skill's world takes its contact breaking threshold from
+:data:`~.world.SKILL_CONTACT_BREAKING_M` (push 2 cm, the bead skills 4 mm), so the push and
+the bead skills run in two worlds. A world is created on first use and reset, not recreated,
+for every trial of a skill with its setting.
 """
 
 from __future__ import annotations
@@ -22,7 +25,7 @@ from ltamp_cli.backends.pybullet.skills.robot import (
     RobotSettings,
     RobotTrialPhysics,
 )
-from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig
+from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig, skill_world_config
 from ltamp_cli.backends.sanity import run_guarded
 from ltamp_cli.backends.skills3d.common import PathCheck
 from ltamp_cli.backends.skills3d.physics import StepCallback
@@ -139,7 +142,9 @@ class Kitchen3DBackend:
     fingertip pad or the stirrer and follows the path by IK and joint position control at
     the skill's timing; reach, arm collisions and slip fail the trial, see
     :mod:`.skills.robot`; ``robot_settings`` tunes it). The robot is part of the trial
-    records' identity: :attr:`name` is ``pybullet+panda`` then.
+    records' identity: :attr:`name` is ``pybullet+panda`` then. ``contact_breaking_m``
+    replaces some skills' contact breaking thresholds (metres, e.g. ``{"push": 0.004}``; a
+    what-if for benchmarks, the shipped ones are :data:`~.world.SKILL_CONTACT_BREAKING_M`).
     """
 
     name = "pybullet"
@@ -154,25 +159,44 @@ class Kitchen3DBackend:
         stir_settings: StirSettings | None = None,
         robot: str = "none",
         robot_settings: RobotSettings | None = None,
+        contact_breaking_m: Mapping[str, float] | None = None,
     ) -> None:
         if robot not in ROBOTS:
             raise ValueError(f"robot must be one of {', '.join(ROBOTS)}, got {robot!r}")
         self.robot = robot
         self.robot_settings = robot_settings or RobotSettings()
         self.name = backend_tag(robot)
+        #: The settings every skill's world shares (each skill's world then takes its own
+        #: contact breaking threshold, :meth:`world_config`).
         self.config = WorldConfig(gui=bool(gui), solver_iterations=int(solver_iterations))
+        unknown = set(contact_breaking_m or {}) - set(_SPECS)
+        if unknown:
+            raise ValueError(f"contact_breaking_m: unknown skills {sorted(unknown)} "
+                             f"(known: {KNOWN_SKILLS})")
+        self.contact_breaking_m: Mapping[str, float] = MappingProxyType(
+            {skill: float(m) for skill, m in (contact_breaking_m or {}).items()})
+        for skill in self.contact_breaking_m:
+            self.world_config(skill)  # a bad threshold fails here, not in the first trial
         self.pour_settings = pour_settings or PourSettings()
         self.scoop_settings = scoop_settings or ScoopSettings()
         self.push_settings = push_settings or PushSettings()
         self.stir_settings = stir_settings or StirSettings()
-        self._world: PhysicsWorld | None = None
+        self._worlds: dict[WorldConfig, PhysicsWorld] = {}
 
-    @property
-    def world(self) -> PhysicsWorld:
-        """The backend's physics world (connected lazily, reused across trials)."""
-        if self._world is None:
-            self._world = PhysicsWorld(self.config)
-        return self._world
+    def world_config(self, skill: str) -> WorldConfig:
+        """The world settings of ``skill``'s trials: :attr:`config` with the skill's
+        contact breaking threshold."""
+        self._spec(skill)
+        return skill_world_config(skill, self.config, self.contact_breaking_m)
+
+    def world_for(self, skill: str) -> PhysicsWorld:
+        """The physics world of ``skill``'s trials (connected lazily, reused across trials;
+        skills with equal settings share it). Worlds of different thresholds cannot leak
+        into each other: :meth:`PhysicsWorld.step` sets its own before stepping."""
+        config = self.world_config(skill)
+        if config not in self._worlds:
+            self._worlds[config] = PhysicsWorld(config)
+        return self._worlds[config]
 
     def skills(self) -> Mapping[str, SkillSpec]:
         return _SPECS
@@ -217,7 +241,7 @@ class Kitchen3DBackend:
     ) -> tuple[TrialResult, list[np.ndarray]]:
         """Like :meth:`run_trial`, also returning RGB frames ``(240, 320, 3)`` uint8 taken
         every ``every`` steps (TinyRenderer; for ``--render out.gif``)."""
-        recorder = FrameRecorder(self.world.client, every, camera)
+        recorder = FrameRecorder(self.world_for(skill).client, every, camera)
         result = self._run(skill, context, control, seed, recorder)
         return result, recorder.frames
 
@@ -237,7 +261,8 @@ class Kitchen3DBackend:
         context, control, rejected = precheck_trial(self._spec(skill), context, control)
         if rejected is not None:
             return rejected
-        physics = self._physics(skill, context, control, int(seed))
+        world = self.world_for(skill)
+        physics = self._physics(world, skill, context, control, int(seed))
         settings = self.settings_for(skill)
         failure_score = self._spec(skill).invalid_score
 
@@ -249,22 +274,21 @@ class Kitchen3DBackend:
                 return failure.result(failure_score)
 
         # A diverged simulation (NaN, bodies flung away) makes an invalid trial.
-        return run_guarded(bullet_guard(self.world.client), trial, on_step, failure_score)
+        return run_guarded(bullet_guard(world.client), trial, on_step, failure_score)
 
-    def _physics(self, skill: str, context: np.ndarray, control: np.ndarray, seed: int
-                 ) -> BulletTrialPhysics:
+    def _physics(self, world: PhysicsWorld, skill: str, context: np.ndarray,
+                 control: np.ndarray, seed: int) -> BulletTrialPhysics:
         """Free-floating tools, or the Panda carrying the tool along the skill's path."""
         if self.robot == "none":
-            return BulletTrialPhysics(self.world)
+            return BulletTrialPhysics(world)
         if skill not in ROBOT_SKILLS:
             raise ValueError(f"robot {self.robot!r} runs {', '.join(ROBOT_SKILLS)} trials only, "
                              f"not {skill}")
         preview = _PREVIEWS[skill](context, control)
         bearings, anchor = SKILL_BEARINGS[skill]
-        return RobotTrialPhysics(self.world, preview, self.robot_settings, seed, bearings,
-                                 anchor)
+        return RobotTrialPhysics(world, preview, self.robot_settings, seed, bearings, anchor)
 
     def close(self) -> None:
-        if self._world is not None:
-            self._world.close()
-            self._world = None
+        for world in self._worlds.values():
+            world.close()
+        self._worlds.clear()

@@ -3,34 +3,96 @@
 Every :class:`PhysicsWorld` connects its own client (``p.DIRECT`` by default) and passes
 its ``client`` id to every PyBullet call, so several worlds coexist in one process and
 nothing ever touches PyBullet's implicit default client.
+
+One setting is *not* per client: Bullet's contact breaking threshold is a C++ global
+(``gContactBreakingThreshold``) that ``setPhysicsEngineParameter(contactBreakingThreshold=...)``
+overwrites for every client of the process, whatever ``physicsClientId`` it is given (checked
+with pybullet 3.2.7: a 2 cm world stepped after a 4 mm world was connected followed the 4 mm
+world's contacts exactly). Manifolds take the value current when they are created, and the
+broadphase box margins the value current at each step, so :meth:`PhysicsWorld.step` sets its
+own threshold before stepping: worlds with different thresholds can then alternate in one
+process without either seeing the other's.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from types import TracebackType
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from types import MappingProxyType, TracebackType
 
 import pybullet as p
 
 GRAVITY_M_S2 = 9.81
-#: Bumped whenever a change to this engine's physics settings can change a trial's outcome;
-#: benchmark caches key their trials by it (``bench/fidelity.py``).
+#: Bumped whenever a change to this engine's physics settings can change the outcome of every
+#: skill's trials; benchmark caches key their trials by :func:`physics_version`
+#: (``bench/fidelity.py``), which adds a per-skill revision.
 PHYSICS_VERSION = 1
+#: Per-skill revisions on top of :data:`PHYSICS_VERSION`, bumped when a change touches one
+#: skill's world only (so the other skills' cached trials stay valid). ``push`` 1: its world's
+#: 2 cm contact breaking threshold (issue #20, :data:`SKILL_CONTACT_BREAKING_M`).
+SKILL_PHYSICS_REVISIONS: Mapping[str, int] = MappingProxyType({"push": 1})
+
+#: Contact breaking threshold (m) of the bead worlds: Bullet's default (2 cm) keeps a
+#: manifold for every bead within 2 cm of a 6 mm bead; 4 mm makes bead piles 2-4x faster with
+#: the same settled heap.
+BEAD_CONTACT_BREAKING_M = 0.004
+#: Bullet's own default contact breaking threshold (m), used by the push world.
+BULLET_DEFAULT_CONTACT_BREAKING_M = 0.02
+
+#: Contact breaking threshold (m) of each Kitchen3D skill's world.
+#:
+#: Pour, scoop and stir simulate bead piles and keep :data:`BEAD_CONTACT_BREAKING_M`. The push
+#: (a fingertip pad sliding a block, no beads) uses Bullet's default 2 cm (issue #20): with
+#: 4 mm each step leaves a single pad-on-block contact point, a different corner of the pad
+#: face each step, so an off-centre push twists the block at random and its label is chaotic:
+#: on the 200 inputs of ``bench/fidelity.py``'s ``3d-push-engine`` row it survived 0.1-0.2 mm
+#: sideways pad shifts on 182/200 (SAPIEN 200/200), and PyBullet 5 vs 50 solver iterations
+#: agreed on 0.935. With 2 cm the pad keeps 2-3 contact points on the block; the label
+#: survives the shifts on 195/200 and PyBullet vs SAPIEN agree on 191/200 = 0.955 (was 0.940);
+#: 9 of the 200 PyBullet push labels change (``bench/push_sensitivity.py``,
+#: ``docs/results/fidelity/push_sensitivity*.json``, ``models/README.md``). A push trial costs
+#: about the same either way (it has no bead piles).
+SKILL_CONTACT_BREAKING_M: Mapping[str, float] = MappingProxyType({
+    "pour": BEAD_CONTACT_BREAKING_M,
+    "scoop": BEAD_CONTACT_BREAKING_M,
+    "stir": BEAD_CONTACT_BREAKING_M,
+    "push": BULLET_DEFAULT_CONTACT_BREAKING_M,
+})
+
+
+def physics_version(skill: str) -> str:
+    """The physics version of ``skill``'s PyBullet trials, as cache keys carry it:
+    ``"<PHYSICS_VERSION>"``, or ``"<PHYSICS_VERSION>.<revision>"`` for a skill with a
+    revision in :data:`SKILL_PHYSICS_REVISIONS` (push: ``"1.1"``; pour, scoop, stir: ``"1"``,
+    as before the push's own revision, so their cached trials stay valid)."""
+    revision = SKILL_PHYSICS_REVISIONS.get(skill, 0)
+    return f"{PHYSICS_VERSION}" if revision == 0 else f"{PHYSICS_VERSION}.{revision}"
 
 
 @dataclass(frozen=True)
 class WorldConfig:
     """Simulation settings: ``time_step`` in seconds, solver iterations per step and the
-    contact breaking threshold in metres.
-
-    Bullet's default threshold (2 cm) keeps manifolds with every bead within 2 cm of a
-    6 mm bead; 4 mm makes bead piles 2-4x faster with the same settled heap.
+    contact breaking threshold in metres (default :data:`BEAD_CONTACT_BREAKING_M`; a skill's
+    world takes its own from :func:`skill_world_config`).
     """
 
     time_step: float = 1.0 / 240.0
     solver_iterations: int = 5
-    contact_breaking_threshold: float = 0.004
+    contact_breaking_threshold: float = BEAD_CONTACT_BREAKING_M
     gui: bool = False
+
+
+def skill_world_config(skill: str, base: WorldConfig | None = None,
+                       contact_breaking_m: Mapping[str, float] | None = None) -> WorldConfig:
+    """``base`` (default :class:`WorldConfig`) with ``skill``'s contact breaking threshold:
+    ``contact_breaking_m[skill]`` when given there (metres; a what-if for benchmarks), else
+    :data:`SKILL_CONTACT_BREAKING_M`. Raises ``KeyError`` for an unknown skill."""
+    overrides = contact_breaking_m or {}
+    threshold = overrides.get(skill, SKILL_CONTACT_BREAKING_M[skill])
+    if not 0.0 < threshold <= 0.1:
+        raise ValueError(f"contact breaking threshold of {skill!r} must be in (0, 0.1] m, "
+                         f"got {threshold}")
+    return replace(base or WorldConfig(), contact_breaking_threshold=float(threshold))
 
 
 class PhysicsWorld:
@@ -61,6 +123,13 @@ class PhysicsWorld:
         p.changeDynamics(self.table, -1, lateralFriction=0.6, physicsClientId=self.client)
 
     def step(self, n: int = 1) -> None:
+        """``n`` simulation steps, after setting this world's contact breaking threshold
+        (process-global in Bullet, see the module docstring: another world may have set its
+        own since this world's last step)."""
+        p.setPhysicsEngineParameter(
+            contactBreakingThreshold=self.config.contact_breaking_threshold,
+            physicsClientId=self.client,
+        )
         for _ in range(n):
             p.stepSimulation(physicsClientId=self.client)
 
