@@ -10,7 +10,12 @@ from scipy.spatial.transform import Rotation
 
 pytest.importorskip("sapien")
 
-from ltamp_cli.backends.kitchenware_geometry import VesselDims, vessel_geometry
+from ltamp_cli.backends.kitchenware_geometry import (
+    SpoonDims,
+    VesselDims,
+    spoon_geometry,
+    vessel_geometry,
+)
 from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial
 from ltamp_cli.backends.pybullet.particles import BeadSpec
 from ltamp_cli.backends.sapien.bodies import (
@@ -174,3 +179,31 @@ def test_emulated_rolling_resistance_stops_a_rolling_bead_like_bullet() -> None:
     # Viscous, not Coulomb: it brakes a fast bead harder than Bullet (1.6 cm vs 5.4 cm).
     assert bullet_x / 5.0 < rolled[0.05] < bullet_x * 2.0
     assert rolled[None] > 4.0 * bullet_x
+
+
+def _bead_rest_height_in_spoon(world: SapienWorld, body_type: str) -> tuple[float, float]:
+    """A bead dropped on the floor of an upright spoon's head at 5 cm: its resting centre
+    height above the head's floor surface and the bead radius (m)."""
+    spoon = create_kitchenware(world, spoon_geometry(SpoonDims(0.2)), (0.0, 0.0, 0.05),
+                               material=BodyMaterial(mass=0.05), body_type=body_type)
+    spec = BeadSpec(count=1, radius=0.006, restitution=0.0)
+    head = spoon.geometry.vessel
+    assert head is not None
+    beads = spawn_beads(world, spec, np.array([[0.0, 0.0, 0.05 + head.thickness + 0.01]]))
+    world.step(world.steps_for(1.0))
+    return float(beads.positions()[0, 2]) - (0.05 + head.thickness), spec.radius
+
+
+def test_beads_rest_sunk_in_a_kinematic_spoon_only() -> None:
+    sunk = SapienWorldConfig().spoon_rest_offset
+    assert -0.004 < sunk < -0.001  # PyBullet's measured sinking: about 2 mm
+    height, radius = _bead_rest_height_in_spoon(SapienWorld(), "kinematic")
+    assert height == pytest.approx(radius + sunk, abs=3e-4)
+    # A static spoon (not a tool) and a spoon with the offset switched off: exact surfaces.
+    height, radius = _bead_rest_height_in_spoon(SapienWorld(), "static")
+    assert height == pytest.approx(radius, abs=3e-4)
+    flush = SapienWorld(SapienWorldConfig(spoon_rest_offset=0.0))
+    height, radius = _bead_rest_height_in_spoon(flush, "kinematic")
+    assert height == pytest.approx(radius, abs=3e-4)
+    with pytest.raises(ValueError, match="spoon_rest_offset"):
+        SapienWorldConfig(spoon_rest_offset=0.001)

@@ -152,13 +152,17 @@ def create_kitchenware(
             raise ValueError("a dynamic body needs a positive mass")
         density = material.mass / geometry.volume()
     scale = np.ones(3, dtype=np.float32)
+    # Beads rest slightly inside a spoon held as a tool, as in PyBullet (see
+    # SapienWorldConfig.spoon_rest_offset); every other body's surface is exact.
+    rest_offset = (config.spoon_rest_offset
+                   if geometry.kind == "spoon" and body_type == "kinematic" else 0.0)
     for piece in geometry.pieces:
         shape = physx.PhysxCollisionShapeConvexMesh(
             np.asarray(piece, dtype=np.float32), scale, physical
         )
         shape.density = density
         shape.contact_offset = config.contact_offset
-        shape.rest_offset = 0.0
+        shape.rest_offset = rest_offset
         component.attach(shape)
     if isinstance(component, physx.PhysxRigidDynamicComponent):
         component.kinematic = body_type == "kinematic"
