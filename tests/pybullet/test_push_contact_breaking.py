@@ -124,3 +124,17 @@ def test_worlds_of_different_thresholds_alternate_without_leaking() -> None:
     finally:
         push.close()
         beads.close()
+
+
+def test_a_world_steps_with_a_temporary_threshold_and_restores_its_own() -> None:
+    from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig
+
+    world = PhysicsWorld(WorldConfig(contact_breaking_threshold=0.004))
+    try:
+        with world.contact_breaking(0.02):
+            assert world.contact_breaking_m == 0.02
+        assert world.contact_breaking_m == 0.004
+        world.reset()
+        assert world.contact_breaking_m == 0.004
+    finally:
+        world.close()

@@ -16,7 +16,8 @@ process without either seeing the other's.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from types import MappingProxyType, TracebackType
 
@@ -100,6 +101,8 @@ class PhysicsWorld:
 
     def __init__(self, config: WorldConfig | None = None) -> None:
         self.config = config or WorldConfig()
+        #: The threshold (m) :meth:`step` sets; :meth:`contact_breaking` changes it for a while.
+        self.contact_breaking_m = self.config.contact_breaking_threshold
         self.client = p.connect(p.GUI if self.config.gui else p.DIRECT)
         if self.client < 0:
             raise RuntimeError("could not connect to a PyBullet physics server")
@@ -115,7 +118,7 @@ class PhysicsWorld:
             fixedTimeStep=self.config.time_step,
             numSolverIterations=self.config.solver_iterations,
             deterministicOverlappingPairs=1,
-            contactBreakingThreshold=self.config.contact_breaking_threshold,
+            contactBreakingThreshold=self.contact_breaking_m,
             physicsClientId=self.client,
         )
         plane = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=self.client)
@@ -127,11 +130,21 @@ class PhysicsWorld:
         (process-global in Bullet, see the module docstring: another world may have set its
         own since this world's last step)."""
         p.setPhysicsEngineParameter(
-            contactBreakingThreshold=self.config.contact_breaking_threshold,
+            contactBreakingThreshold=self.contact_breaking_m,
             physicsClientId=self.client,
         )
         for _ in range(n):
             p.stepSimulation(physicsClientId=self.client)
+
+    @contextmanager
+    def contact_breaking(self, threshold_m: float) -> Iterator[None]:
+        """Step with contact breaking threshold ``threshold_m`` (m) inside the block, e.g. for
+        one action of a plan whose world otherwise keeps the bead piles' threshold."""
+        previous, self.contact_breaking_m = self.contact_breaking_m, float(threshold_m)
+        try:
+            yield
+        finally:
+            self.contact_breaking_m = previous
 
     def steps_for(self, seconds: float) -> int:
         """Number of simulation steps covering ``seconds`` of simulated time."""

@@ -14,7 +14,8 @@ in ``(x, y, z, w)`` order; SAPIEN's :class:`sapien.Pose` stores ``(w, x, y, z)``
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from types import TracebackType
 from typing import Any
@@ -189,6 +190,13 @@ class SapienWorld:
         scene = self.scene
         for _ in range(n):
             scene.step()
+
+    @contextmanager
+    def contact_breaking(self, threshold_m: float) -> Iterator[None]:
+        """The PyBullet world's per-action contact breaking threshold; a no-op here: PhysX
+        keeps patch contacts (4 points pad-on-block and block-on-table) whatever it is."""
+        del threshold_m
+        yield
 
     def steps_for(self, seconds: float) -> int:
         """Number of simulation steps covering ``seconds`` of simulated time."""
