@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -124,6 +125,44 @@ def certified_facts(instance: StreamInstance, outputs: tuple[str, ...]) -> list[
     return []
 
 
+def recursive_streams(externals: Iterable[External]) -> frozenset[str]:
+    """Names of the generators that lie on a cycle of the stream graph: an edge goes from
+    an external to every external whose ``:domain`` mentions a predicate it certifies (for
+    a generator, about one of its outputs), so a cycle is a way for a stream's outputs to
+    reach its own inputs, through other streams or not (successor-state samplers: a mode,
+    a lock state, a configuration sampled near another). Such a stream can make
+    arbitrarily long chains of new objects."""
+    produces: dict[str, set[str]] = {}
+    consumes: dict[str, set[str]] = {}
+    for external in externals:
+        if isinstance(external, Stream):
+            made = set(external.outputs)
+            produces[external.name] = {atom.predicate for atom in external.certified
+                                       if not made or made & set(atom.args)}
+        elif isinstance(external, ExternalPredicate):
+            produces[external.name] = {external.head.predicate}
+        else:
+            produces[external.name] = set()
+        consumes[external.name] = {atom.predicate for atom in external_domain(external)}
+    successors = {name: [other for other in consumes if produced & consumes[other]]
+                  for name, produced in produces.items()}
+    found: set[str] = set()
+    for external in externals:
+        if not isinstance(external, Stream) or external.is_test:
+            continue
+        stack = list(successors[external.name])
+        seen: set[str] = set()
+        while stack:
+            name = stack.pop()
+            if name == external.name:
+                found.add(name)
+                break
+            if name not in seen:
+                seen.add(name)
+                stack.extend(successors[name])
+    return frozenset(found)
+
+
 @dataclass
 class PlannerState:
     """Facts known to be true (from the problem or certified by streams) and objects."""
@@ -141,6 +180,7 @@ class PlannerState:
     stream_stats: dict[str, StreamStats] = field(default_factory=dict)
     start_time: float = field(default_factory=time.perf_counter)
     search_time: float = 0.0
+    search_cpu: float = 0.0  # CPU seconds of this thread in searches
     grounding_time: float = 0.0  # of the searches' tasks (part of search_time)
     sampling_time: float = 0.0
     # The stream call in progress and whether the caller abandoned this solve (see
@@ -154,6 +194,18 @@ class PlannerState:
     # A context is (fluent predicates, the facts of them that held): it holds in a state
     # whose facts of those predicates are exactly these.
     fluent_requirements: dict[Fact, list[Context]] = field(default_factory=dict)
+    # Complexity level of objects made by stream calls (absent: 0), as PDDLStream's result
+    # complexity, but only where outputs can feed their own stream again
+    # (:attr:`recursive`): an output of a call of such a stream is at the highest level of
+    # the call's inputs plus the number of calls its instance made, this one included;
+    # other streams' outputs are at their inputs' highest level. Optimistic instances over
+    # an object start at its level (:func:`.optimistic.optimistic_evaluation`), so that
+    # each complexity bound admits finitely many optimistic plans: with every sampled state
+    # at level 0, each new sample of a successor-state stream opened one more short
+    # optimistic plan ending in it (found at the same bound, so the bound never grew and
+    # the longer plans the problem needs stayed out of reach: PDDLStream's rmmp, where every
+    # sampled placement mode gave a two-switch plan whose goal test fails).
+    object_level: dict[str, int] = field(default_factory=dict)
     # (:fluents stream, inputs) -> the contexts in which a call of it failed.
     failed_contexts: dict[tuple[str, tuple[str, ...]], list[Context]] = field(
         default_factory=dict)
@@ -172,6 +224,16 @@ class PlannerState:
     # Whether a stream certified facts it does not declare (wild outputs): optimistic
     # plans cannot anticipate those, so their failure proves nothing.
     saw_wild_facts: bool = False
+
+    @functools.cached_property
+    def recursive(self) -> frozenset[str]:
+        """The generators whose outputs can feed their own inputs again (see
+        :func:`recursive_streams`)."""
+        return recursive_streams(self.externals.values())
+
+    def max_object_level(self) -> int:
+        """The highest complexity level of a real object (:attr:`object_level`)."""
+        return max(self.object_level.values(), default=0)
 
     def open_real_bindings(self, external: External) -> list[tuple[str, ...]]:
         """The input tuples of ``external`` whose domain facts are real (kept up to date
@@ -287,9 +349,15 @@ class PlannerState:
                     self.add_fact(fact, result)
             return outputs
         exogenous = self.exogenous_context(instance)
+        level = max([self.object_level.get(x, 0) for x in instance.inputs], default=0)
+        if instance.name in self.recursive:
+            level += instance.num_calls  # this call's index + 1
         for output in outputs:
             for name in output:
                 self.object_types.setdefault(name, OBJECT_TYPE)
+                if name not in self.problem.objects and level < self.object_level.get(
+                        name, level + 1):
+                    self.object_level[name] = level
             facts = certified_facts(instance, output)
             result = StreamResult(instance.name, instance.inputs, output, tuple(facts))
             for fact in facts:
@@ -340,6 +408,7 @@ class PlannerState:
         budget keeps them complete. ``guess``: a candidate plan checked before searching
         (see :func:`.plan_discrete`, also for ``skip_if_grounded_as``)."""
         start = time.perf_counter()
+        cpu_start = time.thread_time()
         self.searches += 1
         if budgeted:
             max_expansions = self.search_budget
@@ -351,10 +420,16 @@ class PlannerState:
                 context_blocks, guess, skip_if_grounded_as)
         finally:
             self.search_time += time.perf_counter() - start
+            self.search_cpu += time.thread_time() - cpu_start
         self.grounding_time += result.ground_time_s
         if budgeted and result.capped and not result.skipped:
             self.search_budget *= 2
         return result
+
+    def sampling_cpu(self) -> float:
+        """CPU seconds of the stream calls so far (estimated per stream from a sample of
+        timed calls, :class:`~ltamp_cli.planner.streams.StreamStats`)."""
+        return sum(stats.cpu_s for stats in self.stream_stats.values())
 
     def remember_skeleton(self, actions: list[str]) -> None:
         """Keep the last optimistic plans, to explain a failure."""

@@ -149,7 +149,8 @@ def solve_focused(state: PlannerState) -> PlanResult:
             # ran out of budget is not searched again while the complexity can still grow
             # (kitchen_symbolic seeds 6 and 11: 600, 1,200 and 2,400 expansions of the same
             # task, 2 s of a 3 s solve).
-            skip = capped_task if complexity < state.config.max_complexity else None
+            skip = (capped_task if complexity < state.config.max_complexity
+                    + state.max_object_level() else None)
             discrete = state.search(evaluation.index.members, evaluation.object_types,
                                     evaluation.function_values,
                                     context_blocks=evaluation.context_blocks, budgeted=True,
@@ -166,7 +167,8 @@ def solve_focused(state: PlannerState) -> PlanResult:
                     instance.disabled = False
                 if evaluation.cut or not disabled:
                     complexity += 1
-                if complexity > state.config.max_complexity and not discrete.capped:
+                if (complexity > state.config.max_complexity + state.max_object_level()
+                        and not discrete.capped):
                     return state.result(INFEASIBLE, None)
                 continue
             facts, terms = plan_preimage(discrete)

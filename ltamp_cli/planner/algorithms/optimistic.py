@@ -184,6 +184,7 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
                                       dict(state.object_types))
     done: set[InstanceKey] = set()
     levels = evaluation.level
+    real_levels = state.object_level
     # Semi-naive fixpoint: the first round takes the inputs over real facts (enumerated
     # incrementally across evaluations), each later round only joins the facts the previous
     # round added. An instance cut by the bound stays cut (its level depends only on its
@@ -209,8 +210,10 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
                     continue
                 done.add(key)
                 # Summed input complexity: values built from several placeholders cost more,
-                # so low bounds favour plans over real values.
-                level = sum([levels.get(x, 0) for x in inputs])
+                # so low bounds favour plans over real values. Real inputs count with the
+                # highest of their levels (PlannerState.object_level, PDDLStream's max).
+                level = (sum([levels.get(x, 0) for x in inputs])
+                         + max([real_levels.get(x, 0) for x in inputs], default=0))
                 real = state.instances.get(key)
                 if real is not None:
                     if real.disabled or (real.exhausted and not _pending_test(real)):

@@ -17,7 +17,10 @@ cheap generator of the later one for its next value at once (local repair, see
   then searches again if sampling taught it new facts and a binding step failed. Such a
   speculative search is bounded and changes no bound; a full search that finds nothing new
   raises the retry and complexity bounds. Bindings whose next stream is cheap may be retried
-  more often (plain samplers need several samples where a search costs far more).
+  more often (plain samplers need several samples where a search costs far more). When a
+  full search's share is its floor of one step and searches have found two skeletons or
+  more, the bindings within the retry bound are processed first, as ``binding`` does,
+  while the streams' CPU time stays below the searches' (see :data:`SEARCH_SAMPLE_RATIO`).
 """
 
 from __future__ import annotations
@@ -69,6 +72,24 @@ STEPS_PER_EVALUATION = 0.1
 # tamp2d_uniform_tight_8 0.18 -> 0.21 s (1.0: 0.35 s).
 CHEAP_STEP_COST = 0.25
 CHEAP_RETRY_FACTOR = 10
+# Adaptive: after a full search (one that may raise the bounds) whose share above is its
+# floor of one step, once searches have found two skeletons or more, the bindings within
+# the retry bound are processed as ``binding`` processes them (PDDLStream's
+# process_complexity) while the stream calls' CPU time stays below this times the searches'
+# CPU time (both totals since the start, PDDLStream's ``search_sample_ratio``, default 1),
+# then the share. At its floor the share says nothing: a search that follows the head
+# binding's guess or expands a handful of states evaluates almost nothing, however costly
+# its grounding. With successor-state samplers each step sampled one state that opened one
+# more short optimistic plan, so every search found a new skeleton and the bounds never
+# grew (PDDLStream's rmmp: timeouts, its shares were 0-1 step; own lock problem,
+# tests/pddlstream/test_sampled_levels.py: 5 of seeds 0-7 timed out at 10 s). Measured
+# variants: every binding within the bound, no CPU ratio: Kitchen3D pour_blocked seed 0
+# called its learned pour 11 times instead of 7 (18.0 vs 13.6 s CPU); only streams observed
+# cheap (< 0.25 ms a call): rmmp lost again; also after the first skeleton:
+# tamp2d_uniform_blocked_8 seed 1 sampled poses a fixed obstacle rejects (10 poses and 7
+# searches instead of 3 and 5); also when the share is larger: kitchen_fluent (shares of
+# 15-17 steps) made one more search on seeds 1 and 2 (11 vs 10, 9 vs 8).
+SEARCH_SAMPLE_RATIO = 1.0
 # Expansion bound of a speculative search (see solve_with_skeletons): this many times the
 # most a solved optimistic search needed so far, at least SPECULATIVE_MIN_EXPANSIONS.
 SPECULATIVE_FACTOR = 4
@@ -305,7 +326,8 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                 # not searched again (kitchen_symbolic seed 6: three searches of the same
                 # real task with 600, 1,200 and 2,400 expansions while the complexity
                 # grew): the complexity grows until it changes, up to the bound.
-                skip = capped_task if complexity < state.config.max_complexity else None
+                skip = (capped_task if complexity < state.config.max_complexity
+                        + state.max_object_level() else None)
                 limit = (min(state.search_budget, max(
                     SPECULATIVE_MIN_EXPANSIONS, SPECULATIVE_FACTOR * solved_expansions))
                     if speculative else None)
@@ -363,10 +385,14 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                         return state.result(INFEASIBLE, None)
                     retry_threshold += 1
                     complexity += 1
-                    if (complexity > state.config.max_complexity and not len(queue)
-                            and not discrete.capped):
+                    if (complexity > state.config.max_complexity + state.max_object_level()
+                            and not len(queue) and not discrete.capped):
                         return state.result(INFEASIBLE, None)
             steps = max(1, round(last_search_work * STEPS_PER_EVALUATION))
+            if adaptive and stalled and len(seen_skeletons) >= 2 and steps == 1:
+                result = _process_within_bound(state, queue, retry_threshold, sampling)
+                if result is not None:
+                    return result
             result = _process(state, queue, adaptive, steps, retry_threshold, sampling)
             if result is not None:
                 return result
@@ -416,6 +442,24 @@ class SamplingRound:
     failures: int = 0  # binding steps that failed (a test, an exhausted or empty stream)
 
 
+def _process_within_bound(state: PlannerState, queue: BindingQueue, retry_threshold: int,
+                          sampling: SamplingRound) -> PlanResult | None:
+    """Adaptive, after a full search: process bindings within the retry bound, as
+    ``binding`` does (PDDLStream's process_complexity), while the CPU time of all stream
+    calls so far is below :data:`SEARCH_SAMPLE_RATIO` times that of all searches so far
+    (PDDLStream's ``search_sample_ratio``)."""
+    while len(queue) and not state.timed_out():
+        head = queue.peek()
+        assert head is not None
+        if head.attempts > retry_threshold or (
+                state.sampling_cpu() >= SEARCH_SAMPLE_RATIO * state.search_cpu):
+            return None
+        result = _process_one(state, queue, queue.pop(), sampling)
+        if result is not None:
+            return result
+    return None
+
+
 def _process(state: PlannerState, queue: BindingQueue, adaptive: bool, steps: int,
              retry_threshold: int, sampling: SamplingRound) -> PlanResult | None:
     done = 0.0
@@ -428,20 +472,29 @@ def _process(state: PlannerState, queue: BindingQueue, adaptive: bool, steps: in
         done += CHEAP_STEP_COST if cheap else 1.0
         if head.attempts > retry_limit(state, head, retry_threshold, adaptive):
             return None
-        binding = queue.pop()
-        children = advance(state, binding)
-        if children is not None and (not children
-                                     or (len(children) == 1 and children[0] is binding)):
-            sampling.failures += 1  # a dead end, or nothing this call (a local repair and
-            # an ordinary output go on)
-        if children is None:
-            real = state.search(state.facts.members, state.object_types,
-                                state.function_values, REAL_SEARCH_EXPANSIONS,
-                                guess=bound_plan(binding.skeleton.steps, binding.mapping))
-            if real.solved:
-                facts, terms = plan_preimage(real)
-                return state.result(SOLVED, real, facts | terms)
-            continue
-        for child in children:
-            queue.push(child)
+        result = _process_one(state, queue, queue.pop(), sampling)
+        if result is not None:
+            return result
+    return None
+
+
+def _process_one(state: PlannerState, queue: BindingQueue, binding: Binding,
+                 sampling: SamplingRound) -> PlanResult | None:
+    """Advance ``binding`` one step and queue what follows; a complete binding's plan is
+    checked over the real facts (the result when it is a plan)."""
+    children = advance(state, binding)
+    if children is not None and (not children
+                                 or (len(children) == 1 and children[0] is binding)):
+        sampling.failures += 1  # a dead end, or nothing this call (a local repair and
+        # an ordinary output go on)
+    if children is None:
+        real = state.search(state.facts.members, state.object_types,
+                            state.function_values, REAL_SEARCH_EXPANSIONS,
+                            guess=bound_plan(binding.skeleton.steps, binding.mapping))
+        if real.solved:
+            facts, terms = plan_preimage(real)
+            return state.result(SOLVED, real, facts | terms)
+        return None
+    for child in children:
+        queue.push(child)
     return None
