@@ -5,6 +5,9 @@ from __future__ import annotations
 import textwrap
 from pathlib import Path
 
+import pytest
+
+from ltamp_cli.errors import InputError
 from ltamp_cli.planner.pddl.check import check_domain, check_problem, check_streams
 from ltamp_cli.planner.pddl.parse import parse_domain, parse_problem, parse_stream_file
 from ltamp_cli.planner.pddl.syntax import (
@@ -200,3 +203,18 @@ def test_locations_point_at_source() -> None:
     first = move.precondition.parts[0]  # type: ignore[union-attr]
     assert (first.location.path, first.location.line, first.location.column) == (
         "full.pddl", 13, 24)
+
+
+def test_a_derived_head_of_another_arity_than_its_declaration_is_refused_with_its_location():
+    # Found by the fuzzer: grounding crashed (IndexError) on facts of two lengths.
+    text = """(define (domain d)
+  (:predicates (In ?b ?r) (At ?b ?r))
+  (:derived (In ?b)
+    (exists (?r) (At ?b ?r))))
+"""
+    domain = parse_domain(text, "d.pddl")
+    with pytest.raises(InputError) as raised:
+        check_domain(domain)
+    message = str(raised.value)
+    assert "'in' takes 2 argument(s)" in message and "got 1" in message
+    assert "d.pddl:3:" in message

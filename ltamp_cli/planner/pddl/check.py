@@ -140,6 +140,13 @@ def check_domain(domain: Domain) -> None:
                     raise InputError(f"variable {arg} is not a parameter in {what}",
                                      term.location)
     for axiom in domain.axioms:
+        if axiom.head.arity != arities[axiom.head.name]:
+            # A head whose arity differs from the declaration (or from another axiom's head)
+            # would ground facts of two lengths under one predicate.
+            raise InputError(
+                f"derived predicate {axiom.head.name!r} takes {arities[axiom.head.name]} "
+                f"argument(s) where it is declared, got {axiom.head.arity} in its :derived head",
+                axiom.head.location)
         for atom in formula_atoms(axiom.body):
             # Free body variables of a derived predicate are implicitly existential.
             _check_atom(atom, arities, None, constants, f"derived predicate {axiom.head.name!r}")
