@@ -35,7 +35,7 @@ from ltamp_cli.planner.pddl.syntax import (
     TypedName,
 )
 from ltamp_cli.planner.problem import PlanningProblem
-from ltamp_cli.planner.streams import Binding, External, Stream, WildOutput
+from ltamp_cli.planner.streams import FINITE_ITERATORS, Binding, External, Stream, WildOutput
 from ltamp_cli.planner.streams import PartialInputs as PlannerPartialInputs
 from ltamp_cli.planner.streams import StreamInfo as PlannerStreamInfo
 
@@ -304,6 +304,10 @@ def _adapt(external: External, procedure: Callable[..., Any]) -> Callable[..., A
             produced = procedure(*inputs, **kwargs)
             if produced is None:
                 return iter(())
+            if type(produced) in FINITE_ITERATORS:
+                # ``from_fn`` / ``from_list_fn``: a list that the planner can see the end
+                # of, so that the instance is exhausted by its first call (a function).
+                return iter([_batch(batch) for batch in produced])
             return (_batch(batch) for batch in produced)
         return generate
 

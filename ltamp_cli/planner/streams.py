@@ -226,6 +226,10 @@ class StreamStats:
                 "time_s": round(self.time_s, 6)}
 
 
+# Iterators of Python sequences: their ``__length_hint__`` is exact.
+FINITE_ITERATORS = (type(iter([])), type(iter(())))
+
+
 class StreamInstance:
     """A stream applied to concrete input objects; called repeatedly for more outputs."""
 
@@ -244,6 +248,7 @@ class StreamInstance:
         # names), until the planner takes them (:meth:`take_wild_facts`).
         self.wild_facts: list[tuple[str, ...]] = []
         self._iterator: Iterator[Any] | None = None
+        self._function = False  # the binding returned a list's iterator (see _next)
         self.value: Any = None  # test / predicate truth or function value once evaluated
 
     @property
@@ -315,6 +320,7 @@ class StreamInstance:
             ):
                 self.exhausted = True
                 return self._outputs([produced], objects)
+            self._function = type(produced) in FINITE_ITERATORS
             self._iterator = iter(produced)
         try:
             item = next(self._iterator)
@@ -325,6 +331,13 @@ class StreamInstance:
             self._record_wild(item, objects)
             self.exhausted = self.exhausted or item.enumerated
             return self._outputs(list(item.values), objects)
+        # The iterator of a list knows it has nothing left (``ltamp_cli.pddlstream``'s
+        # ``from_fn``/``from_list_fn`` return one over one batch): the instance is a
+        # function, exhausted by its first call, as PDDLStream bounds them. A generator's
+        # length is unknown (it says so at its end); a list returned by a binding keeps
+        # the behaviour of before (one more call to find its end).
+        if self._function and not self._iterator.__length_hint__():  # type: ignore[attr-defined]
+            self.exhausted = True
         batch = item if isinstance(item, list) else [item]
         return self._outputs(batch, objects)
 

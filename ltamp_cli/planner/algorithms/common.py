@@ -132,6 +132,19 @@ def recursive_streams(externals: Iterable[External]) -> frozenset[str]:
     reach its own inputs, through other streams or not (successor-state samplers: a mode,
     a lock state, a configuration sampled near another). Such a stream can make
     arbitrarily long chains of new objects."""
+    return _stream_cycles(list(externals))[0]
+
+
+def feeding_streams(externals: Iterable[External]) -> frozenset[str]:
+    """Names of the generators not on a cycle of the stream graph (see
+    :func:`recursive_streams`) whose outputs reach the inputs of one that is: the poses,
+    kinematics and motions that PDDLStream's unfactored example feeds to its
+    state-successor functions."""
+    return _stream_cycles(list(externals))[1]
+
+
+def _stream_cycles(externals: list[External]) -> tuple[frozenset[str], frozenset[str]]:
+    """(generators on a cycle of the stream graph, other generators reaching one)."""
     produces: dict[str, set[str]] = {}
     consumes: dict[str, set[str]] = {}
     for external in externals:
@@ -147,6 +160,7 @@ def recursive_streams(externals: Iterable[External]) -> frozenset[str]:
     successors = {name: [other for other in consumes if produced & consumes[other]]
                   for name, produced in produces.items()}
     found: set[str] = set()
+    reaches: dict[str, set[str]] = {}
     for external in externals:
         if not isinstance(external, Stream) or external.is_test:
             continue
@@ -154,13 +168,15 @@ def recursive_streams(externals: Iterable[External]) -> frozenset[str]:
         seen: set[str] = set()
         while stack:
             name = stack.pop()
-            if name == external.name:
-                found.add(name)
-                break
             if name not in seen:
                 seen.add(name)
                 stack.extend(successors[name])
-    return frozenset(found)
+        reaches[external.name] = seen
+        if external.name in seen:
+            found.add(external.name)
+    feeding = {name for name, seen in reaches.items()
+               if name not in found and not seen.isdisjoint(found)}
+    return frozenset(found), frozenset(feeding)
 
 
 @dataclass
@@ -195,10 +211,12 @@ class PlannerState:
     # whose facts of those predicates are exactly these.
     fluent_requirements: dict[Fact, list[Context]] = field(default_factory=dict)
     # Complexity level of objects made by stream calls (absent: 0), as PDDLStream's result
-    # complexity, but only where outputs can feed their own stream again
-    # (:attr:`recursive`): an output of a call of such a stream is at the highest level of
-    # the call's inputs plus the number of calls its instance made, this one included;
-    # other streams' outputs are at their inputs' highest level. Optimistic instances over
+    # complexity, but only where outputs can feed their own stream again, or feed such a
+    # stream (:attr:`leveled`): an output of a call of such a stream is at the highest level
+    # of the call's inputs plus the number of calls its instance made, this one included;
+    # other streams' outputs are at their inputs' highest level. (Feeding streams too: in
+    # PDDLStream's unfactored example every new pose sample at level 0 opened one more
+    # one-step plan from the initial state, so the bound hardly grew.) Optimistic instances over
     # an object start at its level (:func:`.optimistic.optimistic_evaluation`), so that
     # each complexity bound admits finitely many optimistic plans: with every sampled state
     # at level 0, each new sample of a successor-state stream opened one more short
@@ -224,12 +242,23 @@ class PlannerState:
     # Whether a stream certified facts it does not declare (wild outputs): optimistic
     # plans cannot anticipate those, so their failure proves nothing.
     saw_wild_facts: bool = False
+    # Generators an instance of which was not exhausted by its first call (not functions).
+    multi_output: set[str] = field(default_factory=set)
+    # Stream name -> real input tuples enumerated for eager evaluation but not called yet
+    # (above the level bound, see :meth:`eager_within_level`).
+    deferred_eager: dict[str, list[tuple[str, ...]]] = field(default_factory=dict)
 
     @functools.cached_property
     def recursive(self) -> frozenset[str]:
         """The generators whose outputs can feed their own inputs again (see
         :func:`recursive_streams`)."""
         return recursive_streams(self.externals.values())
+
+    @functools.cached_property
+    def leveled(self) -> frozenset[str]:
+        """The generators whose calls raise their outputs' level (:attr:`object_level`):
+        those on a cycle, and those feeding one (:func:`feeding_streams`)."""
+        return self.recursive | feeding_streams(self.externals.values())
 
     def max_object_level(self) -> int:
         """The highest complexity level of a real object (:attr:`object_level`)."""
@@ -277,6 +306,26 @@ class PlannerState:
             return False
         if not self.config.eager_cheap_streams and not (
                 isinstance(external, Stream) and not external.outputs):
+            return False
+        return observed_cheap(self.history.get(name), self.stream_stats.get(name))
+
+    def eager_within_level(self, name: str) -> bool:
+        """Whether the skeleton algorithms call ``name`` eagerly on real inputs below their
+        complexity bound: a function (every instance called so far was exhausted by its
+        first call: ``from_fn``, ``from_list_fn``) observed to be cheap, on or feeding a
+        cycle of the stream graph (:attr:`leveled`), without ``:fluents``.
+
+        In a domain that plans over whole states (PDDLStream's unfactored example: a state
+        and a motion or a grasp to the successor state), an optimistic plan knows nothing
+        of a state's contents, so every transition from a real state looks applicable; left
+        optimistic, each one that the function then rejects (the robot is elsewhere, the
+        hand is empty) costs a search, and the real states grow by about one per search.
+        Called eagerly, the successors of the real states up to the bound are all known
+        after microseconds per call, as PDDLStream's incremental algorithm finds them level
+        by level; generators (samplers) stay optimistic."""
+        external = self.externals[name]
+        if (not isinstance(external, Stream) or external.is_test or external.fluents
+                or name not in self.leveled or name in self.multi_output):
             return False
         return observed_cheap(self.history.get(name), self.stream_stats.get(name))
 
@@ -336,6 +385,8 @@ class PlannerState:
             self.sampling_time += time.perf_counter() - start
         self.add_wild_facts(instance)
         external = instance.external
+        if not instance.exhausted and isinstance(external, Stream) and not external.is_test:
+            self.multi_output.add(instance.name)
         if isinstance(external, StreamFunction):
             mapping = dict(zip(external.head.args, instance.inputs, strict=True))
             key = (external.name, *(mapping[a] for a in external.head.args))
@@ -350,7 +401,7 @@ class PlannerState:
             return outputs
         exogenous = self.exogenous_context(instance)
         level = max([self.object_level.get(x, 0) for x in instance.inputs], default=0)
-        if instance.name in self.recursive:
+        if instance.name in self.leveled:
             level += instance.num_calls  # this call's index + 1
         for output in outputs:
             for name in output:

@@ -23,6 +23,7 @@ from ltamp_cli.planner.algorithms.optimistic import (
     repairable,
     report_unusable,
     sampled_inputs,
+    within_limit,
 )
 from ltamp_cli.planner.algorithms.preimage import plan_preimage
 from ltamp_cli.planner.pddl.syntax import StreamFunction
@@ -168,7 +169,7 @@ def solve_focused(state: PlannerState) -> PlanResult:
                 if evaluation.cut or not disabled:
                     complexity += 1
                 if (complexity > state.config.max_complexity + state.max_object_level()
-                        and not discrete.capped):
+                        and not discrete.capped and not within_limit(state, evaluation)):
                     return state.result(INFEASIBLE, None)
                 continue
             facts, terms = plan_preimage(discrete)

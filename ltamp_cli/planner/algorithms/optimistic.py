@@ -2,8 +2,9 @@
 
 Instances not yet (fully) called certify their facts with placeholder objects ``#name`` up to
 a complexity bound (complexity of an instance = summed complexity of its inputs + calls
-made); a plan over real and optimistic facts is then retraced to the *stream plan* of
-instances whose calls would make its optimistic facts real.
+made; the limit on it is checked by PDDLStream's rule, the highest, see
+:func:`instance_level`); a plan over real and optimistic facts is then retraced to the
+*stream plan* of instances whose calls would make its optimistic facts real.
 
 Shared placeholders (PDDLStream's shared optimistic objects, ``StreamInfo(opt_gen_fn=
 PartialInputs(...))``, see :func:`_share_group`): with an explicit policy, PDDLStream's
@@ -65,7 +66,7 @@ from ltamp_cli.planner.pddl.syntax import (
 from ltamp_cli.planner.search.clock import check_deadline
 from ltamp_cli.planner.search.ground import Context, CostBound, Fact, FactIndex
 from ltamp_cli.planner.search.solve import DiscreteResult
-from ltamp_cli.planner.streams import PartialInputs, StreamInstance
+from ltamp_cli.planner.streams import External, PartialInputs, StreamInstance
 
 InstanceKey = tuple[str, tuple[str, ...]]
 
@@ -165,6 +166,10 @@ class OptimisticEvaluation:
     function_values: dict[Fact, float]
     object_types: dict[str, str]
     level: dict[str, int] = field(default_factory=dict)  # optimistic object -> complexity
+    # ... by PDDLStream's rule (:func:`instance_level`), and the least of an instance left
+    # out by the bound, when measured (at the limit, see :func:`optimistic_evaluation`).
+    max_level: dict[str, int] = field(default_factory=dict)
+    least_cut: int | None = None
     fact_producer: dict[Fact, InstanceKey] = field(default_factory=dict)
     object_producer: dict[str, InstanceKey] = field(default_factory=dict)
     outputs: dict[InstanceKey, tuple[str, ...]] = field(default_factory=dict)
@@ -177,6 +182,11 @@ class OptimisticEvaluation:
 
 def optimistic_evaluation(state: PlannerState, complexity: int,
                           placeholders: Placeholders) -> OptimisticEvaluation:
+    """The real facts and the optimistic ones of the instances within ``complexity``
+    (summed input levels + calls). At or above the algorithms' limit (``max_complexity`` +
+    the highest real level), also ``least_cut``: the least complexity by PDDLStream's rule
+    (:func:`instance_level`) of an instance left out, so that an "infeasible" answer never
+    rests on the sum."""
     index = FactIndex()
     for fact in sorted(state.facts.members):  # a hash-independent order
         index.add(fact)
@@ -185,6 +195,7 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
     done: set[InstanceKey] = set()
     levels = evaluation.level
     real_levels = state.object_level
+    exact = complexity >= state.config.max_complexity + state.max_object_level()
     # Semi-naive fixpoint: the first round takes the inputs over real facts (enumerated
     # incrementally across evaluations), each later round only joins the facts the previous
     # round added. An instance cut by the bound stays cut (its level depends only on its
@@ -199,8 +210,10 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
             else:
                 # Bindings whose inputs alone exceed the bound are not even enumerated: an
                 # instance's level is at least its inputs' summed levels, so they would be
-                # cut (the join still tells whether one exists, for ``cut``).
-                bound = CostBound(levels, complexity)
+                # cut (the join still tells whether one exists, for ``cut``). At the limit,
+                # only those over it by PDDLStream's rule (see ``least_cut``).
+                bound = (CostBound(evaluation.max_level, complexity, highest=True) if exact
+                         else CostBound(levels, complexity))
                 candidates = list(state.bindings_of(external, index, since, bound))
                 if bound.exceeded:
                     evaluation.cut = True
@@ -214,15 +227,20 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
                 # highest of their levels (PlannerState.object_level, PDDLStream's max).
                 level = (sum([levels.get(x, 0) for x in inputs])
                          + max([real_levels.get(x, 0) for x in inputs], default=0))
+                highest = instance_level(inputs, evaluation.max_level, real_levels)
                 real = state.instances.get(key)
                 if real is not None:
                     if real.disabled or (real.exhausted and not _pending_test(real)):
                         continue
                     level += real.num_calls
+                    highest += real.num_calls
                 if level > complexity:
                     evaluation.cut = True
+                    if exact and (evaluation.least_cut is None
+                                  or highest < evaluation.least_cut):
+                        evaluation.least_cut = highest
                     continue
-                _add_optimistic(state, evaluation, key, level, placeholders)
+                _add_optimistic(state, evaluation, key, level, placeholders, highest)
         if index.sizes() == before:
             return evaluation
         since = before
@@ -256,12 +274,41 @@ def _share_group(key: InstanceKey, policy: PartialInputs | None,
     return (name, optimistic) if optimistic else None
 
 
+def instance_level(inputs: Iterable[str], levels: dict[str, int],
+                   real_levels: dict[str, int]) -> int:
+    """Complexity of an instance before its calls by PDDLStream's rule: the highest level
+    of its inputs (placeholders: ``levels``; real objects: ``real_levels``; absent: 0).
+
+    PDDLStream combines the complexities of an instance's domain facts with
+    ``COMPLEXITY_OP = max`` (``algorithms/common.py``; ``Instantiator.compute_complexity``
+    and the skeleton queue's ``compute_index_complexity`` too), then adds the calls made +
+    1 for a stream with outputs. The bound here admits instances by the summed levels of
+    their placeholder inputs instead, an order that favours plans over real values (with
+    the maximum, the adaptive searches of tests/planner/test_cheap_tests_eager.py's tight
+    placements went from 204 to 244 over 40 seeds, tamp2d_blocked's median plan cost from
+    62 to 96). But the sum counts a shared ancestor once per path to it (a value combining
+    two values of level k costs 2k + 1): under ``max_complexity`` (20) a plan six layers
+    deep was answered "infeasible" (tests/pddlstream/test_complexity_max.py). So the
+    limit is checked by this rule (``OptimisticEvaluation.least_cut``), and the bound
+    grows past it while an instance within the limit is still left out."""
+    return max([levels[x] if x in levels else real_levels.get(x, 0) for x in inputs],
+               default=0)
+
+
+def within_limit(state: PlannerState, evaluation: OptimisticEvaluation) -> bool:
+    """Whether ``evaluation`` left out an instance whose complexity by PDDLStream's rule is
+    within the algorithms' limit (``max_complexity`` + the highest real level): then the
+    bound must grow on rather than the answer be "infeasible"."""
+    limit = state.config.max_complexity + state.max_object_level()
+    return evaluation.least_cut is not None and evaluation.least_cut <= limit
+
+
 def _pending_test(instance: StreamInstance) -> bool:
     return instance.is_test and instance.num_calls == 0
 
 
 def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: InstanceKey,
-                    level: int, placeholders: Placeholders) -> bool:
+                    level: int, placeholders: Placeholders, highest: int) -> bool:
     name, inputs = key
     external = state.externals[name]
     mapping = dict(zip(external_inputs(external), inputs, strict=True))
@@ -286,6 +333,7 @@ def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: 
                 outputs = placeholders.unique[key] = placeholders.new(external)
             for placeholder in outputs:
                 evaluation.level[placeholder] = level + 1
+                evaluation.max_level[placeholder] = highest + 1
                 evaluation.object_producer[placeholder] = key
         else:
             outputs = placeholders.shared.get(group, ())
@@ -298,6 +346,8 @@ def _add_optimistic(state: PlannerState, evaluation: OptimisticEvaluation, key: 
                 known = evaluation.level.get(placeholder)
                 evaluation.level[placeholder] = level + 1 if known is None else min(
                     known, level + 1)
+                evaluation.max_level[placeholder] = min(
+                    evaluation.max_level.get(placeholder, highest + 1), highest + 1)
                 evaluation.object_producer.setdefault(placeholder, key)
         evaluation.outputs[key] = outputs
         for placeholder in outputs:
@@ -498,33 +548,57 @@ def probe_unmeasured(state: PlannerState) -> None:
             state.call(state.instance(name, inputs))
 
 
-def evaluate_eager(state: PlannerState) -> None:
+def evaluate_eager(state: PlannerState, complexity: int | None = None) -> None:
     """Call every eager stream (``StreamInfo.eager``) once on all real inputs, to a fixpoint.
 
     Cheap, decisive streams (collision tests, closed-form kinematics) are better evaluated
     for real than assumed optimistically: it keeps optimistic placeholders few. Streams
-    observed to be cheap (:func:`.effort.observed_cheap`) count as eager too.
+    observed to be cheap (:func:`.effort.observed_cheap`) count as eager too. With
+    ``complexity`` (the skeleton algorithms' bound), so do cheap functions on or feeding a
+    cycle of the stream graph, on inputs below that level (see
+    :meth:`PlannerState.eager_within_level`).
     """
-    _eager_fixpoint(state)
+    _eager_fixpoint(state, complexity)
     if state.config.eager_cheap_streams:
         # After the fixpoint: the probe call then sees what the eager streams derived (a
         # sampler may use it, e.g. to offer last the places where objects already stand).
         probe_unmeasured(state)
-        _eager_fixpoint(state)
+        _eager_fixpoint(state, complexity)
 
 
-def _eager_fixpoint(state: PlannerState) -> None:
+def _eager_fixpoint(state: PlannerState, complexity: int | None) -> None:
     changed = True
     while changed and not state.timed_out():
         changed = False
         for external in state.externals.values():
-            if not state.eager(external.name):
+            name = external.name
+            if state.eager(name):
+                candidates = state.deferred_eager.pop(name, [])
+                candidates.extend(state.new_bindings(external, "eager"))
+            elif complexity is not None and state.eager_within_level(name):
+                candidates = _below_level(state, external, complexity)
+            else:
                 continue
-            for inputs in state.new_bindings(external, "eager"):
-                instance = state.instance(external.name, inputs)
+            for inputs in candidates:
+                instance = state.instance(name, inputs)
                 if instance.num_calls == 0:
                     state.call(instance)
                     changed = True
+
+
+def _below_level(state: PlannerState, external: External, complexity: int
+                 ) -> list[tuple[str, ...]]:
+    """The real input tuples of ``external`` whose inputs are all below level
+    ``complexity`` (so that its output is at most at it); the others wait for a higher
+    bound."""
+    waiting = state.deferred_eager.setdefault(external.name, [])
+    waiting.extend(state.new_bindings(external, "eager"))
+    level = state.object_level
+    ready = [inputs for inputs in waiting
+             if max([level.get(x, 0) for x in inputs], default=0) < complexity]
+    if ready:
+        state.deferred_eager[external.name] = [x for x in waiting if x not in set(ready)]
+    return ready
 
 
 

@@ -43,6 +43,7 @@ from ltamp_cli.planner.algorithms.optimistic import (
     repairable,
     report_unusable,
     sampled_inputs,
+    within_limit,
 )
 from ltamp_cli.planner.algorithms.preimage import plan_preimage
 from ltamp_cli.planner.pddl.syntax import Stream, StreamFunction
@@ -292,7 +293,7 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
     try:
         while not state.timed_out():
             state.iterations += 1
-            evaluate_eager(state)
+            evaluate_eager(state, complexity)
             head = queue.peek()
             stalled = (head is None
                        or head.attempts > retry_limit(state, head, retry_threshold, adaptive)
@@ -386,7 +387,8 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                     retry_threshold += 1
                     complexity += 1
                     if (complexity > state.config.max_complexity + state.max_object_level()
-                            and not len(queue) and not discrete.capped):
+                            and not len(queue) and not discrete.capped
+                            and not within_limit(state, evaluation)):
                         return state.result(INFEASIBLE, None)
             steps = max(1, round(last_search_work * STEPS_PER_EVALUATION))
             if adaptive and stalled and len(seen_skeletons) >= 2 and steps == 1:

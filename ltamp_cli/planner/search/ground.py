@@ -244,11 +244,13 @@ class CostBound:
     """Keep only the bindings whose projected variables' values cost at most ``budget`` in
     total (``cost`` per value, 0 when absent, never negative); a partial binding over it is
     not extended. ``exceeded`` is set once a complete binding over the budget is known to
-    exist (checked for the first pruned partial binding that has one)."""
+    exist (checked for the first pruned partial binding that has one). ``highest``: the
+    most costly value counts instead of the total."""
 
     cost: Mapping[str, int]
     budget: int
     exceeded: bool = False
+    highest: bool = False
 
 
 def join_tuples(literals: Sequence[LiftedLiteral], index: FactIndex,
@@ -266,8 +268,9 @@ def join_tuples(literals: Sequence[LiftedLiteral], index: FactIndex,
         if bound is None:
             _extend(steps, 0, index, binding, found, variables)
             continue
-        spent = sum([bound.cost.get(value, 0) for variable, value in binding.items()
-                     if variable in weighted])
+        costs = [bound.cost.get(value, 0) for variable, value in binding.items()
+                 if variable in weighted]
+        spent = max(costs, default=0) if bound.highest else sum(costs)
         if spent <= bound.budget:
             _extend_bounded(steps, 0, index, binding, found, variables, bound, weighted, spent)
         elif not bound.exceeded:
@@ -298,7 +301,10 @@ def _extend_bounded(steps: Sequence[_Step], depth: int, index: FactIndex,
             continue
         total = spent
         for position in costed:
-            total += cost.get(args[position], 0)
+            if bound.highest:
+                total = max(total, cost.get(args[position], 0))
+            else:
+                total += cost.get(args[position], 0)
         if total > budget and bound.exceeded:
             continue
         extended = binding.copy()
