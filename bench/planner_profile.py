@@ -87,10 +87,10 @@ def wrapped(phases: Counter, searches: list[dict[str, Any]]) -> Iterator[None]:
     def logged(state: Any, init: Any, objects: Any, function_values: Any,
                max_expansions: int | None = None, context_blocks: Any = None,
                budgeted: bool = False, guess: Any = None,
-               skip_if_grounded_as: Any = None) -> Any:
+               skip_if_grounded_as: Any = None, **more: Any) -> Any:
         start = time.thread_time()
         result = search(state, init, objects, function_values, max_expansions,
-                        context_blocks, budgeted, guess, skip_if_grounded_as)
+                        context_blocks, budgeted, guess, skip_if_grounded_as, **more)
         outcome = result.outcome
         kind = ("real" if objects is state.object_types
                 else "full" if budgeted else "speculative")
