@@ -34,6 +34,7 @@ from ltamp_cli.planner.algorithms.effort import observed_cheap
 from ltamp_cli.planner.algorithms.optimistic import (
     MAX_LOCAL_REPAIRS,
     InstanceKey,
+    OptimisticEvaluation,
     Placeholders,
     bind_context,
     bindable_stream_plan,
@@ -119,6 +120,8 @@ class Skeleton:
     nogoods: list[tuple[tuple[str, str], ...]] = field(default_factory=list, compare=False)
     # placeholder -> the instance whose output it is (filled by the first learn_nogood)
     producers: dict[str, InstanceKey] = field(default_factory=dict, compare=False)
+    # Whether actions of the task it was found in have costs (see partial_guess's use).
+    action_costs: bool = field(default=False, compare=False)
 
     def learn_nogood(self, step: int, mapping: dict[str, str]) -> None:
         """Record that the test at ``step`` failed with the placeholders bound by
@@ -321,8 +324,13 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                 evaluation = optimistic_evaluation(state, complexity, placeholders)
                 # The most advanced binding's plan, with what it bound so far, is checked
                 # first: once sampling made its facts real it is usually still a plan.
-                guess = None if head is None else bound_plan(head.skeleton.steps,
-                                                             head.mapping)
+                # Rebased onto this task (partial_guess) only without action costs: with
+                # them, a search over the values sampled since may find a cheaper plan than
+                # the old skeleton's (tamp2d_uniform, rebased: 7 of 80 seeds costlier, none
+                # cheaper; blocked_8 seed 5 170.5 instead of 117.8).
+                guess = None if head is None else (
+                    bound_plan(head.skeleton.steps, head.mapping)
+                    if head.skeleton.action_costs else partial_guess(state, head, evaluation))
                 # A task that grounds as the last one whose search ran out of budget is
                 # not searched again (kitchen_symbolic seed 6: three searches of the same
                 # real task with 600, 1,200 and 2,400 expansions while the complexity
@@ -375,7 +383,9 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                             plan, {key: evaluation.outputs[key] for key in plan
                                    if key in evaluation.outputs},
                             tuple(str(a) for a in discrete.actions or []), contexts,
-                            steps=tuple((a.name, a.args) for a in discrete.actions or []))))
+                            steps=tuple((a.name, a.args) for a in discrete.actions or []),
+                            action_costs=any(action.cost for action
+                                             in discrete.grounding.actions))))
                     elif stalled:
                         # Nothing new to try at this bound: allow more retries and
                         # more complex optimistic values.
@@ -401,6 +411,35 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
         return state.result(TIMEOUT, None)
     except SearchTimeout:
         return state.result(TIMEOUT, None)
+
+
+def partial_guess(state: PlannerState, binding: Binding, evaluation: OptimisticEvaluation
+                  ) -> list[tuple[str, tuple[str, ...]]]:
+    """The optimistic plan of ``binding``'s skeleton as a plan of the task of ``evaluation``:
+    placeholders bound so far replaced by their values, and the outputs of instances not yet
+    called replaced by the placeholders that ``evaluation`` gives the same instance over the
+    values bound so far, or, when another binding called that instance already, by its first
+    output (the one this binding takes first). Without the second part a half-bound plan is
+    rarely one of the new task: an instance whose inputs got bound is a different instance
+    there, with its own output placeholders (kitchen_fluent seed 0: every speculative
+    search's guess failed on ``move @q8 #t447 #q122``, a motion to the kinematics of a
+    sampled pose, and searched in full). Follows the stream plan in order, so a rebased
+    output feeds the later instances."""
+    skeleton = binding.skeleton
+    mapping = dict(binding.mapping)
+    for name, inputs in skeleton.stream_plan[binding.step:]:
+        old = skeleton.placeholders.get((name, inputs), ())
+        if not old or all(x in mapping for x in old):
+            continue
+        key = (name, tuple(mapping.get(x, x) for x in inputs))
+        new = evaluation.outputs.get(key)
+        called = state.instances.get(key)
+        if new is None and called is not None and called.results:
+            new = called.results[0]
+        if new is not None and len(new) == len(old):
+            for placeholder, renamed in zip(old, new, strict=True):
+                mapping.setdefault(placeholder, renamed)
+    return bound_plan(skeleton.steps, mapping)
 
 
 def cheap_step(state: PlannerState, binding: Binding) -> bool:
