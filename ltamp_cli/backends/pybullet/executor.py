@@ -1,7 +1,8 @@
 """Replaying kitchen3d plans in PyBullet and checking the goal in the simulated world.
 
 The arm is driven kinematically along the planned joint paths (one configuration per
-simulation step, at a bounded joint speed); a held object is rigidly carried at
+simulation step, at a bounded joint speed; a pour at the pour skill's own tool speeds, as in
+the trials its model learned from); a held object is rigidly carried at
 ``EE pose @ grasp`` with the velocity that reaches its next pose, so contacts push beads the
 way the pour trials do (and is made heavy while held, so a bead pile cannot push it down
 within a step); motions carrying contents start and stop each path segment at a bounded
@@ -82,6 +83,7 @@ from ltamp_cli.backends.pybullet.tamp.planning import pose_of
 from ltamp_cli.backends.pybullet.tamp.scene import SceneSpec, scene_from_world
 from ltamp_cli.backends.pybullet.tamp.values import ArmPath
 from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig
+from ltamp_cli.backends.skills3d.pour import POUR_SPEED_M_S, PourSettings
 from ltamp_cli.motion.timing import MotionLimits, time_path
 
 #: Fraction of a material's beads that must end in a container for ``(Contains c m)``.
@@ -137,11 +139,12 @@ class ActionFailed(RuntimeError):
 
 @dataclass(frozen=True)
 class ExecutionSettings:
-    """Joint speeds (rad/s) for transit, carrying contents and pouring; settle/hold times (s)."""
+    """Joint speeds (rad/s) for transit, carrying contents and dumping a spoon (a pour follows
+    its skill's tool speeds); settle/hold times (s)."""
 
     free_speed: float = 1.5
     carry_speed: float = 0.8
-    pour_speed: float = 1.2
+    dump_speed: float = 1.2
     scoop_speed: float = 0.6
     stir_speed: float = 0.8
     push_speed: float = 0.4
@@ -153,6 +156,28 @@ class ExecutionSettings:
     #: (at constant joint speed a carry's corners jerked the cup at ~60 m/s²; with this
     #: limit the peaks were ~9 m/s²).
     acceleration: float = 2.0
+
+
+def skill_timed_configurations(configurations: np.ndarray, tool_poses: Sequence[Pose],
+                               speed: float, angular_speed: float, dt: float) -> np.ndarray:
+    """Joint configurations ``(m, 7)`` one step ``dt`` (s) apart along ``configurations``
+    ``(n, 7)``, whose tool poses are ``tool_poses`` (n): segment ``i`` takes the longer of
+    the tool's shift / ``speed`` (m/s) and turn / ``angular_speed`` (rad/s), at least one
+    step, interpolated linearly in joint space (the waypoints are dense). The first row is
+    ``configurations[0]`` (the current position), the last ``configurations[-1]``."""
+    q = np.asarray(configurations, dtype=float)
+    if q.ndim != 2 or len(q) != len(tool_poses) or len(q) == 0:
+        raise ValueError(f"{len(tool_poses)} tool poses for configurations of shape {q.shape}")
+    if min(speed, angular_speed, dt) <= 0:
+        raise ValueError("speed, angular_speed and dt must be positive")
+    rows = [q[:1]]
+    for i in range(len(q) - 1):
+        shift = float(np.linalg.norm(tool_poses[i + 1].position - tool_poses[i].position))
+        turn = rotation_distance(tool_poses[i], tool_poses[i + 1])
+        steps = max(1, round(max(shift / speed, turn / angular_speed, dt) / dt))
+        fractions = np.linspace(0.0, 1.0, steps + 1)[1:, None]
+        rows.append(q[i] + fractions * (q[i + 1] - q[i]))
+    return np.concatenate(rows, axis=0)
 
 
 def _material(kind: str, rng: np.random.Generator, fixed: bool) -> BodyMaterial:
@@ -353,6 +378,31 @@ class Kitchen3DRun:
             if drive:
                 self._drive_joints(arm_index, np.zeros(arm.dof))
 
+    def follow_skill(self, path: ArmPath, speed: float, angular_speed: float) -> None:
+        """Drive the arm through ``path.configurations`` so that the held tool moves as in the
+        skill's trials: each segment takes the longer of its distance / ``speed`` (m/s) and
+        its turn / ``angular_speed`` (rad/s), with no stop at the (dense) waypoints.
+
+        A learned skill succeeds at the timing it was trained with: at the joint-speed
+        limited, stop-at-every-waypoint timing of :meth:`follow`, a pour tilted at ~0.4
+        rad/s peak instead of its trials' 2 rad/s, so its beads slid out over the lip one by
+        one, off the cup's axis, instead of falling out together, and 21 of 40 flew past a
+        bowl that the trials fill (Kitchen3D coffee, PyBullet)."""
+        held = self.held.get(path.arm)
+        if held is None:
+            raise ActionFailed(f"{path.kind}: arm {path.arm} holds no tool")
+        arm = self.scene.arms[path.arm]
+        configurations = np.asarray(path.configurations, dtype=float)
+        start = arm.get_configuration()
+        poses = []
+        for q in configurations:
+            arm.set_configuration(q)
+            poses.append(arm.end_effector_pose() @ held[1])
+        arm.set_configuration(start)
+        dense = skill_timed_configurations(configurations, poses, speed, angular_speed,
+                                           self.world.config.time_step)
+        self._follow_dense(path.arm, dense, held, drive=False)
+
     def _drive_joints(self, arm_index: int, velocities: np.ndarray) -> None:
         """Joint velocities (rad/s) for the coming step, held by the joint motors."""
         arm = self.scene.arms[arm_index]
@@ -518,7 +568,10 @@ class Kitchen3DRun:
             raise ActionFailed(f"place {name}: came to rest {error:.3f} m from its pose")
 
     def pour(self, path: ArmPath) -> None:
-        self.follow(path.arm, path.configurations, self.settings.pour_speed)
+        """Tilt the held cup along the pour path at the pour skill's own speeds (those of
+        the trials its model learned from), hold, and carry it back upright."""
+        skill = PourSettings()
+        self.follow_skill(path, POUR_SPEED_M_S, skill.angular_speed)
         self.step_n(self.world.steps_for(self.settings.pour_hold_s))
         self.follow(path.arm, path.configurations[::-1], self.settings.carry_speed)
         self.step_n(self.world.steps_for(self.settings.settle_s))
@@ -540,7 +593,7 @@ class Kitchen3DRun:
 
     def dump(self, spoon: str, cup: str, material: str, path: ArmPath) -> None:
         """Turn the held spoon over above ``cup``, hold, turn it back."""
-        self.follow(path.arm, path.configurations, self.settings.pour_speed)
+        self.follow(path.arm, path.configurations, self.settings.dump_speed)
         self.step_n(self.world.steps_for(self.settings.pour_hold_s))
         self.follow(path.arm, path.configurations[::-1], self.settings.carry_speed)
         self.step_n(self.world.steps_for(self.settings.settle_s))
