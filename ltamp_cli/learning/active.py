@@ -13,11 +13,20 @@ The first ``init`` trials are always random, and so is every trial until one has
 the level (``explore_until_success``): with no super-level point observed the GP's posterior
 mean lies below the level everywhere, so the straddle ψ has no boundary to refine and reduces
 to maximising σ, which the box's corners win — for physical skills those are extreme controls,
-worse than uniform ones (2D pour, seeds 0 and 2: 1 and 0 successes in 75 straddle trials
-where uniform ones find ~1 in 10). ``budget`` counts all trials. After every trial the
-GP is conditioned on the new data; its hyperparameters are re-optimised (warm-started) after
-every trial up to ``dense_refit`` trials and every ``refit_every`` trials after that, and fully
-(with random restarts) at the end. Online learning runs live trials through a
+worse than uniform ones (2D pour, seeds 0 and 2: 1 and 0 successes in 75 straddle trials where
+uniform ones find ~1 in 10). Likewise, once the GP is fitted, a trial is drawn uniformly (a
+valid control for the context) whenever the straddle's maximum is ≤ 0
+(``explore_without_boundary``): then ``μ ± 1.96σ`` excludes the level at every candidate, the
+GP is confident that no control there succeeds (``lse2``: no control for the drawn context) and
+ψ's argmax is merely the least certain failure, which σ puts on the box's boundary. This is
+what broke ``lse2`` on the 2D pour (issue #21): each new context's control slice looked
+hopeless, the straddle picked a corner of the control box in 43 of 47 choices, the corners
+failed, and with only failures there the GP's control lengthscales rose to their upper bound
+(controls "irrelevant"), so the next slice looked hopeless too (1 success in 47 straddle
+trials, seed 0; 16 in 47 with the uniform fallback). ``budget`` counts all trials. After every
+trial the GP is conditioned on the new data; its hyperparameters are re-optimised (warm-
+started) after every trial up to ``dense_refit`` trials and every ``refit_every`` trials after
+that, and fully (with random restarts) at the end. Online learning runs live trials through a
 :class:`~ltamp_cli.backends.protocol.SkillBackend`, appending each to a
 :class:`~ltamp_cli.trials.TrialDataset` so that an interrupted run resumes; *pool* learning
 replays a dataset of pre-collected trials, picking each next trial without replacement (the
@@ -79,6 +88,9 @@ class LearningConfig:
     pool_neighbourhood: float = 0.02
     #: Keep drawing uniform trials after ``init`` until one scores above the level (> 0).
     explore_until_success: bool = True
+    #: Draw a uniform valid trial when the straddle's maximum is <= 0 (no plausible level-set
+    #: boundary where the acquisition may search; see the module doc).
+    explore_without_boundary: bool = True
     threads: int | None = 1  # thread-pool limit while learning (ltamp_cli.threads)
 
     def __post_init__(self) -> None:
@@ -320,7 +332,7 @@ def _propose(
             n_restarts=config.acquisition_restarts,
             is_valid=test,
         )
-        if best is not None:
+        if best is not None and _informative(config, best.value):
             contexts, controls = model.from_unit(best.x)
             return contexts[0], controls[0]
         context = np.asarray(backend.sample_context(skill, rng), dtype=float).reshape(
@@ -343,9 +355,32 @@ def _propose(
             n_restarts=config.acquisition_restarts,
             is_valid=test,
         )
-        if best is not None:
+        if best is not None and _informative(config, best.value):
             return context, model.from_unit(best.x)[1][0]
+    if best is not None and config.explore_without_boundary:
+        return context, _uniform_valid_control(spec, context, rng, is_valid)
     return context, spec.control.sample_uniform(rng, 1)[0]
+
+
+def _informative(config: LearningConfig, value: float) -> bool:
+    """Whether a straddle maximum ``value`` (scaled-score units) may be used: > 0, i.e. some
+    candidate's ``μ ± 1.96σ`` interval contains the level (always, without
+    ``explore_without_boundary``)."""
+    return value > 0.0 or not config.explore_without_boundary
+
+
+#: Uniform controls drawn per attempt by :func:`_uniform_valid_control`.
+UNIFORM_BATCH = 256
+
+
+def _uniform_valid_control(
+    spec: SkillSpec, context: np.ndarray, rng: np.random.Generator, is_valid: PhysicalValidity
+) -> np.ndarray:
+    """The first of :data:`UNIFORM_BATCH` uniform controls ``(dθ,)`` that passes the
+    pre-check for ``context`` (the first one drawn if none does)."""
+    controls = spec.control.sample_uniform(rng, UNIFORM_BATCH)
+    ok = np.asarray(is_valid(context, controls), dtype=bool)
+    return controls[int(np.argmax(ok))] if ok.any() else controls[0]
 
 
 @limits_threads
