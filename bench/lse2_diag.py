@@ -8,8 +8,7 @@ and normalised), the GP's ``μ``/``σ`` (score units) at the choice *before* the
 the control lies on the box boundary (some normalised coordinate with ``|u| > 0.95``), whether
 it passes the pre-check, the true score and the GP hyperparameters. A summary (successes,
 boundary share of active choices, mean σ/|μ|) is printed at the end. ``--skill saturated4d``
-runs ``bench.lse2``'s synthetic skill instead of Box2D; ``--old`` runs the code before issue
-#21 (``explore_without_boundary=False``).
+runs ``bench.lse2``'s synthetic skill instead of Box2D.
 """
 
 from __future__ import annotations
@@ -40,8 +39,6 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--trials", type=int, default=60)
     parser.add_argument("--init", type=int, default=10)
     parser.add_argument("--out", type=Path, required=True)
-    parser.add_argument("--old", action="store_true",
-                        help="without explore_without_boundary (the code before issue #21)")
     args = parser.parse_args(argv)
     if args.trials < 1:
         print("lse2_diag: --trials must be >= 1", file=sys.stderr)
@@ -54,7 +51,7 @@ def main(argv: list[str] | None = None) -> int:
         backend = load_backend(args.backend)
     spec = backend.skills()[args.skill]
     config = LearningConfig(strategy=args.strategy, budget=args.trials, init=args.init,
-                            seed=args.seed, explore_without_boundary=not args.old)
+                            seed=args.seed)
     rng = np.random.default_rng([config.seed, 0])
     learner = _Learner(spec, config, rng)
     template = RandomModel(spec, 0.0)
