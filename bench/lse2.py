@@ -3,7 +3,9 @@
 ``python -m bench.lse2 run --skill pour --learner lse2 --seeds 0-4`` runs learner × seed jobs
 and appends each finished job as one JSON line to ``docs/results/learning/lse2-runs.jsonl``
 (``--log``); a rerun skips the jobs already logged, so an interrupted run continues.
-``python -m bench.lse2 report`` prints a table and writes ``docs/results/learning/lse2.json``.
+``python -m bench.lse2 report`` prints a table and writes ``docs/results/learning/lse2.json``;
+jobs of ``lse2`` run with the code before the fix (the same command on commit ``c76fd92``'s
+``ltamp_cli``) are read from ``lse2-runs-before.jsonl`` and reported as ``lse2-before``.
 
 Skills:
 
@@ -48,6 +50,9 @@ DEFAULT_LOG = REPO / "docs" / "results" / "learning" / "lse2-runs.jsonl"
 DEFAULT_JSON = REPO / "docs" / "results" / "learning" / "lse2.json"
 STANDARD_LOG = REPO / "docs" / "results" / "standard" / "runs" / "al2d-pour-standard.jsonl"
 LEARNERS = ("random", "gp", "lse", "lse2")
+#: The report's rows: the learners, and ``lse2`` before issue #21's fix (``--before-log``).
+ROWS = (*LEARNERS, "lse2-before")
+DEFAULT_BEFORE = REPO / "docs" / "results" / "learning" / "lse2-runs-before.jsonl"
 
 #: Per skill: trials, random initial trials, checkpoint spacing, held-out contexts, θ*
 #: candidates. ``pour`` is ``bench.paper.al2d``'s standard row.
@@ -197,27 +202,31 @@ def _wilson(k: int, n: int) -> list[float]:
     return [round(float(ci.low), 3), round(float(ci.high), 3)]
 
 
-def report(log: Path, out: Path, standard_log: Path | None) -> dict[str, Any]:
+def report(log: Path, out: Path, standard_log: Path | None,
+           before_log: Path | None = None) -> dict[str, Any]:
     """Table of final θ* success per skill × learner (pooled Wilson interval over seeds ×
     contexts) and paired comparisons of ``lse2`` against the others (units: seed × context)."""
     from bench.paper.stats import paired_comparison
 
     jobs = _read_log(log)
+    if before_log is not None:
+        jobs.update({(skill, "lse2-before", seed): job for (skill, learner, seed), job
+                     in _read_log(before_log).items() if learner == "lse2"})
     standard = _standard_jobs(standard_log) if standard_log is not None else {}
     summary: dict[str, Any] = {}
     for skill in SIZES:
         rows: dict[str, Any] = {}
         finals: dict[str, dict[int, list[bool]]] = {}
-        for learner in LEARNERS:
-            own = {seed: job for (s, lr, seed), job in jobs.items()
-                   if s == skill and lr == learner}
-            source = "this run"
-            if not own and skill == "pour":
-                own = {seed: job for (s, lr, seed), job in standard.items()
-                       if s == skill and lr == learner}
-                source = "standard run"
+        for learner in ROWS:
+            mine = {seed: job for (s, lr, seed), job in jobs.items()
+                    if s == skill and lr == learner}
+            theirs = {seed: job for (s, lr, seed), job in standard.items()
+                      if s == skill and lr == learner and seed not in mine}
+            own = {**theirs, **mine}
             if not own:
                 continue
+            source = ("this run" if not theirs else "standard run" if not mine
+                      else f"std + this ({','.join(map(str, sorted(mine)))})")
             finals[learner] = {seed: list(job["curve"][-1]["successes"])
                                for seed, job in sorted(own.items())}
             k = sum(sum(v) for v in finals[learner].values())
@@ -233,7 +242,7 @@ def report(log: Path, out: Path, standard_log: Path | None) -> dict[str, Any]:
                 "cpu_s": {str(seed): job.get("cpu_s") for seed, job in sorted(own.items())}}
         comparisons = []
         if "lse2" in finals:
-            for other in ("random", "gp", "lse"):
+            for other in ("random", "gp", "lse", "lse2-before"):
                 if other not in finals:
                     continue
                 seeds = sorted(set(finals["lse2"]) & set(finals[other]))
@@ -251,11 +260,11 @@ def report(log: Path, out: Path, standard_log: Path | None) -> dict[str, Any]:
     out.write_text(json.dumps(payload, indent=1) + "\n")
     for skill, entry in summary.items():
         print(f"\n{skill}: final θ* success (seeds: per-seed rates; pooled [Wilson 95 %])")
-        print(f"{'learner':8} {'source':13} {'per seed':40} pooled")
+        print(f"{'learner':11} {'source':13} {'per seed':40} pooled")
         for learner, row in entry["learners"].items():
             per_seed = " ".join(f"{v:.2f}" for v in row["final_per_seed"].values())
             low, high = row["final_wilson95"]
-            print(f"{learner:8} {row['source']:13} {per_seed:40} {row['final_pooled']:.3f} "
+            print(f"{learner:11} {row['source']:13} {per_seed:40} {row['final_pooled']:.3f} "
                   f"[{low:.3f}, {high:.3f}]")
         for comparison in entry["comparisons"]:
             print(f"  {comparison['text']}: {comparison['verdict']}")
@@ -283,9 +292,12 @@ def main(argv: list[str] | None = None) -> int:
     rep.add_argument("--log", type=Path, default=DEFAULT_LOG)
     rep.add_argument("--out", type=Path, default=DEFAULT_JSON)
     rep.add_argument("--standard-log", type=Path, default=STANDARD_LOG)
+    rep.add_argument("--before-log", type=Path, default=DEFAULT_BEFORE,
+                     help="jobs of lse2 run with the code before the fix (reported as "
+                          "lse2-before)")
     args = parser.parse_args(argv)
     if args.command == "report":
-        report(args.log, args.out, args.standard_log)
+        report(args.log, args.out, args.standard_log, args.before_log)
         return 0
     try:
         seeds = _seeds(args.seeds)
