@@ -4,7 +4,9 @@ Strategies (``LearningConfig.strategy``):
 
 * ``lse`` — GP; each query maximises the straddle ψ over control *and* context;
 * ``lse2`` — GP; the context is drawn from the skill's context distribution, the control
-  maximises ψ for it;
+  is the one with the largest ψ among ``lse2_candidates`` uniform controls that pass the
+  pre-check for it (the paper's discrete GP-LSE2, section 6.2, which picks the pool trial
+  with the largest ψ among those of a sampled bowl–cup pair; see below);
 * ``gp`` — GP on uniformly random trials (no active learning);
 * ``random`` — uniformly random trials, no model (:class:`~.baselines.RandomModel`);
 * ``nn-c``, ``nn-r``, ``rf-c``, ``rf-r`` — scikit-learn baselines on uniformly random trials.
@@ -14,7 +16,16 @@ the level (``explore_until_success``): with no super-level point observed the GP
 mean lies below the level everywhere, so the straddle ψ has no boundary to refine and reduces
 to maximising σ, which the box's corners win — for physical skills those are extreme controls,
 worse than uniform ones (2D pour, seeds 0 and 2: 1 and 0 successes in 75 straddle trials
-where uniform ones find ~1 in 10). ``budget`` counts all trials. After every trial the
+where uniform ones find ~1 in 10).
+
+``lse2`` does not refine its choice by gradient ascent inside the control box, as ``lse`` does:
+each drawn context is new, so its control slice is unexplored and ψ there is dominated by σ,
+which grows towards the box's corners; maximised continuously, ψ put 43 of 47 choices on the
+control box's boundary on the 2D pour (seed 0, issue #21; the corners all failed, and with only
+failures there the GP's control lengthscales rose to their upper bound, so the next slice
+looked unexplored too: 1 success in 47 straddle trials). Among 100 uniform valid controls the
+choice stays in the body of the box unless ψ really singles out an edge (seed 0: 9 of 47 on the
+boundary, 13 successes; seed 1: 11 of 50). ``budget`` counts all trials. After every trial the
 GP is conditioned on the new data; its hyperparameters are re-optimised (warm-started) after
 every trial up to ``dense_refit`` trials and every ``refit_every`` trials after that, and fully
 (with random restarts) at the end. Online learning runs live trials through a
@@ -79,6 +90,8 @@ class LearningConfig:
     pool_neighbourhood: float = 0.02
     #: Keep drawing uniform trials after ``init`` until one scores above the level (> 0).
     explore_until_success: bool = True
+    #: ``lse2``: uniform controls per drawn context among which ψ picks (module doc).
+    lse2_candidates: int = 100
     threads: int | None = 1  # thread-pool limit while learning (ltamp_cli.threads)
 
     def __post_init__(self) -> None:
@@ -94,6 +107,8 @@ class LearningConfig:
             raise ValueError(f"budget and init must be >= 1, got {self.budget} and {self.init}")
         if self.refit_every < 1:
             raise ValueError(f"refit_every must be >= 1, got {self.refit_every}")
+        if self.lse2_candidates < 1:
+            raise ValueError(f"lse2_candidates must be >= 1, got {self.lse2_candidates}")
 
 
 @dataclass
@@ -330,22 +345,29 @@ def _propose(
         context = np.asarray(backend.sample_context(skill, rng), dtype=float).reshape(
             spec.context.dim
         )
-        fixed = np.zeros(model.dim)
-        fixed[spec.control.dim :] = model._context_unit(context)
-        free = np.arange(model.dim) < spec.control.dim
-        best = maximize(
-            model.gp,
-            straddle,
-            rng,
-            fixed=fixed,
-            free=free,
-            n_candidates=config.n_candidates,
-            n_restarts=config.acquisition_restarts,
-            is_valid=test,
-        )
-        if best is not None:
-            return context, model.from_unit(best.x)[1][0]
+        control = _lse2_control(model, spec, config, context, rng, is_valid)
+        if control is not None:
+            return context, control
     return context, spec.control.sample_uniform(rng, 1)[0]
+
+
+def _lse2_control(
+    model: LevelSetModel,
+    spec: SkillSpec,
+    config: LearningConfig,
+    context: np.ndarray,
+    rng: np.random.Generator,
+    is_valid: PhysicalValidity,
+) -> np.ndarray | None:
+    """The control ``(dθ,)`` with the largest ψ for physical ``context (dα,)`` among
+    ``config.lse2_candidates`` uniform ones that pass the pre-check; ``None`` if none does."""
+    controls = spec.control.sample_uniform(rng, config.lse2_candidates)
+    controls = controls[np.asarray(is_valid(context, controls), dtype=bool)]
+    if len(controls) == 0:
+        return None
+    contexts = np.repeat(np.asarray(context, dtype=float).reshape(1, -1), len(controls), axis=0)
+    values = evaluate(model.gp, straddle, model.to_unit(contexts, controls))
+    return controls[int(np.argmax(values))]
 
 
 @limits_threads
