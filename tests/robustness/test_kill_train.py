@@ -22,9 +22,11 @@ ENV = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_N
 
 
 def _command(out: Path) -> list[str]:
+    # ``lse`` (a continuous straddle search per trial): ``lse2``'s 100-candidate proposal is
+    # so fast on the synthetic skill that all 25 trials are written within a kill's delay.
     return [
         sys.executable, "-m", "ltamp_cli", "train", "moving2d", "--backend", "synthetic",
-        "--strategy", "lse2", "--budget", str(BUDGET), "--init", "5", "--seed", str(SEED),
+        "--strategy", "lse", "--budget", str(BUDGET), "--init", "5", "--seed", str(SEED),
         "--out", str(out),
     ]  # fmt: skip
 
@@ -62,7 +64,7 @@ def test_train_killed_at_random_moments_resumes_exactly(tmp_path: Path) -> None:
     rng = np.random.default_rng(20261121)
     # Three kills mid-way (after k trials plus a random fraction of a trial) ...
     kill_points = sorted(int(k) for k in rng.choice(np.arange(2, BUDGET - 3), 3, replace=False))
-    landed = 0
+    landed = midway = 0
     kept: list[TrialRecord] = []
     for at_trials in kill_points:
         code = _run_and_kill(out, at_trials, float(rng.uniform(0.0, 0.3)))
@@ -73,8 +75,12 @@ def test_train_killed_at_random_moments_resumes_exactly(tmp_path: Path) -> None:
         kept = records
         if code == -signal.SIGKILL:
             landed += 1
-            assert at_trials <= len(records) < BUDGET
-    assert landed == len(kill_points), "every mid-way kill should land before the budget"
+            # A fast proposal may write the last trial within the delay; the kill then lands
+            # in the final fit, which the resume must survive too.
+            assert at_trials <= len(records) <= BUDGET
+            midway += len(records) < BUDGET
+    assert landed == len(kill_points), "every kill should land before training ends"
+    assert midway >= 1, "at least one kill should land between trials"
     # ... and one after the last trial is written (final fit or model save), if still running.
     _run_and_kill(out, BUDGET, float(rng.uniform(0.0, 0.2)))
 
