@@ -61,6 +61,7 @@ from ltamp_cli.backends.pybullet.particles import (
     count_lost,
     spawn_beads_in,
 )
+from ltamp_cli.backends.pybullet.paths import segment_steps
 from ltamp_cli.backends.pybullet.render import Camera
 from ltamp_cli.backends.pybullet.replay import (
     BeadGroup,
@@ -174,7 +175,7 @@ def skill_timed_configurations(configurations: np.ndarray, tool_poses: Sequence[
     for i in range(len(q) - 1):
         shift = float(np.linalg.norm(tool_poses[i + 1].position - tool_poses[i].position))
         turn = rotation_distance(tool_poses[i], tool_poses[i + 1])
-        steps = max(1, round(max(shift / speed, turn / angular_speed, dt) / dt))
+        steps = segment_steps(shift, turn, speed, angular_speed, dt)
         fractions = np.linspace(0.0, 1.0, steps + 1)[1:, None]
         rows.append(q[i] + fractions * (q[i + 1] - q[i]))
     return np.concatenate(rows, axis=0)

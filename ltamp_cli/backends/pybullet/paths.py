@@ -67,6 +67,13 @@ def interpolate(path: PosePath, index: int, t: np.ndarray) -> PosePath:
     return PosePath(positions, slerp(np.asarray(t)).as_quat())
 
 
+def segment_steps(shift: float, turn: float, speed: float, angular_speed: float,
+                  dt: float) -> int:
+    """Simulation steps of ``dt`` s for a segment that moves ``shift`` m and turns ``turn``
+    rad: the longer of ``shift / speed`` and ``turn / angular_speed``, at least one step."""
+    return max(1, round(max(shift / speed, turn / angular_speed, dt) / dt))
+
+
 def timed_poses(path: PosePath, speed: float, angular_speed: float, dt: float) -> PosePath:
     """Resample ``path`` at simulation steps of ``dt`` s: each segment takes the longer of
     ``distance / speed`` and ``angle / angular_speed`` seconds. Shape ``(n_steps + 1, ·)``."""
@@ -75,8 +82,7 @@ def timed_poses(path: PosePath, speed: float, angular_speed: float, dt: float) -
     for i in range(len(path) - 1):
         shift = float(np.linalg.norm(path.positions[i + 1] - path.positions[i]))
         turn = float((rotations[i].inv() * rotations[i + 1]).magnitude())
-        duration = max(shift / speed, turn / angular_speed, dt)
-        n = max(1, round(duration / dt))
+        n = segment_steps(shift, turn, speed, angular_speed, dt)
         segment = interpolate(path, i, np.linspace(0.0, 1.0, n + 1)[1:])
         positions.append(segment.positions)
         quaternions.append(segment.quaternions)
