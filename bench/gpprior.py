@@ -36,17 +36,15 @@ POUR_MODEL = REPO / "models" / "kitchen2d" / "pour"
 
 
 def _pour_data() -> tuple[Any, np.ndarray, np.ndarray, dict[str, Any]]:
-    from ltamp_cli.learning.active import _training_score
+    """The shipped pour model's skill, training inputs ``(250, 8)`` normalised, scores
+    ``(250,)`` and saved hyperparameters."""
+    from ltamp_cli.learning.model import LevelSetModel
     from ltamp_cli.learning.model_dir import load_model
-    from ltamp_cli.trials.record import TrialDataset
 
-    model = load_model(str(POUR_MODEL))
-    spec = model.spec
-    records = TrialDataset(str(POUR_MODEL / "trials.jsonl")).read()
-    x = np.array([model.to_unit(r.context, r.control)[0] for r in records])
-    y = np.array([_training_score(spec, r.score) for r in records])
+    model = load_model(str(POUR_MODEL)).model
+    assert isinstance(model, LevelSetModel)
     shipped = json.loads((POUR_MODEL / "model.json").read_text())["hyperparameters"]
-    return spec, x, y, shipped
+    return model.spec, model.gp.x_np, model.gp.y_np, shipped
 
 
 def fits(repeats: int, out: Path) -> dict[str, Any]:

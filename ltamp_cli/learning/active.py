@@ -50,6 +50,7 @@ from ltamp_cli.backends.protocol import SkillBackend, SkillSpec
 from ltamp_cli.backends.sanity import run_trial_safely
 from ltamp_cli.learning.acquisition import evaluate, maximize, straddle
 from ltamp_cli.learning.baselines import SKLEARN_KINDS, RandomModel, SklearnModel
+from ltamp_cli.learning.defaults import DEFAULT_STRATEGY
 from ltamp_cli.learning.gp import DEFAULT_PRIOR, HyperBounds, LengthscalePrior, fit_gp
 from ltamp_cli.learning.kernels import KERNEL_NAMES
 from ltamp_cli.learning.metrics import Evaluation, SkillEvaluator
@@ -76,7 +77,7 @@ GP_STRATEGIES = ("lse", "lse2", "gp")
 class LearningConfig:
     """How to learn. ``budget`` is the total number of trials, ``init`` of them random."""
 
-    strategy: str = "lse2"
+    strategy: str = DEFAULT_STRATEGY
     kernel: str = "matern52"
     budget: int = 50
     init: int = 10
