@@ -174,9 +174,13 @@ def _evaluator(backend: SkillBackend, skill: str, seed: int) -> SkillEvaluator:
 
 
 def run_job(skill: str, learner: str, seed: int,
-            prior_sd: float | None = LearningConfig.lengthscale_prior_sd) -> dict[str, Any]:
-    """One learner × seed job: its θ* curve, training successes and CPU seconds."""
-    sizes = SIZES[skill]
+            prior_sd: float | None = LearningConfig.lengthscale_prior_sd,
+            final_only: bool = False) -> dict[str, Any]:
+    """One learner × seed job: its θ* curve (only the final point with ``final_only``),
+    training successes and CPU seconds."""
+    sizes = dict(SIZES[skill])
+    if final_only:
+        sizes["eval_every"] = sizes["budget"]
     backend = _backend(skill)
     try:
         evaluator = _evaluator(backend, skill, seed)
@@ -195,6 +199,16 @@ def run_job(skill: str, learner: str, seed: int,
                        "successes": list(p.successes or ())} for p in result.curve]}
 
 
+def _same_protocol(sizes: Mapping[str, int] | None, expected: Mapping[str, int]) -> bool:
+    """Whether a job's sizes are ``expected``'s, up to ``eval_every`` (``--final-only`` jobs
+    skip the intermediate checkpoints; the final θ* evaluation is the same: its candidates
+    come from a generator seeded afresh per evaluation)."""
+    if sizes is None:
+        return False
+    return ({k: v for k, v in sizes.items() if k != "eval_every"}
+            == {k: v for k, v in expected.items() if k != "eval_every"})
+
+
 def _read_log(path: Path) -> dict[tuple[str, str, int], dict[str, Any]]:
     jobs: dict[tuple[str, str, int], dict[str, Any]] = {}
     if path.is_file():
@@ -203,7 +217,7 @@ def _read_log(path: Path) -> dict[tuple[str, str, int], dict[str, Any]]:
                 entry = json.loads(line)
             except json.JSONDecodeError:
                 continue  # a line torn by an interruption
-            if entry.get("sizes") == dict(SIZES[entry["skill"]]):
+            if _same_protocol(entry.get("sizes"), SIZES[entry["skill"]]):
                 jobs[(entry["skill"], entry["learner"], int(entry["seed"]))] = entry
     return jobs
 
@@ -334,6 +348,9 @@ def main(argv: list[str] | None = None) -> int:
     run_p.add_argument("--prior-sd", default=str(LearningConfig.lengthscale_prior_sd),
                        help="LearningConfig.lengthscale_prior_sd, or 'none' (maximum "
                             "marginal likelihood)")
+    run_p.add_argument("--final-only", action="store_true",
+                       help="evaluate θ* only after the last trial (same final number, "
+                            "less CPU)")
     rep = sub.add_parser("report", help="print the table and write the JSON")
     rep.add_argument("--log", type=Path, default=DEFAULT_LOG)
     rep.add_argument("--out", type=Path, default=DEFAULT_JSON)
@@ -363,7 +380,7 @@ def main(argv: list[str] | None = None) -> int:
         if (args.skill, args.learner, seed) in _read_log(args.log):
             print(f"{args.skill} {args.learner} seed {seed}: logged already", flush=True)
             continue
-        job = run_job(args.skill, args.learner, seed, prior_sd)
+        job = run_job(args.skill, args.learner, seed, prior_sd, args.final_only)
         with args.log.open("a") as handle:
             handle.write(json.dumps(job) + "\n")
         print(f"{args.skill} {args.learner} seed {seed}: θ* "
