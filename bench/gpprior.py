@@ -7,6 +7,12 @@ DEFAULT_PRIOR`), prints the lengthscales next to the shipped ``model.json``'s, a
 seconds per cold fit (2 random restarts, as the final fit of ``ltamp train``) on the first 100
 and all 250 trials (median of ``--repeats``). Writes ``docs/results/learning/gpprior-fits.json``.
 
+``python -m bench.gpprior refit-diag`` reads the per-trial diagnostics of
+``bench.lse2_diag`` (default: pour ``lse2`` seeds 2 and 3, maximum-likelihood fit,
+``diag/pour-lse2-after-seed{2,3}.jsonl``), prints the hyperparameters that run fitted over the
+trials, and refits the same trials' prefixes (n = 20, 30, …) cold with and without the prior.
+Writes ``docs/results/learning/gpprior-refit-diag.json``.
+
 ``python -m bench.gpprior report`` reads ``bench.lse2`` job logs — the MAP fit's
 (``gpprior-runs*.jsonl``) and the maximum-likelihood fit's (``lse2-runs.jsonl`` of the previous
 session, ``gpprior-ml-runs*.jsonl`` of this one, and the standard paper run's pour jobs, same
@@ -83,6 +89,46 @@ def fits(repeats: int, out: Path) -> dict[str, Any]:
         print(f"  {label:22} " + ", ".join(f"{n} points {v:.3f} s" for n, v in entry.items()))
     payload = {"experiment": "gpprior fits (issue #21)", "inputs": names, "fits": rows,
                "cpu_s_per_fit": cost, "repeats": repeats}
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(payload, indent=1) + "\n")
+    return payload
+
+
+def refit_diag(paths: list[Path], out: Path) -> dict[str, Any]:
+    """Hyperparameters of a logged run over its trials, and cold refits ML vs MAP."""
+    from ltamp_cli.backends import load_backend
+    from ltamp_cli.learning.active import _training_score, gp_bounds
+    from ltamp_cli.learning.baselines import RandomModel
+    from ltamp_cli.learning.gp import DEFAULT_PRIOR, fit_gp
+
+    backend = load_backend("box2d")
+    spec = backend.skills()["pour"]
+    template = RandomModel(spec, 0.0)
+    payload: dict[str, Any] = {"experiment": "gpprior refit-diag (issue #21)",
+                               "inputs": [*spec.control.names, *spec.context.names], "runs": {}}
+    for path in paths:
+        rows = [json.loads(line) for line in path.read_text().splitlines()]
+        x = np.array([template.to_unit(np.array(r["context"]), np.array(r["control"]))[0]
+                      for r in rows])
+        y = np.array([_training_score(spec, float(r["score"])) for r in rows])
+        logged = {int(r["index"]): r["lengthscales"] for r in rows if "lengthscales" in r}
+        print(f"\n{path.name}: {len(rows)} trials, {int((y > 0).sum())} successes; "
+              "lengthscales [control (4) | context (4)], normalised units")
+        for index in sorted(logged)[::5]:
+            print(f"  logged before trial {index:3d}: "
+                  + " ".join(f"{v:6.2f}" for v in logged[index]))
+        refits: dict[str, Any] = {}
+        for n in range(20, len(rows) + 1, 10):
+            for label, prior in (("ML", None), ("MAP", DEFAULT_PRIOR)):
+                gp = fit_gp(x[:n], y[:n], "matern52", restarts=2, rng=np.random.default_rng(0),
+                            bounds=gp_bounds(spec), prior=prior)
+                refits.setdefault(str(n), {})[label] = gp.lengthscales.round(3).tolist()
+                print(f"  refit n={n:3d} {label:3}: "
+                      + " ".join(f"{v:6.2f}" for v in gp.lengthscales)
+                      + f"   ({int((y[:n] > 0).sum())} successes)")
+        payload["runs"][path.name] = {"logged": {str(k): v for k, v in logged.items()},
+                                      "refits": refits}
+    backend.close()
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(payload, indent=1) + "\n")
     return payload
@@ -185,6 +231,11 @@ def main(argv: list[str] | None = None) -> int:
     fit_p = sub.add_parser("fits", help="shipped pour model refit and CPU per fit")
     fit_p.add_argument("--repeats", type=int, default=3)
     fit_p.add_argument("--out", type=Path, default=RESULTS / "gpprior-fits.json")
+    diag = sub.add_parser("refit-diag", help="hyperparameters over a logged run; refits")
+    diag.add_argument("paths", type=Path, nargs="*",
+                      default=[RESULTS / "diag" / f"pour-lse2-after-seed{s}.jsonl"
+                               for s in (2, 3)])
+    diag.add_argument("--out", type=Path, default=RESULTS / "gpprior-refit-diag.json")
     rep = sub.add_parser("report", help="paired θ* comparisons MAP vs ML")
     rep.add_argument("--map-log", type=Path, nargs="+",
                      default=sorted(RESULTS.glob("gpprior-runs*.jsonl")))
@@ -201,6 +252,8 @@ def main(argv: list[str] | None = None) -> int:
             print("bench.gpprior: --repeats must be >= 1", file=sys.stderr)
             return 2
         fits(args.repeats, args.out)
+    elif args.command == "refit-diag":
+        refit_diag(args.paths, args.out)
     else:
         report(args.map_log, args.ml_log, args.standard_log, args.out)
     return 0
