@@ -218,7 +218,23 @@ def report(map_logs: list[Path], ml_logs: list[Path], standard_log: Path,
                   f"seed-bootstrap 95% {c['seed_bootstrap95']}, pair-bootstrap "
                   f"{c['pair_bootstrap95']}, pairs {c['pair_wins']}/{c['pair_losses']} sign "
                   f"p = {c['pair_sign_p']:.2g} ({c['verdict_pairs']})")
-    payload = {"experiment": "gpprior (issue #21)", "summary": summary}
+    # lse2 − lse under MAP over every (skill, seed) unit: the default strategy's question
+    units = [(skill, d) for skill, entry in summary.items() for c in entry["comparisons"]
+             if (c["a"], c["b"]) == ("lse2 MAP", "lse MAP") for d in c["per_seed_diff"]]
+    overall: dict[str, Any] = {}
+    if units:
+        diffs = np.array([d for _, d in units])
+        rng = np.random.default_rng(0)
+        boots = diffs[rng.integers(0, diffs.size, size=(10_000, diffs.size))].mean(1)
+        overall = {"units": len(units), "mean": round(float(diffs.mean()), 3),
+                   "bootstrap95": [round(float(np.quantile(boots, 0.025)), 3),
+                                   round(float(np.quantile(boots, 0.975)), 3)],
+                   "up": int((diffs > 0).sum()), "down": int((diffs < 0).sum())}
+        print(f"\nlse2 MAP − lse MAP over {overall['units']} (skill, seed) units: "
+              f"{overall['mean']:+.3f}, bootstrap 95% {overall['bootstrap95']}, "
+              f"{overall['up']} up / {overall['down']} down")
+    payload = {"experiment": "gpprior (issue #21)", "summary": summary,
+               "lse2_minus_lse_all_skills": overall}
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(payload, indent=1) + "\n")
     return payload

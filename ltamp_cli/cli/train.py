@@ -56,7 +56,9 @@ def train_command(
         str, typer.Option("--backend", help="Backend that runs trials.")
     ] = "synthetic",
     strategy: Annotated[
-        str, typer.Option("--strategy", help="lse, lse2, random, gp, nn-c, nn-r, rf-c or rf-r.")
+        str, typer.Option("--strategy", help="lse (straddle over control and context), lse2 "
+                          "(over the controls of a drawn context), random, gp, nn-c, nn-r, rf-c "
+                          "or rf-r.")
     ] = DEFAULT_STRATEGY,
     budget: Annotated[int, typer.Option("--budget", help="Total number of trials.")] = 50,
     init: Annotated[int, typer.Option("--init", help="Random trials before active ones.")] = 10,

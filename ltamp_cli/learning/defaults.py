@@ -8,4 +8,4 @@ them at start-up).
 
 from __future__ import annotations
 
-DEFAULT_STRATEGY = "lse2"
+DEFAULT_STRATEGY = "lse"
