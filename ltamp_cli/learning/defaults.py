@@ -2,8 +2,13 @@
 them at start-up).
 
 ``DEFAULT_STRATEGY`` is both :attr:`ltamp_cli.learning.active.LearningConfig.strategy`'s and
-``ltamp train --strategy``'s default. Issue #21 chose it from paired θ* measurements
-(``docs/results/learning/README.md``, "GP lengthscale prior").
+``ltamp train --strategy``'s default. Issue #21 chose ``lse`` from paired θ* measurements with
+the GP's lengthscale prior (``docs/results/learning/README.md``, "GP lengthscale prior"):
+over every (skill, seed) unit of the 2D pour and the synthetic ``saturated4d`` and
+``narrowing5d`` skills, ``lse2`` − ``lse`` was negative with a bootstrap interval below zero;
+``lse2`` was ahead on the pour alone (+0.09, seed-level interval including zero) but failed
+outright (θ* ≤ 0.2) on 3 of 10 ``saturated4d`` seeds and on most ``narrowing5d`` seeds, where
+``lse`` stayed at 0.98–1.00 and 0.5–0.6.
 """
 
 from __future__ import annotations
