@@ -5,10 +5,10 @@ them at start-up).
 ``ltamp train --strategy``'s default. Issue #21 chose ``lse`` from paired θ* measurements with
 the GP's lengthscale prior (``docs/results/learning/README.md``, "GP lengthscale prior"):
 over every (skill, seed) unit of the 2D pour and the synthetic ``saturated4d`` and
-``narrowing5d`` skills, ``lse2`` − ``lse`` was negative with a bootstrap interval below zero;
-``lse2`` was ahead on the pour alone (+0.09, seed-level interval including zero) but failed
-outright (θ* ≤ 0.2) on 3 of 10 ``saturated4d`` seeds and on most ``narrowing5d`` seeds, where
-``lse`` stayed at 0.98–1.00 and 0.5–0.6.
+``narrowing5d`` skills (21 units), ``lse2`` − ``lse`` = −0.19, bootstrap [−0.33, −0.06].
+``lse2`` was ahead on the pour alone (+0.08, seed-level interval [+0.004, +0.18]; pass
+``--strategy lse2`` there) but failed outright (θ* ≤ 0.2) on 3 of 10 ``saturated4d`` seeds
+and 6 of 7 ``narrowing5d`` seeds, where ``lse`` reached 0.98–1.00 and up to 0.6.
 """
 
 from __future__ import annotations
