@@ -22,7 +22,18 @@ Skills:
   ``g = 3 exp(−‖u − c‖² / (2 r²)) − 1`` saturates at −1 away from it (like the pour's score:
   most failures score the same, so a fresh context's slice is flat). Controls with
   ``u₀ + u₁ > 1.4`` fail the pre-check. Uniform controls succeed ~9 % of the time. θ* is
-  scored with the exact score over 100 held-out contexts; 60 trials, checkpoints every 20.
+  scored with the exact score over 100 held-out contexts; 100 trials, checkpoints every 25.
+* ``narrowing5d`` — a second synthetic skill (issue #21, defined here, unseen by the GP fit's
+  design): two contexts ``a ∈ [0, 1]²``, three controls ``(reach ∈ [0, 2], lift ∈ [−1, 1],
+  yaw ∈ [−π, π])``; in normalised control coordinates the good set is a ball centred at
+  ``(0.5 cos(2π a₀), 0.5 sin(2π a₀), 0.6 a₁ − 0.3)`` whose radius ``0.55 − 0.3 a₁`` narrows with
+  ``a₁``; the score saturates at −1 outside it (same sigmoid as ``saturated4d``). Controls with
+  ``u₀ − u₂ > 1.5`` fail the pre-check. Uniform controls succeed ~4 % of the time. Same
+  protocol as ``saturated4d``.
+
+``run --prior-sd S`` sets ``LearningConfig.lengthscale_prior_sd`` (``none``: the maximum
+marginal likelihood fit before issue #21); each job records it, and a log mixes no settings
+(pass a different ``--log``).
 
 Times are CPU seconds of this process (the machine is shared; wall time means little).
 """
@@ -60,6 +71,8 @@ SIZES: Mapping[str, Mapping[str, int]] = {
     "pour": {"budget": 100, "init": 10, "eval_every": 25, "contexts": 50, "candidates": 5000},
     "saturated4d": {"budget": 100, "init": 10, "eval_every": 25, "contexts": 100,
                     "candidates": 5000},
+    "narrowing5d": {"budget": 100, "init": 10, "eval_every": 25, "contexts": 100,
+                    "candidates": 5000},
 }
 
 SATURATED4D = SkillSpec(
@@ -88,16 +101,45 @@ def saturated4d_valid(contexts: np.ndarray, controls: np.ndarray) -> np.ndarray:
     return u[:, 0] + u[:, 1] <= 1.4
 
 
+NARROWING5D = SkillSpec(
+    name="narrowing5d",
+    context=ParamSpace(("a0", "a1"), (0.0, 0.0), (1.0, 1.0)),
+    control=ParamSpace(("reach", "lift", "yaw"), (0.0, -1.0, -math.pi), (2.0, 1.0, math.pi)),
+    description="3 controls + 2 contexts: a good ball that circles with a0 and narrows with "
+                "a1; the score saturates at -1 elsewhere; one edge fails the pre-check",
+)
+
+
+def narrowing5d_score(contexts: np.ndarray, controls: np.ndarray) -> np.ndarray:
+    """Score ``(n,)`` of physical ``contexts (n, 2)`` and ``controls (n, 3)`` (module doc)."""
+    u = _unit(controls, NARROWING5D.control)
+    a0, a1 = contexts[:, 0], contexts[:, 1]
+    center = np.stack([0.5 * np.cos(2 * math.pi * a0), 0.5 * np.sin(2 * math.pi * a0),
+                       0.6 * a1 - 0.3], axis=1)
+    distance = np.linalg.norm(u - center, axis=1)
+    return 2.7 / (1.0 + np.exp(-(0.55 - 0.3 * a1 - distance) / 0.02)) - 1.0
+
+
+def narrowing5d_valid(contexts: np.ndarray, controls: np.ndarray) -> np.ndarray:
+    """Pre-check ``(n,)`` bools: the edge ``u₀ − u₂ > 1.5`` is invalid."""
+    u = _unit(controls, NARROWING5D.control)
+    return u[:, 0] - u[:, 2] <= 1.5
+
+
 def saturated_backend() -> SyntheticBackend:
-    """The synthetic backend with :data:`SATURATED4D` added (noise-free)."""
+    """The synthetic backend with :data:`SATURATED4D` and :data:`NARROWING5D` added
+    (noise-free)."""
     backend = SyntheticBackend()
-    backend._skills = {**backend._skills, "saturated4d": AnalyticSkill(
-        SATURATED4D, saturated4d_score, saturated4d_valid)}
+    backend._skills = {**backend._skills,
+                       "saturated4d": AnalyticSkill(SATURATED4D, saturated4d_score,
+                                                    saturated4d_valid),
+                       "narrowing5d": AnalyticSkill(NARROWING5D, narrowing5d_score,
+                                                    narrowing5d_valid)}
     return backend
 
 
 def _backend(skill: str) -> SkillBackend:
-    if skill == "saturated4d":
+    if skill in ("saturated4d", "narrowing5d"):
         return saturated_backend()
     from ltamp_cli.backends import load_backend
 
@@ -131,14 +173,19 @@ def _evaluator(backend: SkillBackend, skill: str, seed: int) -> SkillEvaluator:
                           n_candidates=sizes["candidates"])
 
 
-def run_job(skill: str, learner: str, seed: int) -> dict[str, Any]:
-    """One learner × seed job: its θ* curve, training successes and CPU seconds."""
-    sizes = SIZES[skill]
+def run_job(skill: str, learner: str, seed: int,
+            prior_sd: float | None = LearningConfig.lengthscale_prior_sd,
+            final_only: bool = False) -> dict[str, Any]:
+    """One learner × seed job: its θ* curve (only the final point with ``final_only``),
+    training successes and CPU seconds."""
+    sizes = dict(SIZES[skill])
+    if final_only:
+        sizes["eval_every"] = sizes["budget"]
     backend = _backend(skill)
     try:
         evaluator = _evaluator(backend, skill, seed)
         config = LearningConfig(strategy=learner, budget=sizes["budget"], init=sizes["init"],
-                                seed=seed)
+                                seed=seed, lengthscale_prior_sd=prior_sd)
         cpu0 = time.process_time()
         result = learn_online(backend, skill, config, evaluator=evaluator,
                               eval_every=sizes["eval_every"])
@@ -146,10 +193,20 @@ def run_job(skill: str, learner: str, seed: int) -> dict[str, Any]:
     finally:
         backend.close()
     return {"skill": skill, "learner": learner, "seed": seed, "sizes": dict(sizes),
-            "cpu_s": round(cpu, 1),
+            "lengthscale_prior_sd": prior_sd, "cpu_s": round(cpu, 1),
             "training_successes": sum(1 for r in result.records if r.score > 0),
             "curve": [{"n_trials": p.n_trials, "success_rate": p.success_rate,
                        "successes": list(p.successes or ())} for p in result.curve]}
+
+
+def _same_protocol(sizes: Mapping[str, int] | None, expected: Mapping[str, int]) -> bool:
+    """Whether a job's sizes are ``expected``'s, up to ``eval_every`` (``--final-only`` jobs
+    skip the intermediate checkpoints; the final θ* evaluation is the same: its candidates
+    come from a generator seeded afresh per evaluation)."""
+    if sizes is None:
+        return False
+    return ({k: v for k, v in sizes.items() if k != "eval_every"}
+            == {k: v for k, v in expected.items() if k != "eval_every"})
 
 
 def _read_log(path: Path) -> dict[tuple[str, str, int], dict[str, Any]]:
@@ -160,7 +217,7 @@ def _read_log(path: Path) -> dict[tuple[str, str, int], dict[str, Any]]:
                 entry = json.loads(line)
             except json.JSONDecodeError:
                 continue  # a line torn by an interruption
-            if entry.get("sizes") == dict(SIZES[entry["skill"]]):
+            if _same_protocol(entry.get("sizes"), SIZES[entry["skill"]]):
                 jobs[(entry["skill"], entry["learner"], int(entry["seed"]))] = entry
     return jobs
 
@@ -288,6 +345,12 @@ def main(argv: list[str] | None = None) -> int:
     run_p.add_argument("--learner", choices=LEARNERS, required=True)
     run_p.add_argument("--seeds", default="0-4", help="e.g. 0-4 or 0,2")
     run_p.add_argument("--log", type=Path, default=DEFAULT_LOG)
+    run_p.add_argument("--prior-sd", default=str(LearningConfig.lengthscale_prior_sd),
+                       help="LearningConfig.lengthscale_prior_sd, or 'none' (maximum "
+                            "marginal likelihood)")
+    run_p.add_argument("--final-only", action="store_true",
+                       help="evaluate θ* only after the last trial (same final number, "
+                            "less CPU)")
     rep = sub.add_parser("report", help="print the table and write the JSON")
     rep.add_argument("--log", type=Path, default=DEFAULT_LOG)
     rep.add_argument("--out", type=Path, default=DEFAULT_JSON)
@@ -305,12 +368,19 @@ def main(argv: list[str] | None = None) -> int:
         print(f"bench.lse2: bad --seeds {args.seeds!r} (expected e.g. 0-4 or 0,2)",
               file=sys.stderr)
         return 2
+    try:
+        prior_sd = None if args.prior_sd.lower() == "none" else float(args.prior_sd)
+        LearningConfig(lengthscale_prior_sd=prior_sd)
+    except ValueError:
+        print(f"bench.lse2: bad --prior-sd {args.prior_sd!r} (expected a number > 0 or none)",
+              file=sys.stderr)
+        return 2
     args.log.parent.mkdir(parents=True, exist_ok=True)
     for seed in seeds:
         if (args.skill, args.learner, seed) in _read_log(args.log):
             print(f"{args.skill} {args.learner} seed {seed}: logged already", flush=True)
             continue
-        job = run_job(args.skill, args.learner, seed)
+        job = run_job(args.skill, args.learner, seed, prior_sd, args.final_only)
         with args.log.open("a") as handle:
             handle.write(json.dumps(job) + "\n")
         print(f"{args.skill} {args.learner} seed {seed}: θ* "

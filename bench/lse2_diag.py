@@ -8,7 +8,9 @@ and normalised), the GP's ``μ``/``σ`` (score units) at the choice *before* the
 the control lies on the box boundary (some normalised coordinate with ``|u| > 0.95``), whether
 it passes the pre-check, the true score and the GP hyperparameters. A summary (successes,
 boundary share of active choices, mean σ/|μ|) is printed at the end. ``--skill saturated4d``
-runs ``bench.lse2``'s synthetic skill instead of Box2D.
+(or ``narrowing5d``) runs ``bench.lse2``'s synthetic skill instead of Box2D. ``--prior-sd``
+sets ``LearningConfig.lengthscale_prior_sd`` (``none``: maximum marginal likelihood, the fit
+before issue #21's prior).
 """
 
 from __future__ import annotations
@@ -39,11 +41,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--trials", type=int, default=60)
     parser.add_argument("--init", type=int, default=10)
     parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument("--prior-sd", default=str(LearningConfig.lengthscale_prior_sd))
     args = parser.parse_args(argv)
     if args.trials < 1:
         print("lse2_diag: --trials must be >= 1", file=sys.stderr)
         return 2
-    if args.skill == "saturated4d":
+    try:
+        prior_sd = None if args.prior_sd.lower() == "none" else float(args.prior_sd)
+        LearningConfig(lengthscale_prior_sd=prior_sd)
+    except ValueError:
+        print(f"lse2_diag: bad --prior-sd {args.prior_sd!r}", file=sys.stderr)
+        return 2
+    if args.skill in ("saturated4d", "narrowing5d"):
         from bench.lse2 import saturated_backend
 
         backend = saturated_backend()
@@ -51,7 +60,7 @@ def main(argv: list[str] | None = None) -> int:
         backend = load_backend(args.backend)
     spec = backend.skills()[args.skill]
     config = LearningConfig(strategy=args.strategy, budget=args.trials, init=args.init,
-                            seed=args.seed)
+                            seed=args.seed, lengthscale_prior_sd=prior_sd)
     rng = np.random.default_rng([config.seed, 0])
     learner = _Learner(spec, config, rng)
     template = RandomModel(spec, 0.0)

@@ -9,6 +9,7 @@ import typer
 
 from ltamp_cli.cli.paths import writable_output_file
 from ltamp_cli.errors import InputError
+from ltamp_cli.learning.defaults import DEFAULT_STRATEGY
 from ltamp_cli.seeds import usable_seed
 from ltamp_cli.writer_lock import holds_writer_lock
 
@@ -55,8 +56,10 @@ def train_command(
         str, typer.Option("--backend", help="Backend that runs trials.")
     ] = "synthetic",
     strategy: Annotated[
-        str, typer.Option("--strategy", help="lse, lse2, random, gp, nn-c, nn-r, rf-c or rf-r.")
-    ] = "lse2",
+        str, typer.Option("--strategy", help="lse (straddle over control and context), lse2 "
+                          "(over the controls of a drawn context), random, gp, nn-c, nn-r, rf-c "
+                          "or rf-r.")
+    ] = DEFAULT_STRATEGY,
     budget: Annotated[int, typer.Option("--budget", help="Total number of trials.")] = 50,
     init: Annotated[int, typer.Option("--init", help="Random trials before active ones.")] = 10,
     explore_until_success: Annotated[

@@ -50,7 +50,8 @@ from ltamp_cli.backends.protocol import SkillBackend, SkillSpec
 from ltamp_cli.backends.sanity import run_trial_safely
 from ltamp_cli.learning.acquisition import evaluate, maximize, straddle
 from ltamp_cli.learning.baselines import SKLEARN_KINDS, RandomModel, SklearnModel
-from ltamp_cli.learning.gp import HyperBounds, fit_gp
+from ltamp_cli.learning.defaults import DEFAULT_STRATEGY
+from ltamp_cli.learning.gp import DEFAULT_PRIOR, HyperBounds, LengthscalePrior, fit_gp
 from ltamp_cli.learning.kernels import KERNEL_NAMES
 from ltamp_cli.learning.metrics import Evaluation, SkillEvaluator
 from ltamp_cli.learning.model import LevelSetModel, PhysicalValidity, SkillModel
@@ -76,7 +77,7 @@ GP_STRATEGIES = ("lse", "lse2", "gp")
 class LearningConfig:
     """How to learn. ``budget`` is the total number of trials, ``init`` of them random."""
 
-    strategy: str = "lse2"
+    strategy: str = DEFAULT_STRATEGY
     kernel: str = "matern52"
     budget: int = 50
     init: int = 10
@@ -92,6 +93,10 @@ class LearningConfig:
     explore_until_success: bool = True
     #: ``lse2``: uniform controls per drawn context among which ψ picks (module doc).
     lse2_candidates: int = 100
+    #: GP strategies: log-sd of the log-normal prior on the lengthscales (median
+    #: ``DEFAULT_PRIOR.median``), fitted by MAP; ``None``: maximum marginal likelihood, the
+    #: fit before issue #21 (see :class:`~ltamp_cli.learning.gp.LengthscalePrior`).
+    lengthscale_prior_sd: float | None = DEFAULT_PRIOR.log_sd
     threads: int | None = 1  # thread-pool limit while learning (ltamp_cli.threads)
 
     def __post_init__(self) -> None:
@@ -109,6 +114,16 @@ class LearningConfig:
             raise ValueError(f"refit_every must be >= 1, got {self.refit_every}")
         if self.lse2_candidates < 1:
             raise ValueError(f"lse2_candidates must be >= 1, got {self.lse2_candidates}")
+        if self.lengthscale_prior_sd is not None and not self.lengthscale_prior_sd > 0:
+            raise ValueError(
+                f"lengthscale_prior_sd must be > 0 or None, got {self.lengthscale_prior_sd}"
+            )
+
+    def lengthscale_prior(self) -> LengthscalePrior | None:
+        """The GP fit's lengthscale prior (``None``: maximum marginal likelihood)."""
+        if self.lengthscale_prior_sd is None:
+            return None
+        return LengthscalePrior(DEFAULT_PRIOR.median, self.lengthscale_prior_sd)
 
 
 @dataclass
@@ -152,7 +167,7 @@ def fit_model(
         restarts = config.gp_restarts if final or warm is None else 0
         gp = fit_gp(
             x, y, config.kernel, mean=config.mean, restarts=restarts, rng=rng, warm_start=warm,
-            bounds=gp_bounds(spec),
+            bounds=gp_bounds(spec), prior=config.lengthscale_prior(),
         )
         return LevelSetModel(spec, gp)
     if config.strategy == "random":
