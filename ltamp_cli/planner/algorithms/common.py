@@ -39,6 +39,7 @@ from ltamp_cli.planner.search.ground import (
     join_tuples,
 )
 from ltamp_cli.planner.search.normalize import LiftedLiteral
+from ltamp_cli.planner.search.incremental import GroundingCache
 from ltamp_cli.planner.search.solve import DiscreteResult, plan_discrete
 from ltamp_cli.planner.streams import (
     Binding,
@@ -204,6 +205,8 @@ class PlannerState:
     tracker: CallTracker = field(default_factory=CallTracker)
     iterations: int = 0
     searches: int = 0
+    # Grounds this solve's successive search tasks without redoing the joins.
+    grounding_cache: GroundingCache = field(default_factory=GroundingCache)
     last_skeletons: list[list[str]] = field(default_factory=list)
     cost_bound: float | None = None  # anytime mode: only plans cheaper than this
     # Facts certified by :fluents streams -> the state facts they were computed under.
@@ -468,7 +471,7 @@ class PlannerState:
                 self.problem.domain, objects, init, function_values, self.problem.goal,
                 self.deadline, self.config.search, self.config.unit_costs, max_expansions,
                 self.config.skeleton, self.cost_bound, self.fluent_requirements,
-                context_blocks, guess, skip_if_grounded_as)
+                context_blocks, guess, skip_if_grounded_as, self.grounding_cache)
         finally:
             self.search_time += time.perf_counter() - start
             self.search_cpu += time.thread_time() - cpu_start
