@@ -32,7 +32,7 @@ from planner import config_for
 from ltamp_cli.planner.algorithms import common, skeletons
 from ltamp_cli.planner.api import _relaxed_gc, _solve
 from ltamp_cli.planner.problem import load_problem
-from ltamp_cli.planner.search import engine, heuristic, solve
+from ltamp_cli.planner.search import engine, heuristic, incremental, solve
 from ltamp_cli.planner.search.task import Task
 from ltamp_cli.planner.watchdog import CallTracker
 from ltamp_cli.threads import use_one_thread
@@ -45,6 +45,10 @@ PHASES = (
     (skeletons, "evaluate_eager", "eager streams"),
     (skeletons, "_process", "binding processing"),
     (solve, "ground_task", "grounding"),
+    (incremental.GroundingCache, "ground", "grounding"),
+    (solve, "require_fluent_contexts", "fluent contexts"),
+    (solve, "forbid_contexts", "fluent contexts"),
+    (engine, "follow_plan", "guess check"),
     (engine, "_search", "search engine (incl. heuristic)"),
     (engine, "eliminate_redundant_actions", "post-processing: elimination"),
     (engine, "bridge_detours", "post-processing: bridging"),
@@ -82,6 +86,9 @@ def wrapped(phases: Counter, searches: list[dict[str, Any]]) -> Iterator[None]:
     patch(heuristic.FFHeuristic, "_evaluate",
           timer(heuristic.FFHeuristic._evaluate, "heuristic evaluations"))
     patch(Task, "__init__", timer(Task.__init__, "task encoding"))
+    patch(heuristic.FFHeuristic, "__init__",
+          timer(heuristic.FFHeuristic.__init__, "heuristic construction"))
+    patch(Task, "_compute_vector", timer(Task._compute_vector, "state vectors (axioms)"))
     search = common.PlannerState.search
 
     def logged(state: Any, init: Any, objects: Any, function_values: Any,

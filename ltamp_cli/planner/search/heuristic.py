@@ -103,6 +103,12 @@ class FFHeuristic:
         self.ach_segment = np.repeat(np.arange(len(lists)), counts)
         self.ach_counts = counts
         self.has_ops = len(preconditions) > 0
+        # Work arrays of :meth:`_evaluate` (values of pre_flat, operator costs, candidate
+        # costs, best and current cost per achieved fact); results never alias them.
+        self._buffers = (np.empty(len(self.pre_flat)), np.empty(len(preconditions)),
+                         np.empty(len(self.ach_flat)), np.empty(len(self.achiever_facts)),
+                         np.empty(len(self.achiever_facts)))
+        self._improved = np.empty(len(self.achiever_facts), dtype=bool)
         self._memo: dict[bytes, HeuristicResult] = {}
 
     @staticmethod
@@ -191,17 +197,25 @@ class FFHeuristic:
         fact_cost[TRUE_FACT] = 0.0
         if not self.has_ops or not len(self.achiever_facts):
             return HeuristicResult(INFINITY, [])
-        op_cost = self.costs
+        # Jacobi rounds of the additive costs over preallocated buffers (``take``/``out=``:
+        # no array allocation per round; the rounds are most of an evaluation).
+        pre_values, op_cost, candidate_costs, best, current = self._buffers
+        pre_flat, pre_starts, costs = self.pre_flat, self.pre_starts, self.costs
+        ach_flat, ach_starts, achiever_facts = self.ach_flat, self.ach_starts, self.achiever_facts
+        improved = self._improved
         for _ in range(self.num_facts + 1):
-            op_cost = np.add.reduceat(fact_cost[self.pre_flat], self.pre_starts)
-            op_cost += self.costs
-            candidate_costs = op_cost[self.ach_flat]
-            best = np.minimum.reduceat(candidate_costs, self.ach_starts)
-            current = fact_cost[self.achiever_facts]
-            if not (best < current).any():
+            np.take(fact_cost, pre_flat, out=pre_values)
+            np.add.reduceat(pre_values, pre_starts, out=op_cost)
+            op_cost += costs
+            np.take(op_cost, ach_flat, out=candidate_costs)
+            np.minimum.reduceat(candidate_costs, ach_starts, out=best)
+            np.take(fact_cost, achiever_facts, out=current)
+            np.less(best, current, out=improved)
+            if not improved.any():
                 break
             # Scatter the element-wise minimum: cheaper than boolean-indexing the changes.
-            fact_cost[self.achiever_facts] = np.minimum(best, current)
+            np.minimum(best, current, out=current)
+            fact_cost[achiever_facts] = current
         if fact_cost[task.goal] == INFINITY:
             return HeuristicResult(INFINITY, [])
         return self._relaxed_plan(fact_cost, candidate_costs, best)

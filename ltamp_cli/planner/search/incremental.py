@@ -31,6 +31,7 @@ over changing objects gets a new union whenever its rules change.
 
 from __future__ import annotations
 
+import bisect
 from collections import defaultdict
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -101,12 +102,17 @@ class _Instance:
     # ``demands`` and those of every effect (what the union grounds on demand).
     all_demands: tuple[Fact, ...] = ()
     built: dict[tuple[object, ...], GroundAction | GroundAxiom] = field(default_factory=dict)
+    # An action with a constant cost and no effect with static conditions or demands: its
+    # one ground action (built on first use).
+    plain: bool = False
+    number: int = -1  # position in the union's flat arrays
 
     def sort_key(self) -> tuple[object, ...]:
+        """:func:`.ground_task`'s canonical order (axioms after actions, never compared)."""
         if self.head is not None:
-            return (self.head, self.dynamic_pos, self.dynamic_neg, self.static_pos)
-        return (self.rule.source.name, self.args, self.dynamic_pos,  # type: ignore[union-attr]
-                self.dynamic_neg, self.static_pos)
+            return (1, self.head, self.dynamic_pos, self.dynamic_neg, self.static_pos)
+        return (0, self.rule.source.name, self.args,  # type: ignore[union-attr]
+                self.dynamic_pos, self.dynamic_neg, self.static_pos)
 
 
 class _Union:
@@ -149,6 +155,9 @@ class _Union:
         self.row_bounds: list[int] = []  # first effect row of each main instance
         self.row_bounds_end: list[int] = [0]
         self.cost_terms: list[tuple[int, Fact]] = []
+        self.on_demand_list: list[bool] = []
+        # (sort key, number) of every instance, kept sorted as the union grows.
+        self.ranked: list[tuple[tuple[object, ...], int]] = []
 
     # ----------------------------------------------------------------- union growth
 
@@ -315,6 +324,8 @@ class _Union:
                 delta.append(fact)
         instance.effects = tuple(effects)
         instance.all_demands = tuple(demands)
+        instance.plain = instance.cost is not None and not any(
+            e.static_pos or e.static_neg or e.demands for e in effects)
         self.instances.append(instance)
         return instance
 
@@ -332,10 +343,10 @@ class _Union:
             lists[7], lists[8], lists[9], lists[10])
         fid = self.fact_id
         for instance in self.instances[max(self.arrays_for, 0):]:
-            if instance.on_demand:
-                continue
-            number = len(self.main)
+            number = instance.number = len(self.main)
             self.main.append(instance)
+            bisect.insort(self.ranked, (instance.sort_key(), number))
+            self.on_demand_list.append(instance.on_demand)
             self.row_bounds.append(len(rows_owner))
             if instance.cost_term is not None:
                 self.cost_terms.append((number, instance.cost_term))
@@ -363,6 +374,9 @@ class _Union:
         (self.pre, self.pre_starts, self.neg, self.neg_starts, self.rows_owner,
          self.rows_fact) = (np.asarray(values, dtype=as_int) for values in lists[:6])
         self.rows_positive = np.asarray(rows_positive, dtype=bool)
+        self.on_demand_mask = np.asarray(self.on_demand_list, dtype=bool)
+        self.order = np.fromiter((number for _, number in self.ranked), dtype=np.int64,
+                                 count=len(self.ranked))
         (self.row_pos, self.row_pos_starts, self.row_neg, self.row_neg_starts) = (
             np.asarray(values, dtype=as_int) for values in lists[7:])
 
@@ -377,9 +391,11 @@ class _Union:
         ids = self.fact_ids
         state[np.fromiter((ids[f] for f in init if f in ids), dtype=np.int64)] = True
         count = len(self.main)
-        valid = np.ones(count, dtype=bool)
+        static_ok = np.ones(count, dtype=bool)
         if count:
-            valid &= ~np.maximum.reduceat(state[self.neg], self.neg_starts)
+            static_ok &= ~np.maximum.reduceat(state[self.neg], self.neg_starts)
+        # Negative-only derived predicates are instantiated on demand, after the fixpoint.
+        valid = static_ok & ~self.on_demand_mask
         costs: dict[int, float] = {}
         for number, term in self.cost_terms:
             value = function_values.get(term)  # type: ignore[arg-type]
@@ -411,17 +427,27 @@ class _Union:
         demanded: list[Fact] = []
         rows_ok_list = rows_ok.tolist()
         bounds = self.row_bounds_end
-        for position in np.flatnonzero(body_ready).tolist():
+        ready_list = body_ready.tolist()
+        static_list = static_ok.tolist()
+        order = self.order
+        # In the canonical order: the lists come out sorted.
+        for position in order[(body_ready & ~self.on_demand_mask)[order]].tolist():
             instance = self.main[position]
             if not fired[position]:
-                if instance.head is not None:
-                    blocking = next((f for f in instance.static_neg if f in init), None)
-                    if blocking is not None:
-                        blocked.append((instance.head, instance.dynamic_pos, blocking))
+                if instance.head is not None and not static_list[position]:
+                    blocking = next(f for f in instance.static_neg if f in init)
+                    blocked.append((instance.head, instance.dynamic_pos, blocking))
                 continue
             demanded.extend(instance.demands)
             if instance.head is not None:
                 axioms.append(self._axiom(instance))
+                continue
+            if instance.plain:
+                built = instance.built.get(())
+                if built is None:
+                    built = instance.built[()] = self._action(
+                        instance, (True,) * len(instance.effects), instance.cost)  # type: ignore
+                actions.append(built)  # type: ignore[arg-type]
                 continue
             flags = tuple(rows_ok_list[bounds[position]:bounds[position + 1]])
             for effect, ok in zip(instance.effects, flags, strict=True):
@@ -432,6 +458,7 @@ class _Union:
         reachable = set(init)
         reachable.update([facts[i] for i in np.flatnonzero(reach & ~state).tolist()])
         included = len(actions) + len(axioms)
+        included_axioms = len(axioms)
         done: set[Fact] = set()
         while demanded:
             fact = demanded.pop()
@@ -439,10 +466,10 @@ class _Union:
                 continue
             done.add(fact)
             for instance in self.demand_instances.get(fact, ()):
-                if not all(reach[i] for i in instance.positive):
+                if not ready_list[instance.number]:
                     continue
-                blocking = next((f for f in instance.static_neg if f in init), None)
-                if blocking is not None:
+                if not static_list[instance.number]:
+                    blocking = next(f for f in instance.static_neg if f in init)
                     blocked.append((instance.head, instance.dynamic_pos,  # type: ignore
                                     blocking))
                     continue
@@ -450,8 +477,8 @@ class _Union:
                 included += 1
                 reachable.add(instance.head)  # type: ignore[arg-type]
                 demanded.extend(instance.demands)
-        actions.sort(key=lambda a: (a.name, a.args, a.pre_pos, a.pre_neg, a.static_pre))
-        axioms.sort(key=lambda a: (a.head, a.body_pos, a.body_neg, a.static_pos))
+        if len(axioms) > included_axioms:  # on-demand ones were added
+            axioms.sort(key=lambda a: (a.head, a.body_pos, a.body_neg, a.static_pos))
         grounding = Grounding(actions, axioms, reachable,
                               frozenset({fact[0] for fact in reachable} - self.fluent),
                               self.derived, blocked)
