@@ -38,8 +38,8 @@ from ltamp_cli.planner.search.ground import (
     FactIndex,
     join_tuples,
 )
-from ltamp_cli.planner.search.normalize import LiftedLiteral
 from ltamp_cli.planner.search.incremental import GroundingCache
+from ltamp_cli.planner.search.normalize import LiftedLiteral
 from ltamp_cli.planner.search.solve import DiscreteResult, plan_discrete
 from ltamp_cli.planner.streams import (
     Binding,

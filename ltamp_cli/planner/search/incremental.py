@@ -141,6 +141,8 @@ class _Union:
             for position, literal in enumerate(rule.positive):
                 self.by_predicate[literal.predicate].append((rule, position))
         self.seen: set[tuple[int, tuple[str, ...]]] = set()
+        self.layouts: dict[int, tuple[tuple[tuple[str, tuple[str, ...]], ...],
+                                      tuple[int, ...], tuple[int, ...]]] = {}
         self.instances: list[_Instance] = []
         self.demand_instances: dict[Fact, list[_Instance]] = defaultdict(list)
         self.demanded_done: set[Fact] = set()
@@ -171,7 +173,8 @@ class _Union:
 
     def extend(self, init: Iterable[Fact], deadline: float) -> None:
         """Add the facts of ``init`` that are new to the union and ground what they reach."""
-        delta = [fact for fact in sorted(init) if fact not in self.index.members]
+        members = self.index.members
+        delta = sorted([fact for fact in init if fact not in members])
         since = self.index.sizes() if self.started else None
         for fact in delta:
             self.index.add(fact)
@@ -263,19 +266,23 @@ class _Union:
         compiled = rule.compiled
         if compiled is None:
             compiled = rule.compiled = _compile_rule(rule, self.fluent)
+        layout = self.layouts.get(id(rule))
+        if layout is None:
+            layout = self.layouts[id(rule)] = _layout(rule, self.fluent)
+        terms_of_positive, dynamic_at, static_at = layout
         fid = self.fact_id
-        positive = tuple(dict.fromkeys(
-            fid((lit.predicate, *[get(a, a) for a in lit.args])) for lit in rule.positive))
+        # Each positive literal grounded once: its id, and as a dynamic or static fact.
+        grounded = [(predicate, *[get(a, a) for a in terms])
+                    for predicate, terms in terms_of_positive]
         static_neg = tuple([(predicate, *[get(a, a) for a in terms])
                             for predicate, terms in compiled.static_neg])
         instance = _Instance(
-            rule, (), positive, static_neg, tuple(fid(f) for f in static_neg),
-            tuple([(predicate, *[get(a, a) for a in terms])
-                   for predicate, terms in compiled.dynamic_pos]),
+            rule, (), tuple([fid(f) for f in grounded]), static_neg,
+            tuple([fid(f) for f in static_neg]),
+            tuple([grounded[i] for i in dynamic_at]),
             tuple([(predicate, *[get(a, a) for a in terms])
                    for predicate, terms in compiled.dynamic_neg]),
-            tuple([(predicate, *[get(a, a) for a in terms])
-                   for predicate, terms in compiled.static_pos]))
+            tuple([grounded[i] for i in static_at]))
         source = rule.source
         demanded = self.on_demand_predicates
         if isinstance(source, NormalAxiom):
@@ -504,6 +511,17 @@ class _Union:
                 instance.rule.source.name, instance.args, instance.dynamic_pos,
                 instance.dynamic_neg, effects, cost, instance.static_pos, instance.cost_term)
         return built  # type: ignore[return-value]
+
+
+def _layout(rule: _Rule, fluent: frozenset[str]
+            ) -> tuple[tuple[tuple[str, tuple[str, ...]], ...], tuple[int, ...], tuple[int, ...]]:
+    """A rule's positive literals as (predicate, terms), and the positions of the dynamic
+    ones and of the static ones other than types (:func:`.ground._compile_rule`'s split)."""
+    terms = tuple((lit.predicate, lit.args) for lit in rule.positive)
+    dynamic = tuple(i for i, (predicate, _) in enumerate(terms) if predicate in fluent)
+    static = tuple(i for i, (predicate, _) in enumerate(terms)
+                   if predicate not in fluent and not predicate.startswith("type:"))
+    return terms, dynamic, static
 
 
 class GroundingCache:
