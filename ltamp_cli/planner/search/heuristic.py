@@ -97,11 +97,6 @@ class FFHeuristic:
         self.achievers = achievers
         lists = [achievers[f] for f in self.achiever_facts]
         self.ach_flat, self.ach_starts = _flatten(lists, 0)
-        # Segment (position in achiever_facts) of every ach_flat entry, for picking each
-        # fact's best supporter with array operations.
-        counts = np.diff(np.append(self.ach_starts, len(self.ach_flat)))
-        self.ach_segment = np.repeat(np.arange(len(lists)), counts)
-        self.ach_counts = counts
         self.has_ops = len(preconditions) > 0
         # Work arrays of :meth:`_evaluate` (values of pre_flat, operator costs, candidate
         # costs, best and current cost per achieved fact); results never alias them.
@@ -218,40 +213,42 @@ class FFHeuristic:
             fact_cost[achiever_facts] = current
         if fact_cost[task.goal] == INFINITY:
             return HeuristicResult(INFINITY, [])
-        return self._relaxed_plan(fact_cost, candidate_costs, best)
+        return self._relaxed_plan(fact_cost, op_cost)
 
-    def _best_supporters(self, candidate_costs: np.ndarray, best: np.ndarray) -> np.ndarray:
-        """Per fact, its first achiever of minimal cost (-1: none), as ``(num_facts,)``."""
-        hits = np.flatnonzero(candidate_costs == np.repeat(best, self.ach_counts))
-        segments = self.ach_segment[hits]
-        first = np.ones(len(hits), dtype=bool)
-        first[1:] = segments[1:] != segments[:-1]
-        supporters = np.full(self.num_facts, -1, dtype=np.int64)
-        supporters[self.achiever_facts[segments[first]]] = self.ach_flat[hits[first]]
-        return supporters
+    def _relaxed_plan(self, fact_cost: np.ndarray, op_cost: np.ndarray) -> HeuristicResult:
+        """The relaxed plan of best supporters from the fixpoint's costs (``fact_cost``
+        ``(num_facts,)``, ``op_cost`` ``(relaxed operators,)`` of the last round).
 
-    def _relaxed_plan(self, fact_cost: np.ndarray, candidate_costs: np.ndarray,
-                      best: np.ndarray) -> HeuristicResult:
-        # Facts of cost 0 hold already (or are reached by cost-0 axioms from what holds).
-        supporters = self._best_supporters(candidate_costs, best).tolist()
-        zero = (fact_cost == 0.0).tolist()
+        A fact's best supporter is its first achiever whose cost equals the fact's: at the
+        fixpoint a fact that does not hold initially costs exactly its cheapest achiever
+        (costs only decrease from round to round), so the supporter is looked up, only for
+        the facts the plan visits, instead of computed for every fact with array operations
+        (measured: the extraction took 100 µs of a 370 µs evaluation that way, 55 µs now).
+        """
+        costs_now = fact_cost.tolist()
+        operator_costs = op_cost.tolist()
+        achievers = self.achievers
+        preconditions = self.preconditions
         chosen: set[int] = set()
         marked: set[int] = set()
         stack = [self.task.goal]
         while stack:
             fact = stack.pop()
-            if fact in marked or zero[fact]:
+            # Facts of cost 0 hold already (or are reached by cost-0 axioms from them).
+            if fact in marked or costs_now[fact] == 0.0:
                 continue
             marked.add(fact)
-            supporter = supporters[fact]
+            target = costs_now[fact]
+            supporter = next(op for op in achievers[fact] if operator_costs[op] == target)
             if supporter in chosen:
                 continue
             chosen.add(supporter)
-            stack.extend(self.preconditions[supporter])
+            stack.extend(preconditions[supporter])
         costs = self._cost_list
         value = float(sum(costs[i] for i in chosen))
+        origin = self.origin
         preferred = sorted({
-            self.origin[i] for i in chosen
-            if self.origin[i] >= 0 and all(zero[f] for f in self.preconditions[i])
+            origin[i] for i in chosen
+            if origin[i] >= 0 and all(costs_now[f] == 0.0 for f in preconditions[i])
         })
         return HeuristicResult(value, preferred)
