@@ -165,7 +165,7 @@ def test_whole_solves_ground_as_from_scratch(example: str, algorithm: str,
     known = {f.name for f in fields(PlannerConfig)}
     options = {k: v for k, v in problem.planner_options.items() if k in known}
     config = PlannerConfig(**{**options, "algorithm": algorithm, "seed": 0,
-                              "max_time": 60.0})
+                              "max_time": 60.0, "incremental_grounding": True})
     result = _solve(problem, config, time.perf_counter(), CallTracker(), [])
     assert result.status == "solved"
     assert len(calls) >= 3 and all(calls)
