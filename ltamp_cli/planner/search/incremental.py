@@ -22,10 +22,15 @@ the heads that included instances negate, as :func:`.ground_task` does. The acti
 axioms come out in the same canonical order, so searches see the same task
 (``tests/planner/test_incremental_grounding.py`` compares both on whole solves).
 
-The union only grows; when it holds more than :data:`RESET_FACTOR` times the instances a
+The first task of a rule set is grounded from scratch (a union costs ~1.7x that to build;
+a solve with one search gains nothing from it), the union is built on the second. The
+union only grows; when it holds more than :data:`RESET_FACTOR` times the instances a
 search needs (placeholders that never come back), the next call starts a new union from
 that call's state, so a call costs at most a constant factor more than grounding its own
-state. The cache is keyed by the normalised rules: a domain whose quantifiers are expanded
+state. It pays when the searches reuse most of what they ground (kitchen_fluent), not when
+each brings mostly new instances (tamp2d with uniform placements: slower, also through the
+garbage collector's work on the union): hence ``PlannerConfig.incremental_grounding``, off
+by default. The cache is keyed by the normalised rules: a domain whose quantifiers are expanded
 over changing objects gets a new union whenever its rules change.
 """
 
