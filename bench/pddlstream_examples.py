@@ -37,6 +37,7 @@ from typing import Any
 import ltamp_cli.pddlstream as api
 from ltamp_cli.errors import InputError
 from ltamp_cli.pddlstream.problem import to_planning_problem
+from ltamp_cli.pddlstream.satisfaction import assignment_from_solution, compile_satisfaction
 from ltamp_cli.pddlstream.solve import to_solution
 from ltamp_cli.planner.algorithms.common import PlannerConfig
 from ltamp_cli.planner.api import solve as plan
@@ -46,6 +47,7 @@ DEFAULT_OUT = REPO / "bench" / "results" / "pddlstream_examples.json"
 SKIPPED_DIRS = ("retired", "todo", "pybullet")
 # PDDLStream's solvers: whatever algorithm an example calls, the bench solves with adaptive.
 SOLVERS = ("solve", "solve_adaptive", "solve_binding", "solve_focused", "solve_incremental")
+SATISFIERS = ("constraint_satisfaction", "solve_pddlstream_satisfaction")
 
 
 class Recorder:
@@ -74,6 +76,15 @@ class Recorder:
                       cost=result.cost if result.solved else None,
                       plan=[str(step) for step in result.plan or []])
         return to_solution(result)
+
+    def satisfy(self, problem: Any, stream_info: Any = None, costs: bool = True,
+                **_: Any) -> api.SatisfactionSolution:
+        """PDDLStream's ``constraint_satisfaction``: compiled to planning, then solved as
+        :meth:`solve` solves."""
+        compiled = compile_satisfaction(problem, costs)
+        solution = self.solve(compiled.problem, stream_info)
+        return assignment_from_solution(compiled, solution.plan, solution.cost,
+                                        solution.certificate)
 
     def solve_from_pddl(self, domain_pddl: str, problem_pddl: str, **_: Any) -> Any:
         start = time.perf_counter()
@@ -135,6 +146,8 @@ class PddlstreamRedirect(importlib.abc.MetaPathFinder, importlib.abc.Loader):
                 return redirect.recorder.solve
             if name == "solve_from_pddl":
                 return redirect.recorder.solve_from_pddl
+            if name in SATISFIERS:
+                return redirect.recorder.satisfy
             if hasattr(api, name):
                 return getattr(api, name)
             for helpers in redirect.helpers:

@@ -125,6 +125,40 @@ class FunctionInfo:
 PredicateInfo = FunctionInfo
 
 
+@dataclass(frozen=True)
+class UniqueOptValue:
+    """PDDLStream's optimistic value of one stream instance's output. ltamp never passes
+    optimistic values to user procedures (a function's optimistic value is 0), so user code
+    only ever sees real values; the type exists so that ported ``isinstance`` checks run."""
+
+    instance: Any
+    sequence_index: int
+    output: str
+
+
+@dataclass(frozen=True)
+class SharedOptValue:
+    """PDDLStream's optimistic value shared by a stream's instances (see
+    :class:`UniqueOptValue`)."""
+
+    stream: str
+    inputs: tuple[Any, ...]
+    input_objects: tuple[Any, ...]
+    output: str
+
+
+def add_opt_function(name: str, base_fn: Callable[..., float], stream_map: dict[str, Any],
+                     stream_info: dict[str, Any], constant: float = 0.0,
+                     coefficient: float = 1.0, **info_options: Any
+                     ) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Bind the ``:function`` ``name`` to ``constant + coefficient * base_fn(...)`` and give it
+    a :class:`FunctionInfo` whose ``opt_fn`` is ``constant`` (PDDLStream's helper). The
+    updated ``(stream_map, stream_info)`` are returned (the given dicts, changed in place)."""
+    stream_map[name] = lambda *args, **kwargs: constant + coefficient * base_fn(*args, **kwargs)
+    stream_info[name] = FunctionInfo(opt_fn=fn_from_constant(constant), **info_options)
+    return stream_map, stream_info
+
+
 
 def outputs_from_boolean(boolean: Any) -> tuple[()] | None:
     """A test's truth as one empty output tuple (true) or no output (false)."""
@@ -153,7 +187,8 @@ def get_defer_any_unbound() -> Callable[..., bool]:
     return never_defer
 
 
-__all__ = ["FunctionInfo", "PredicateInfo", "StreamInfo", "defer_shared", "defer_unique",
+__all__ = ["FunctionInfo", "PredicateInfo", "SharedOptValue", "StreamInfo", "UniqueOptValue",
+           "add_opt_function", "defer_shared", "defer_unique",
            "empty_gen", "empty_test", "fn_from_constant", "from_constant", "from_fn", "from_gen",
            "from_gen_fn", "from_list_fn", "from_list_gen_fn", "from_sampler", "from_test",
            "get_defer_all_unbound", "get_defer_any_unbound", "negate_test", "never_defer",

@@ -39,8 +39,7 @@ def plan_preimage(result: DiscreteResult) -> tuple[set[Fact], set[Fact]]:
             preimage.support(fact, vector, seen)
         for fact in action.pre_neg:
             preimage.refute(fact, vector, seen)
-        if action.cost_term is not None:
-            cost_terms.add(action.cost_term)
+        cost_terms.update(action.cost_terms)
     final = task.state_vector(result.outcome.states[-1])
     preimage.support(GOAL_FACT, final, set())
     return preimage.needed, cost_terms

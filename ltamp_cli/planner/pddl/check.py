@@ -316,6 +316,20 @@ def declare_predicates(domain: Domain, atoms: Iterable[Atom]) -> Domain:
     return replace(domain, predicates=(*domain.predicates, *added.values()))
 
 
+def _declare_used_functions(domain: Domain, streams: StreamFile) -> Domain:
+    """``domain`` plus the stream file's ``:function`` heads that an action's cost uses but
+    ``:functions`` does not declare."""
+    declared = {signature.name for signature in domain.functions}
+    used = {term.name for action in domain.actions for term in _cost_terms(action.effect)}
+    added = tuple(
+        PredicateSignature(function.name,
+                           tuple(TypedName(f"?x{i}") for i in range(len(function.head.args))),
+                           function.location)
+        for function in streams.functions
+        if function.name in used and function.name not in declared)
+    return replace(domain, functions=(*domain.functions, *added)) if added else domain
+
+
 def fluent_predicates(domain: Domain) -> frozenset[str]:
     """Predicates whose facts actions change (any add or delete effect) and derived ones."""
     changed = {atom.predicate for action in domain.actions
@@ -343,8 +357,9 @@ def prepare_streams(streams: StreamFile, domain: Domain) -> tuple[Domain, Stream
 
     * predicates used only in the stream file (and ``init``) are declared in the domain,
       whose actions may use them;
-    * ``:function`` declarations the domain does not declare in ``:functions`` are dropped
-      (no action can use them; PDDLStream ignores them too);
+    * ``:function`` declarations the domain does not declare in ``:functions`` are declared
+      there when an action's cost uses them (PDDLStream's translator accepts that), and
+      dropped otherwise (no action can use them; PDDLStream ignores them too);
     * :domain facts of predicates that actions change (PDDLStream's exogenous streams) go
       to ``Stream.fluent_domain``: what the stream certifies holds only in states where
       those facts hold. Inputs are enumerated from the other :domain facts (and from such a
@@ -353,6 +368,7 @@ def prepare_streams(streams: StreamFile, domain: Domain) -> tuple[Domain, Stream
       value check them).
     """
     domain = declare_predicates(domain, _stream_file_atoms(streams))
+    domain = _declare_used_functions(domain, streams)
     check_domain(domain)
     fluent = fluent_predicates(domain)
     declared_functions = {signature.name for signature in domain.functions}

@@ -53,7 +53,7 @@ class GroundAction:
     effects: tuple[GroundEffect, ...]
     cost: float
     static_pre: tuple[Fact, ...] = ()
-    cost_term: Fact | None = None
+    cost_terms: tuple[Fact, ...] = ()
 
     def __str__(self) -> str:
         return "(" + " ".join((self.name, *self.args)) + ")"
@@ -575,14 +575,16 @@ def _emit(rule: _Rule, binding: dict[str, str], index: FactIndex, init: set[Fact
         if index.add(head):
             delta.append(head)
         return
-    cost, cost_term = 0.0, None
-    if isinstance(source.cost, Number):
-        cost = source.cost.value
-    elif isinstance(source.cost, FunctionTerm):
-        cost_term = (source.cost.name, *_ground(source.cost.args, binding))
-        if cost_term not in function_values:
-            return  # undefined cost: the action is not applicable (as in PDDLStream)
-        cost = function_values[cost_term]
+    cost, cost_terms = 0.0, []
+    for amount in source.costs:
+        if isinstance(amount, Number):
+            cost += amount.value
+        elif isinstance(amount, FunctionTerm):
+            cost_term = (amount.name, *_ground(amount.args, binding))
+            if cost_term not in function_values:
+                return  # undefined cost: the action is not applicable (as in PDDLStream)
+            cost += function_values[cost_term]
+            cost_terms.append(cost_term)
     effects = []
     for effect in source.effects:
         cond_pos, cond_neg, possible = [], [], True
@@ -604,7 +606,8 @@ def _emit(rule: _Rule, binding: dict[str, str], index: FactIndex, init: set[Fact
             delta.append(fact)
     args = tuple([binding[p] for p in source.parameters])
     result.actions.append(GroundAction(source.name, args, dynamic_pos, negative,
-                                       tuple(effects), cost, static_pos, cost_term))
+                                       tuple(effects), cost, static_pos,
+                                       tuple(cost_terms)))
 
 
 class _ContextLiterals:

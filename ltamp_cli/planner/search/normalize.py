@@ -73,7 +73,7 @@ class NormalAction:
     parameters: tuple[str, ...]
     precondition: Clause
     effects: tuple[NormalEffect, ...]
-    cost: CostExpression | None
+    costs: tuple[CostExpression, ...]  # summed, as PDDL sums repeated increases
 
 
 @dataclass(frozen=True)
@@ -276,10 +276,6 @@ class Normalizer:
             LiftedLiteral(type_predicate(p.type), (p.name,)) for p in action.parameters
         )
         effects, costs = self.effects(action.effect)
-        if len(costs) > 1:
-            raise InputError(f"action {action.name!r} increases total-cost more than once",
-                             action.location)
-        cost = costs[0] if costs else None
         parameters = tuple(p.name for p in action.parameters)
         created = len(self._pending)
         clauses = [types + clause for clause in self.dnf(action.precondition)]
@@ -287,7 +283,7 @@ class Normalizer:
             self._action_uses[name] = [
                 clause for clause in clauses
                 if any(lit.predicate == name for lit in clause)]
-        return [NormalAction(action.name, parameters, clause, tuple(effects), cost)
+        return [NormalAction(action.name, parameters, clause, tuple(effects), tuple(costs))
                 for clause in clauses]
 
     def axiom(self, axiom: DerivedPredicate) -> list[NormalAxiom]:
