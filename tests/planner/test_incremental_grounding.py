@@ -31,7 +31,8 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "problems" / "examples"
 
 # Static negations (Broken, and Reserved through the derived UnsafeSlot), a forall (a
 # negative-only auxiliary axiom), an effect conditioned on a static fact (Heavy), and a
-# cost looked up in the function values (undefined: the action does not exist).
+# cost looked up in the function values (undefined: the action does not exist) and added to a
+# constant one.
 DOMAIN = """
 (define (domain shelf)
   (:requirements :strips :derived-predicates :universal-preconditions
@@ -47,7 +48,7 @@ DOMAIN = """
                        (forall (?b2 ?p2) (imply (and (Pose ?b2 ?p2) (AtPose ?b2 ?p2))
                                                 (CFree ?b ?p ?b2 ?p2))))
     :effect (and (AtPose ?b ?p) (not (Holding ?b)) (HandEmpty) (when (Heavy ?b) (Tired))
-                 (increase (total-cost) (PlaceCost ?b ?p))))
+                 (increase (total-cost) (PlaceCost ?b ?p)) (increase (total-cost) 0.5)))
   (:action pick
     :parameters (?b ?p ?q)
     :precondition (and (Kin ?b ?p ?q) (AtPose ?b ?p) (HandEmpty))

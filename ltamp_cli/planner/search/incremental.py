@@ -101,8 +101,12 @@ class _Instance:
     static_pos: tuple[Fact, ...]
     head: Fact | None = None  # axioms
     effects: tuple[_Effect, ...] = ()
-    cost: float | None = None  # a constant cost, or None with cost_term
-    cost_term: Fact | None = None
+    # The action's cost amounts in order (numbers, or function terms looked up per task and
+    # summed in this order, as ground_task sums them); ``cost``: their sum when all are
+    # numbers, else None.
+    cost_parts: tuple[float | Fact, ...] = ()
+    cost_terms: tuple[Fact, ...] = ()
+    cost: float | None = None
     on_demand: bool = False
     demands: tuple[Fact, ...] = ()  # negated facts of negative-only derived predicates
     # ``demands`` and those of every effect (what the union grounds on demand).
@@ -164,7 +168,7 @@ class _Union:
         self.lists: list[list[int]] = [[] for _ in range(11)]
         self.row_bounds: list[int] = []  # first effect row of each main instance
         self.row_bounds_end: list[int] = [0]
-        self.cost_terms: list[tuple[int, Fact]] = []
+        self.cost_terms: list[tuple[int, _Instance]] = []  # instances with function terms
         self.on_demand_list: list[bool] = []
         # (sort key, number) of every instance, kept sorted as the union grows.
         self.ranked: list[tuple[tuple[object, ...], int]] = []
@@ -305,12 +309,16 @@ class _Union:
             self.instances.append(instance)
             return instance
         instance.args = tuple([binding[p] for p in source.parameters])
-        if isinstance(source.cost, Number):
-            instance.cost = source.cost.value
-        elif isinstance(source.cost, FunctionTerm):
-            instance.cost_term = (source.cost.name, *_ground(source.cost.args, binding))
-        else:
-            instance.cost = 0.0
+        parts: list[float | Fact] = []
+        for amount in source.costs:
+            if isinstance(amount, Number):
+                parts.append(amount.value)
+            elif isinstance(amount, FunctionTerm):
+                parts.append((amount.name, *_ground(amount.args, binding)))
+        instance.cost_parts = tuple(parts)
+        instance.cost_terms = tuple(part for part in parts if isinstance(part, tuple))
+        if not instance.cost_terms:
+            instance.cost = _summed(parts, {})
         effects = []
         instance.demands = tuple(f for f in instance.dynamic_neg if f[0] in demanded)
         demands = list(instance.demands)
@@ -363,8 +371,8 @@ class _Union:
             bisect.insort(self.ranked, (instance.sort_key(), number))
             self.on_demand_list.append(instance.on_demand)
             self.row_bounds.append(len(rows_owner))
-            if instance.cost_term is not None:
-                self.cost_terms.append((number, instance.cost_term))
+            if instance.cost_terms:
+                self.cost_terms.append((number, instance))
             pre_starts.append(len(pre))
             pre.extend(instance.positive or (TRUE_ID,))
             neg_starts.append(len(neg))
@@ -412,12 +420,11 @@ class _Union:
         # Negative-only derived predicates are instantiated on demand, after the fixpoint.
         valid = static_ok & ~self.on_demand_mask
         costs: dict[int, float] = {}
-        for number, term in self.cost_terms:
-            value = function_values.get(term)  # type: ignore[arg-type]
-            if value is None:
-                valid[number] = False
+        for number, instance in self.cost_terms:
+            if all(term in function_values for term in instance.cost_terms):
+                costs[number] = _summed(instance.cost_parts, function_values)
             else:
-                costs[number] = value
+                valid[number] = False  # undefined cost: not applicable (as in ground_task)
         rows_ok = np.ones(len(self.rows_fact), dtype=bool)
         if len(self.rows_fact):
             rows_ok &= np.minimum.reduceat(state[self.row_pos], self.row_pos_starts)
@@ -516,8 +523,16 @@ class _Union:
                             if ok) if flags else tuple(e.effect for e in instance.effects)
             built = instance.built[key] = GroundAction(
                 instance.rule.source.name, instance.args, instance.dynamic_pos,
-                instance.dynamic_neg, effects, cost, instance.static_pos, instance.cost_term)
+                instance.dynamic_neg, effects, cost, instance.static_pos, instance.cost_terms)
         return built  # type: ignore[return-value]
+
+
+def _summed(parts: Iterable[float | Fact], function_values: Mapping[Fact, float]) -> float:
+    """An action's cost: its amounts added in order (numbers, function terms' values)."""
+    cost = 0.0
+    for part in parts:
+        cost += function_values[part] if isinstance(part, tuple) else part
+    return cost
 
 
 def _layout(rule: _Rule, fluent: frozenset[str]
