@@ -28,7 +28,7 @@ number of blocks (``--plot``). In every suite, a run that returned later than
     OMP_NUM_THREADS=1 .venv/bin/python bench/planner.py [--seeds 5] [--max-time 10]
         [--examples a,b] [--algorithms incremental,focused] [--histories cold,warm]
         [--repeats 3] [--suite examples|uniform] [--plot bench/results/planner_scaling.png]
-        [--out bench/results/planner.json]
+        [--out bench/results/planner.json] [--incremental-grounding]
 """
 
 from __future__ import annotations
@@ -81,14 +81,17 @@ WARM_UP_SEED = 1000
 
 
 def config_for(problem: Any, algorithm: str, seed: int, max_time: float,
-               statistics_dir: str | None) -> PlannerConfig:
-    """The problem file's planner options, overridden by the benchmark's own."""
+               statistics_dir: str | None, overrides: dict[str, Any] | None = None
+               ) -> PlannerConfig:
+    """The problem file's planner options, overridden by the benchmark's own (and by
+    ``overrides``, e.g. ``incremental_grounding``)."""
     known = {f.name for f in fields(PlannerConfig)}
     options = {k: v for k, v in problem.planner_options.items() if k in known}
     if "skeleton" in options:
         options["skeleton"] = tuple(options["skeleton"])
     options.update(algorithm=algorithm, seed=seed, max_time=max_time,
                    statistics_dir=statistics_dir)
+    options.update(overrides or {})
     return PlannerConfig(**options)
 
 
@@ -114,11 +117,12 @@ def machine_reference_s(repeats: int = 3) -> float:
 
 
 def run_one(problem: Any, algorithm: str, seed: int, max_time: float,
-            statistics_dir: str | None = None, repeats: int = 1) -> dict[str, Any]:
+            statistics_dir: str | None = None, repeats: int = 1,
+            overrides: dict[str, Any] | None = None) -> dict[str, Any]:
     """Solve ``repeats`` times (the planner is deterministic per seed: same plan, same work)
     and keep the least wall and CPU time: what the code costs, without the slowdowns a
     shared machine adds to single runs. Repeats that disagree on the plan are an error."""
-    config = config_for(problem, algorithm, seed, max_time, statistics_dir)
+    config = config_for(problem, algorithm, seed, max_time, statistics_dir, overrides)
     walls, cpus, plans = [], [], set()
     # A warm run updates the persisted statistics: every repeat starts from the same ones.
     snapshot = _read_files(statistics_dir)
@@ -298,7 +302,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--plot", type=Path, default=DEFAULT_PLOT,
                         help="uniform suite: where to write the scaling PNG")
     parser.add_argument("--out", type=Path, default=None)
+    parser.add_argument("--incremental-grounding", action="store_true",
+                        help="solve with PlannerConfig.incremental_grounding (issue #19)")
     args = parser.parse_args(argv)
+    overrides = {"incremental_grounding": True} if args.incremental_grounding else {}
     if args.suite == "uniform":
         given = set(argv if argv is not None else sys.argv[1:])
         if "--seeds" not in given:
@@ -337,13 +344,14 @@ def main(argv: list[str] | None = None) -> int:
                 statistics_dir = None
                 if history == "warm":
                     statistics_dir = cache
-                    run_one(problem, "adaptive", WARM_UP_SEED, args.max_time, statistics_dir)
+                    run_one(problem, "adaptive", WARM_UP_SEED, args.max_time, statistics_dir,
+                            overrides=overrides)
                 for algorithm in algorithms:
                     rows = []
                     for seed in range(args.seeds):
                         progress.set_postfix_str(f"{name} {algorithm} {history} seed {seed}")
                         row = run_one(problem, algorithm, seed, args.max_time, statistics_dir,
-                                      args.repeats)
+                                      args.repeats, overrides)
                         rows.append(row)
                         runs.append({"example": name, "history": history, **row})
                         progress.update()
@@ -382,7 +390,8 @@ def main(argv: list[str] | None = None) -> int:
     args.out.write_text(json.dumps({
         "benchmark": "planner", "seeds": args.seeds, "repeats": args.repeats,
         "max_time_s": args.max_time, "suite": args.suite, "overruns": len(late),
-        "machine_reference": reference, "summary": summary, "targets": checks, "runs": runs,
+        "planner_overrides": overrides, "machine_reference": reference, "summary": summary,
+        "targets": checks, "runs": runs,
     }, indent=2) + "\n")
     print(f"\nwrote {args.out}")
     return 0

@@ -2,8 +2,9 @@
 
 Solves one example problem (cold stream history, the problem file's planner options) for
 each seed in this thread, with timers wrapped around the planner's phases: optimistic
-evaluation, grounding (``ground_task``), task encoding, the FF heuristic's evaluations,
-the rest of the search engine, plan post-processing and binding processing. Prints one
+evaluation, grounding (``ground_task`` and the solve's ``GroundingCache``), fluent contexts,
+task encoding, state vectors (axioms), the FF heuristic's construction and evaluations, the
+rest of the search engine, guess checks, plan post-processing and binding processing. Prints one
 row per discrete search (what kind of search, task size, expansions, evaluations, whether
 the guessed plan was followed, grounding and search CPU seconds) and a table of phase
 totals, and writes both as JSON. Timers are thread CPU seconds (``time.thread_time``); the
@@ -12,6 +13,7 @@ wrappers add a few percent, so compare runs of this script with each other, not 
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/planner_profile.py [--example kitchen_fluent]
         [--algorithm adaptive] [--seeds 0-9] [--out bench/results/planner_profile.json]
+        [--incremental-grounding]
 """
 
 from __future__ import annotations
@@ -32,7 +34,7 @@ from planner import config_for
 from ltamp_cli.planner.algorithms import common, skeletons
 from ltamp_cli.planner.api import _relaxed_gc, _solve
 from ltamp_cli.planner.problem import load_problem
-from ltamp_cli.planner.search import engine, heuristic, solve
+from ltamp_cli.planner.search import engine, heuristic, incremental, solve
 from ltamp_cli.planner.search.task import Task
 from ltamp_cli.planner.watchdog import CallTracker
 from ltamp_cli.threads import use_one_thread
@@ -45,6 +47,10 @@ PHASES = (
     (skeletons, "evaluate_eager", "eager streams"),
     (skeletons, "_process", "binding processing"),
     (solve, "ground_task", "grounding"),
+    (incremental.GroundingCache, "ground", "grounding"),
+    (solve, "require_fluent_contexts", "fluent contexts"),
+    (solve, "forbid_contexts", "fluent contexts"),
+    (engine, "follow_plan", "guess check"),
     (engine, "_search", "search engine (incl. heuristic)"),
     (engine, "eliminate_redundant_actions", "post-processing: elimination"),
     (engine, "bridge_detours", "post-processing: bridging"),
@@ -82,6 +88,9 @@ def wrapped(phases: Counter, searches: list[dict[str, Any]]) -> Iterator[None]:
     patch(heuristic.FFHeuristic, "_evaluate",
           timer(heuristic.FFHeuristic._evaluate, "heuristic evaluations"))
     patch(Task, "__init__", timer(Task.__init__, "task encoding"))
+    patch(heuristic.FFHeuristic, "__init__",
+          timer(heuristic.FFHeuristic.__init__, "heuristic construction"))
+    patch(Task, "_compute_vector", timer(Task._compute_vector, "state vectors (axioms)"))
     search = common.PlannerState.search
 
     def logged(state: Any, init: Any, objects: Any, function_values: Any,
@@ -119,13 +128,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", default="0-9")
     parser.add_argument("--max-time", type=float, default=60.0)
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
+    parser.add_argument("--incremental-grounding", action="store_true",
+                        help="solve with PlannerConfig.incremental_grounding")
     args = parser.parse_args(argv)
     use_one_thread()
     problem = load_problem(REPO / "problems" / "examples" / f"{args.example}.yaml")
     rows: list[dict[str, Any]] = []
     totals: Counter = Counter()
     for seed in parse_seeds(args.seeds):
-        config = config_for(problem, args.algorithm, seed, args.max_time, None)
+        config = config_for(problem, args.algorithm, seed, args.max_time, None,
+                            {"incremental_grounding": True} if args.incremental_grounding
+                            else None)
         phases: Counter = Counter()
         searches: list[dict[str, Any]] = []
         start = time.thread_time()

@@ -71,7 +71,8 @@ def solve_command(
     use_one_thread()  # after loading the bindings: learned streams bring torch and scipy
     options = dict(loaded.planner_options)
     known = {"algorithm", "max_time", "seed", "search", "unit_costs", "initial_complexity",
-             "max_complexity", "success_cost", "skeleton", "eager_cheap_streams"}
+             "max_complexity", "success_cost", "skeleton", "eager_cheap_streams",
+             "incremental_grounding"}
     for key in options:
         if key not in known:
             raise InputError(f"{problem}: unknown planner option {key!r}: expected one of "

@@ -84,6 +84,7 @@ class PlannerOptions(BaseModel):
     success_cost: float | None = Field(None, ge=0.0)
     skeleton: list[str] | None = None
     eager_cheap_streams: bool | None = None
+    incremental_grounding: bool | None = None
 
 
 class ProblemFile(BaseModel):

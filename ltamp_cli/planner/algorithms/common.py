@@ -38,6 +38,7 @@ from ltamp_cli.planner.search.ground import (
     FactIndex,
     join_tuples,
 )
+from ltamp_cli.planner.search.incremental import GroundingCache
 from ltamp_cli.planner.search.normalize import LiftedLiteral
 from ltamp_cli.planner.search.solve import DiscreteResult, plan_discrete
 from ltamp_cli.planner.streams import (
@@ -81,6 +82,12 @@ class PlannerConfig:
     so is every other stream observed to be cheap; worth it
     for cheap finite samplers (discrete slots), not for continuous samplers that feed
     quadratic eager streams such as motions between all configurations.
+    ``incremental_grounding``: ground the solve's successive search tasks with one
+    :class:`.GroundingCache` (same tasks, plans and searches; the joins are not redone).
+    It pays when the searches reuse most of what they ground: kitchen_fluent's 8-15
+    searches, -6 % (adaptive) and -14 % (binding) median CPU; it costs when each search
+    brings mostly new instances (tamp2d problems with uniform placements: +10-25 %), so it
+    is off by default (docs/results/planner/issue19.md).
     """
 
     algorithm: str = "adaptive"
@@ -95,6 +102,7 @@ class PlannerConfig:
     statistics_dir: str | None = None
     eager_cheap_streams: bool = False
     threads: int | None = 1  # thread-pool limit while solving (ltamp_cli.threads)
+    incremental_grounding: bool = False
 
 
 def external_domain(external: External) -> tuple[Atom, ...]:
@@ -204,6 +212,8 @@ class PlannerState:
     tracker: CallTracker = field(default_factory=CallTracker)
     iterations: int = 0
     searches: int = 0
+    # Grounds this solve's successive search tasks without redoing the joins.
+    grounding_cache: GroundingCache = field(default_factory=GroundingCache)
     last_skeletons: list[list[str]] = field(default_factory=list)
     cost_bound: float | None = None  # anytime mode: only plans cheaper than this
     # Facts certified by :fluents streams -> the state facts they were computed under.
@@ -468,7 +478,8 @@ class PlannerState:
                 self.problem.domain, objects, init, function_values, self.problem.goal,
                 self.deadline, self.config.search, self.config.unit_costs, max_expansions,
                 self.config.skeleton, self.cost_bound, self.fluent_requirements,
-                context_blocks, guess, skip_if_grounded_as)
+                context_blocks, guess, skip_if_grounded_as,
+                self.grounding_cache if self.config.incremental_grounding else None)
         finally:
             self.search_time += time.perf_counter() - start
             self.search_cpu += time.thread_time() - cpu_start

@@ -18,6 +18,7 @@ from ltamp_cli.planner.search.ground import (
     ground_task,
     require_fluent_contexts,
 )
+from ltamp_cli.planner.search.incremental import GroundingCache
 from ltamp_cli.planner.search.normalize import Normalizer, type_predicate
 from ltamp_cli.planner.search.skeleton import constrain
 from ltamp_cli.planner.search.task import Task
@@ -105,6 +106,7 @@ def plan_discrete(
     context_blocks: Mapping[Fact, Sequence[Context]] | None = None,
     guess: Sequence[tuple[str, tuple[str, ...]]] | None = None,
     skip_if_grounded_as: frozenset[object] | None = None,
+    grounding_cache: GroundingCache | None = None,
 ) -> DiscreteResult:
     """Find a plan for the finite task given by ``objects`` (name → type) and ``init``.
 
@@ -116,6 +118,8 @@ def plan_discrete(
     ``skip_if_grounded_as``: a :func:`grounding_signature` of a task whose search ran out of
     budget; when this task grounds to the same, no search runs (``skipped``, reported as
     capped): it would repeat that search.
+    ``grounding_cache``: the caller's :class:`.GroundingCache` (one per solve), which grounds
+    successive tasks without redoing the joins; the grounding is the same without it.
     """
     start = time.perf_counter()
     closure = type_closure(domain)
@@ -135,7 +139,10 @@ def plan_discrete(
                 | {axiom.head.name for axiom in domain.axioms})
     axioms += normalizer.take_auxiliary(
         lambda predicate: predicate not in changing and not predicate.startswith("%"))
-    grounding = ground_task(actions, axioms, facts, function_values, deadline)
+    if grounding_cache is not None:
+        grounding = grounding_cache.ground(actions, axioms, facts, function_values, deadline)
+    else:
+        grounding = ground_task(actions, axioms, facts, function_values, deadline)
     if fluent_requirements:
         grounding = require_fluent_contexts(grounding, fluent_requirements, deadline)
     if context_blocks:
