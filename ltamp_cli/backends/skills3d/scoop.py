@@ -177,10 +177,12 @@ def bed_depth_m(bowl: VesselDims, count: int, radius: float) -> float:
     return lo
 
 
-def beads_for_depth(bowl: VesselDims, depth: float, radius: float) -> int:
-    """The fewest beads of ``radius`` m whose bed (:func:`bed_depth_m`) is ``depth`` m deep."""
-    bead = 4.0 / 3.0 * math.pi * radius**3
-    return math.ceil(_frustum_volume_m3(bowl, depth) * BED_PACKING / bead)
+def beads_for_depth(bowl: VesselDims, depth: float, radius: float, at_most: bool = False
+                    ) -> int:
+    """The fewest beads of ``radius`` m whose bed (:func:`bed_depth_m`) is at least ``depth``
+    m deep, or with ``at_most`` the most whose bed is at most ``depth`` m deep."""
+    beads = _frustum_volume_m3(bowl, depth) * BED_PACKING / (4.0 / 3.0 * math.pi * radius**3)
+    return math.floor(beads) if at_most else math.ceil(beads)
 
 
 def scoop_bead_count(bowl: VesselDims, drawn: int, radius: float,
@@ -191,7 +193,7 @@ def scoop_bead_count(bowl: VesselDims, drawn: int, radius: float,
     :func:`bed_depth_m`'s estimate), beads of ``radius`` m."""
     count = max(drawn, beads_for_depth(bowl, min_depth, radius))
     top = max_fill * bowl.height - bowl.thickness
-    return min(count, beads_for_depth(bowl, top, radius))
+    return min(count, beads_for_depth(bowl, top, radius, at_most=True))
 
 
 def measure_spoon_capacity(physics: TrialPhysics, spoon: KitchenwareGeometry, beads: BeadSpec,
