@@ -10,13 +10,15 @@ the trials already there):
   context distribution, ``--seed``), in each the first pre-check-valid control of 1,000
   uniform ones (``ltamp evaluate``'s random baseline), run once with the old bed (the drawn
   count only) and once with the new one, same trial seed: success rates (Wilson 95 %), CPU
-  seconds per trial, bead counts; ``--out`` gets the summary JSON.
+  seconds per trial, bead counts; ``--out`` gets the summary JSON. Where the rule leaves the
+  count unchanged the new trial is the old one (same seed, same beads) and is copied.
 * ``noise``: the first ``--controls`` of those controls, each with ``--seeds`` trial seeds on
   the new bed: how often one control's label flips between seeds.
 * ``relabel``: a trials pool (``--pool``, a ``trials.jsonl``) under the new bed into
   ``--into``: a valid trial whose bead count the rule leaves unchanged is copied (same seed,
   same beads: the same simulation; ``--verify`` of them are re-run to check that), every other
-  valid trial is re-run with its own seed; pre-check rejections are copied.
+  valid trial is re-run with its own seed; pre-check rejections are copied. ``--reverse``
+  runs from the pool's end, for a second process writing another file (merge by ``index``).
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/scoop_bed.py compare --contexts 40 \\
         --log docs/results/scoop3d/bed_compare_trials.jsonl \\
@@ -100,8 +102,13 @@ def sample_cases(contexts: int, seed: int, backend: Kitchen3DBackend
     for index in range(contexts):
         context = backend.sample_context("scoop", rng)
         candidates = SCOOP_SPEC.control.sample_uniform(baseline_rng, 1000)
-        valid = np.flatnonzero(backend.is_valid("scoop", context, candidates))
-        control = candidates[valid[0]] if len(valid) else None
+        control = None
+        for start in range(0, len(candidates), 25):  # the first valid one, checked in chunks
+            chunk = candidates[start:start + 25]
+            valid = np.flatnonzero(backend.is_valid("scoop", context, chunk))
+            if len(valid):
+                control = chunk[valid[0]]
+                break
         cases.append((context, control, seed * 100_003 + index))
     return cases
 
@@ -141,16 +148,27 @@ def run_compare(args: argparse.Namespace) -> dict[str, Any]:
     settings = {"old": OLD_BED, "new": NEW_BED}
     done = {(r["index"], r["setting"]) for r in read_log(args.log) if r["kind"] == "compare"}
     cases = sample_cases(args.contexts, args.seed, backends["new"])
+    old_rows = {r["index"]: r for r in read_log(args.log)
+                if r["kind"] == "compare" and r["setting"] == "old"}
     with args.log.open("a") as log:
         for index, (context, control, seed) in enumerate(cases):
             if control is None:
                 continue
+            same_beads = bead_count(OLD_BED, context, seed) == bead_count(NEW_BED, context, seed)
             for name in ("old", "new"):
                 if (index, name) in done:
                     continue
-                result, cpu = timed_trial(backends[name], context, control, seed)
-                row = record("compare", index, name, context, control, seed, result, cpu,
-                             settings[name])
+                if name == "new" and same_beads and (index, "old") in done:
+                    # Same seed, same beads: the same simulation (relabel's --verify checks
+                    # it); the old trial's result and CPU stand for the new one.
+                    row = dict(old_rows[index], setting="new", copied=True)
+                else:
+                    result, cpu = timed_trial(backends[name], context, control, seed)
+                    row = record("compare", index, name, context, control, seed, result, cpu,
+                                 settings[name])
+                if name == "old":
+                    old_rows[index] = row
+                    done.add((index, "old"))
                 log.write(json.dumps(row) + "\n")
                 log.flush()
                 print(f"{index:3d} {name} beads {row['beads']:3d} score {row['score']:+.2f} "
@@ -206,7 +224,7 @@ def run_relabel(args: argparse.Namespace) -> dict[str, Any]:
     verified = sum(1 for r in read_log(args.into) if r.get("info", {}).get("relabel") == "verified")
     counts = {"copied": 0, "rerun": 0, "verified": 0, "verify_mismatch": 0}
     with args.into.open("a") as out:
-        for old in pool:
+        for old in reversed(pool) if args.reverse else pool:
             if old["index"] in done:
                 continue
             context = np.asarray(old["context"])
@@ -270,6 +288,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--pool", type=Path)
     parser.add_argument("--into", type=Path)
     parser.add_argument("--verify", type=int, default=3)
+    parser.add_argument("--reverse", action="store_true",
+                        help="relabel from the pool's end (a second process; merge by index)")
     parser.add_argument("--log", type=Path)
     parser.add_argument("--out", type=Path)
     args = parser.parse_args(argv)
