@@ -165,7 +165,7 @@ def _frustum_volume_m3(bowl: VesselDims, depth: float) -> float:
     return math.pi * depth / 3.0 * (r0 * r0 + r0 * r + r * r)
 
 
-def bed_depth_m(bowl: VesselDims, count: int, radius: float) -> float:
+def bed_depth_m(bowl: VesselDims, count: float, radius: float) -> float:
     """Estimated depth (m above the floor) of ``count`` settled beads of ``radius`` m in
     ``bowl``: their volume at packing :data:`BED_PACKING` filling the cavity from the floor
     (capped at the cavity's depth)."""
