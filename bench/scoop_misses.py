@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 import time
 from pathlib import Path
@@ -34,12 +33,13 @@ import numpy as np
 
 from ltamp_cli.backends import load_backend
 from ltamp_cli.backends.kitchenware_geometry import SpoonDims
-from ltamp_cli.backends.skills3d.scoop import ScoopContext, ScoopSettings
+from ltamp_cli.backends.skills3d.scoop import BED_PACKING, ScoopContext, ScoopSettings
+from ltamp_cli.backends.skills3d.scoop import bed_depth_m as skill_bed_depth_m
 
 ROOT = Path(__file__).resolve().parents[1]
 #: Mean bead radius (m) of a scoop trial (``sample_beads``: N(6, 0.5) mm truncated to 5-7).
 MEAN_BEAD_RADIUS_M = 0.006
-PACKING = 0.6
+PACKING = BED_PACKING
 
 
 def failed_theta_star(path: Path) -> list[tuple[int, list[float], list[float], float]]:
@@ -53,21 +53,11 @@ def failed_theta_star(path: Path) -> list[tuple[int, list[float], list[float], f
 
 
 def bed_depth_m(context: np.ndarray, beads: float) -> float:
-    """Estimated depth (m) of ``beads`` settled beads in the bowl of ``context`` (4,): their
-    volume at packing :data:`PACKING` filling the inner frustum from the floor."""
+    """Estimated depth (m) of ``beads`` settled beads of the mean radius in the bowl of
+    ``context`` (4,): the skill's own estimate (:func:`~ltamp_cli.backends.skills3d.scoop.
+    bed_depth_m`, volume at packing :data:`PACKING` filling the inner frustum)."""
     bowl = ScoopContext.from_array(context).bowl
-    volume = beads * 4.0 / 3.0 * math.pi * MEAN_BEAD_RADIUS_M**3 / PACKING
-    r0 = bowl.base_diameter / 2.0 - bowl.thickness
-    r1 = bowl.top_diameter / 2.0 - bowl.thickness
-    inner = bowl.height - bowl.thickness
-    slope = (r1 - r0) / inner
-    lo, hi = 0.0, inner
-    for _ in range(60):  # bisection on the frustum's volume up to depth h
-        h = (lo + hi) / 2.0
-        r = r0 + slope * h
-        filled = math.pi * h / 3.0 * (r0 * r0 + r0 * r + r * r)
-        lo, hi = (h, hi) if filled < volume else (lo, h)
-    return lo
+    return skill_bed_depth_m(bowl, beads, MEAN_BEAD_RADIUS_M)
 
 
 def main(argv: list[str] | None = None) -> int:

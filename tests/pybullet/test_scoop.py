@@ -6,17 +6,23 @@ import numpy as np
 import pytest
 
 from ltamp_cli.backends import load_backend
-from ltamp_cli.backends.kitchenware_geometry import SpoonDims, spoon_geometry
+from ltamp_cli.backends.kitchenware_geometry import SpoonDims, VesselDims, spoon_geometry
 from ltamp_cli.backends.protocol import SkillBackend
 from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial
 from ltamp_cli.backends.pybullet.particles import BeadSpec
 from ltamp_cli.backends.pybullet.skills.physics import BulletTrialPhysics
 from ltamp_cli.backends.pybullet.skills.scoop import (
+    MAX_FILL_FRACTION,
+    MIN_BED_DEPTH_M,
     NOMINAL_BOWL,
     SCOOP_CONTEXT,
     SCOOP_TAU,
     ScoopContext,
+    ScoopSettings,
+    bed_depth_m,
     measure_spoon_capacity,
+    sample_scoop_latents,
+    scoop_bead_count,
     scoop_outcome,
     scoop_path,
 )
@@ -112,3 +118,54 @@ def test_known_bad_scoop_fails(backend: SkillBackend) -> None:
     result = backend.run_trial("scoop", CONTEXT, BAD, seed=0)
     assert result.valid and result.score < 0, result.info
     assert result.info["beads_lost"] == 0
+
+
+# The widest bowl of the context box and a narrow one (bowl top, height, base; spoon).
+WIDE = np.array([0.25, 0.1, 0.1875, 0.2])
+NARROW = np.array([0.166, 0.089, 0.098, 0.2])
+
+
+def test_bed_is_raised_to_the_references_depth_in_wide_bowls_only() -> None:
+    wide = ScoopContext.from_array(WIDE).bowl
+    count = scoop_bead_count(wide, 250, 0.006)
+    # 250 beads lie ~17 mm deep here (the reference dropped such bowls): raised to the
+    # fewest beads that make a 25 mm bed.
+    assert bed_depth_m(wide, 250, 0.006) < 0.02
+    assert count > 400
+    assert bed_depth_m(wide, count, 0.006) >= MIN_BED_DEPTH_M - 1e-6
+    assert bed_depth_m(wide, count - 1, 0.006) < MIN_BED_DEPTH_M
+    # Deep enough already: the drawn count is kept.
+    narrow = ScoopContext.from_array(NARROW).bowl
+    assert bed_depth_m(narrow, 250, 0.006) > MIN_BED_DEPTH_M
+    assert scoop_bead_count(narrow, 250, 0.006) == 250
+
+
+def test_bed_never_rises_above_three_quarters_of_the_bowl() -> None:
+    small = VesselDims(base_diameter=0.05, top_diameter=0.08, height=0.05)
+    count = scoop_bead_count(small, 300, 0.006)
+    top = MAX_FILL_FRACTION * small.height - small.thickness
+    assert count < 300
+    assert bed_depth_m(small, count, 0.006) <= top + 1e-9
+    assert bed_depth_m(small, count + 1, 0.006) > top
+
+
+def test_bead_draws_do_not_depend_on_the_bowl() -> None:
+    # Same seed: same radius and materials in every bowl, only the count follows the bowl,
+    # so a deep-enough bowl's trial is the one it was before the bed rule.
+    settings = ScoopSettings()
+    wide = sample_scoop_latents(np.random.default_rng(3), settings,
+                                ScoopContext.from_array(WIDE).bowl)
+    narrow = sample_scoop_latents(np.random.default_rng(3), settings,
+                                  ScoopContext.from_array(NARROW).bowl)
+    assert wide.beads.radius == narrow.beads.radius
+    assert wide.spoon_material == narrow.spoon_material
+    assert wide.beads.count > narrow.beads.count
+
+
+def test_a_wide_bowl_holds_the_whole_raised_bed(backend: SkillBackend) -> None:
+    result = backend.run_trial("scoop", WIDE, BAD, seed=0)
+    bowl = ScoopContext.from_array(WIDE).bowl
+    latents = sample_scoop_latents(np.random.default_rng(0), ScoopSettings(), bowl)
+    assert result.valid, result.info
+    assert result.info["beads_total"] == latents.beads.count > 300
+    assert result.info["beads_in_bowl_start"] == result.info["beads_total"]

@@ -20,6 +20,15 @@ Path: entry (above the start, 4 cm over the rim) → start → end → exit. Con
 path touches the bowl or the table are invalid and not simulated. Score: ``g(x; τ = 0.7)``
 with ``x`` = beads in the spoon's head at the end / the spoon's capacity, measured per trial
 with the trial's beads (:func:`measure_spoon_capacity`).
+
+The bed (:func:`scoop_bead_count`), as the reference fills a bowl for a scoop (caelan/LTAMP
+``collect_scoop``: up to 250 beads, kept below 75 % of the bowl's height): about 250 beads
+(200-300), but never a bed shallower than :data:`MIN_BED_DEPTH_M` and never above 75 % of
+the bowl's height. The reference kept the bed deep enough by dropping the bowls where 250
+beads lie too shallow ("too difficult to scoop from large items when only using 250
+particles": its three widest bowls, beds of 16-21 mm at the estimate of :func:`bed_depth_m`,
+against 26-47 mm in the twelve it kept); this context box keeps such bowls and adds beads
+instead, so every bowl gets at least the bed of the reference's shallowest kept bowl.
 """
 
 from __future__ import annotations
@@ -72,6 +81,16 @@ SPOON_LENGTH_RANGE = (0.16, 0.24)
 CAPACITY_BEADS = 120
 #: Height (m) of the spoon's frame above the table while its capacity is measured.
 CAPACITY_LIFT_M = 0.05
+#: The shallowest bed (m, :func:`bed_depth_m`) a scoop trial gets: the reference's shallowest
+#: bowl it scooped from (``blue``, 10.5 / 22.3 / 9.5 cm, 250 beads of 5 mm: 25.9 mm with its
+#: 1 cm walls). Its dropped bowls had 16-21 mm.
+MIN_BED_DEPTH_M = 0.025
+#: The reference keeps the beads below this fraction of the bowl's height.
+MAX_FILL_FRACTION = 0.75
+#: Volume fraction of a settled bed of beads, for the bed-depth estimate (random close
+#: packing of equal spheres is ~0.64; measured on PyBullet after the 0.5 s settle: 0.45-0.66,
+#: looser in shallow beds).
+BED_PACKING = 0.6
 
 SCOOP_CONTEXT = ParamSpace(
     names=("bowl_diameter", "bowl_height", "bowl_base_diameter", "spoon_length"),
@@ -95,13 +114,17 @@ SCOOP_SPEC = SkillSpec(
 
 @dataclass(frozen=True)
 class ScoopSettings:
-    """Timing: settle/hold in seconds, spoon speed m/s and turn rate rad/s; bead count."""
+    """Timing: settle/hold in seconds, spoon speed m/s and turn rate rad/s; the bed: mean
+    bead count drawn (200-300), shallowest bed (m) and highest fill (fraction of the bowl's
+    height), see :func:`scoop_bead_count`."""
 
     settle_s: float = 0.5
     hold_s: float = 0.3
     speed: float = 0.15
     angular_speed: float = 1.5
     bead_count_mean: float = 250.0
+    min_bed_depth_m: float = MIN_BED_DEPTH_M
+    max_fill_fraction: float = MAX_FILL_FRACTION
 
 
 @dataclass(frozen=True)
@@ -131,6 +154,46 @@ def sample_scoop_context(rng: np.random.Generator) -> np.ndarray:
     base = bowl.top_diameter * rng.uniform(*BOWL_BASE_RATIO)
     bowl = VesselDims(base, bowl.top_diameter, bowl.height)
     return ScoopContext(bowl, SpoonDims(rng.uniform(*SPOON_LENGTH_RANGE))).to_array()
+
+
+def _frustum_volume_m3(bowl: VesselDims, depth: float) -> float:
+    """Volume (m³) of the bowl's cavity from its floor up to ``depth`` m (a frustum)."""
+    r0 = bowl.base_diameter / 2.0 - bowl.thickness
+    r1 = bowl.top_diameter / 2.0 - bowl.thickness
+    slope = (r1 - r0) / (bowl.height - bowl.thickness)
+    r = r0 + slope * depth
+    return math.pi * depth / 3.0 * (r0 * r0 + r0 * r + r * r)
+
+
+def bed_depth_m(bowl: VesselDims, count: float, radius: float) -> float:
+    """Estimated depth (m above the floor) of ``count`` settled beads of ``radius`` m in
+    ``bowl``: their volume at packing :data:`BED_PACKING` filling the cavity from the floor
+    (capped at the cavity's depth)."""
+    volume = count * 4.0 / 3.0 * math.pi * radius**3 / BED_PACKING
+    lo, hi = 0.0, bowl.height - bowl.thickness
+    for _ in range(60):  # bisection: the frustum's volume grows with the depth
+        mid = (lo + hi) / 2.0
+        lo, hi = (mid, hi) if _frustum_volume_m3(bowl, mid) < volume else (lo, mid)
+    return lo
+
+
+def beads_for_depth(bowl: VesselDims, depth: float, radius: float, at_most: bool = False
+                    ) -> int:
+    """The fewest beads of ``radius`` m whose bed (:func:`bed_depth_m`) is at least ``depth``
+    m deep, or with ``at_most`` the most whose bed is at most ``depth`` m deep."""
+    beads = _frustum_volume_m3(bowl, depth) * BED_PACKING / (4.0 / 3.0 * math.pi * radius**3)
+    return math.floor(beads) if at_most else math.ceil(beads)
+
+
+def scoop_bead_count(bowl: VesselDims, drawn: int, radius: float,
+                     min_depth: float = MIN_BED_DEPTH_M,
+                     max_fill: float = MAX_FILL_FRACTION) -> int:
+    """Beads in a scoop trial's bowl: the ``drawn`` count (200-300), raised to a bed of
+    ``min_depth`` m and capped at a bed reaching ``max_fill`` of the bowl's height (both by
+    :func:`bed_depth_m`'s estimate), beads of ``radius`` m."""
+    count = max(drawn, beads_for_depth(bowl, min_depth, radius))
+    top = max_fill * bowl.height - bowl.thickness
+    return min(count, beads_for_depth(bowl, top, radius, at_most=True))
 
 
 def measure_spoon_capacity(physics: TrialPhysics, spoon: KitchenwareGeometry, beads: BeadSpec,
@@ -234,8 +297,13 @@ class ScoopLatents:
     spoon_material: BodyMaterial
 
 
-def sample_scoop_latents(rng: np.random.Generator, settings: ScoopSettings) -> ScoopLatents:
+def sample_scoop_latents(rng: np.random.Generator, settings: ScoopSettings,
+                        bowl: VesselDims) -> ScoopLatents:
+    """Beads (count by :func:`scoop_bead_count` for ``bowl``), then the bowl's and the
+    spoon's materials; the draws from ``rng`` do not depend on ``bowl``."""
     beads = sample_beads(rng, settings.bead_count_mean, 20.0, 200.0, 300.0)
+    beads = replace(beads, count=scoop_bead_count(
+        bowl, beads.count, beads.radius, settings.min_bed_depth_m, settings.max_fill_fraction))
     bowl = sample_material(rng, BOWL_RGBA)
     spoon = sample_material(rng, (0.6, 0.6, 0.65, 1.0), mass=(0.05, 0.01, 0.02, 0.08))
     return ScoopLatents(beads, bowl, spoon)
@@ -261,7 +329,7 @@ def run_scoop(
         return trial.rejected
     path = trial.path
     rng = np.random.default_rng(seed)
-    latents = sample_scoop_latents(rng, settings)
+    latents = sample_scoop_latents(rng, settings, trial.scene.bowl)
     capacity = measure_spoon_capacity(physics, trial.tool, latents.beads,
                                       latents.spoon_material, rng, settings.settle_s)
     physics.reset()
