@@ -138,10 +138,12 @@ def _execution_row(report: object, cpu_s: float, wall_s: float) -> dict:
 
 
 def execute_plans(n: int, path: Path = POUR_BLOCKED, backends: tuple[str, ...] = BACKENDS,
-                  cache: Path | None = None) -> list[dict]:
+                  cache: Path | None = None, max_time: float | None = None) -> list[dict]:
     """Solve the problem at ``path`` with seeds ``0..n-1``; execute each plan on every one
     of ``backends``. With ``cache`` (JSONL, one row per seed) seeds already there with every
-    backend are reused and each finished seed is appended, so a stopped run resumes."""
+    backend are reused and each finished seed is appended, so a stopped run resumes.
+    ``max_time`` (s, wall clock) replaces the problem's planning time limit (a loaded
+    machine makes a wall-clock limit a CPU limit several times smaller)."""
     from ltamp_cli.backends.execution import execute_plan
     from ltamp_cli.planner.algorithms.common import PlannerConfig
     from ltamp_cli.planner.api import solve
@@ -161,8 +163,12 @@ def execute_plans(n: int, path: Path = POUR_BLOCKED, backends: tuple[str, ...] =
             rows.append(done[seed])
             continue
         w0, c0 = time.perf_counter(), time.process_time()
-        result = solve(problem, PlannerConfig(**{**problem.planner_options, "seed": seed}))
+        options = {**problem.planner_options, "seed": seed}
+        if max_time is not None:
+            options["max_time"] = max_time
+        result = solve(problem, PlannerConfig(**options))
         row: dict = {"problem": path.stem, "seed": seed, "status": result.status,
+                     "max_time_s": options.get("max_time"),
                      "plan_cpu_s": time.process_time() - c0,
                      "plan_wall_s": time.perf_counter() - w0,
                      "actions": [step.name for step in (result.plan or ())]}
@@ -325,7 +331,11 @@ def main() -> None:
                         help="backends that execute the --plans plans")
     parser.add_argument("--cache", type=Path, default=None,
                         help="JSONL of executed seeds: reused, and appended to (resumable)")
+    parser.add_argument("--max-time", type=float, default=None,
+                        help="planning wall-clock limit (s) instead of the problem's")
     args = parser.parse_args()
+    if args.max_time is not None and args.max_time <= 0:
+        parser.error("--max-time must be positive")
     if args.trials < 0 or args.plans < 0:
         parser.error("--trials and --plans must be >= 0")
     if not args.problem.is_file():
@@ -346,7 +356,7 @@ def main() -> None:
         stepping = {name: stepping_rate(name, args.beads, args.steps) for name in BACKENDS}
         step_speedup = stepping["sapien"] / stepping["pybullet"]
         print_trials(args, summary, stepping)
-    plans = execute_plans(args.plans, args.problem, exec_backends, args.cache)
+    plans = execute_plans(args.plans, args.problem, exec_backends, args.cache, args.max_time)
     plans_summary = plan_summary(plans, exec_backends)
     print_plans(args.problem.stem, plans, plans_summary, exec_backends)
     payload = {
@@ -363,6 +373,7 @@ def main() -> None:
                      "speedup": step_speedup},
         "problem": str(args.problem),
         "exec_backends": list(exec_backends),
+        "max_time_s": args.max_time,
         "plans_summary": plans_summary,
         "plans": plans,
         "rows": [
