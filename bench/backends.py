@@ -138,10 +138,12 @@ def _execution_row(report: object, cpu_s: float, wall_s: float) -> dict:
 
 
 def execute_plans(n: int, path: Path = POUR_BLOCKED, backends: tuple[str, ...] = BACKENDS,
-                  cache: Path | None = None, max_time: float | None = None) -> list[dict]:
-    """Solve the problem at ``path`` with seeds ``0..n-1``; execute each plan on every one
-    of ``backends``. With ``cache`` (JSONL, one row per seed) seeds already there with every
-    backend are reused and each finished seed is appended, so a stopped run resumes.
+                  cache: Path | None = None, max_time: float | None = None,
+                  first_seed: int = 0) -> list[dict]:
+    """Solve the problem at ``path`` with seeds ``first_seed .. first_seed + n - 1``;
+    execute each plan on every one of ``backends``. With ``cache`` (JSONL, one row per
+    seed) seeds already there with every backend are reused and each finished seed is
+    appended, so a stopped run resumes.
     ``max_time`` (s, wall clock) replaces the problem's planning time limit (a loaded
     machine makes a wall-clock limit a CPU limit several times smaller)."""
     from ltamp_cli.backends.execution import execute_plan
@@ -158,7 +160,7 @@ def execute_plans(n: int, path: Path = POUR_BLOCKED, backends: tuple[str, ...] =
                 done[int(row["seed"])] = row
     problem = load_problem(path)
     rows = []
-    for seed in tqdm(range(n), desc=path.stem, leave=False):
+    for seed in tqdm(range(first_seed, first_seed + n), desc=path.stem, leave=False):
         if seed in done:
             rows.append(done[seed])
             continue
@@ -331,13 +333,15 @@ def main() -> None:
                         help="backends that execute the --plans plans")
     parser.add_argument("--cache", type=Path, default=None,
                         help="JSONL of executed seeds: reused, and appended to (resumable)")
+    parser.add_argument("--first-seed", type=int, default=0,
+                        help="the plans' seeds are first-seed .. first-seed + plans - 1")
     parser.add_argument("--max-time", type=float, default=None,
                         help="planning wall-clock limit (s) instead of the problem's")
     args = parser.parse_args()
     if args.max_time is not None and args.max_time <= 0:
         parser.error("--max-time must be positive")
-    if args.trials < 0 or args.plans < 0:
-        parser.error("--trials and --plans must be >= 0")
+    if args.trials < 0 or args.plans < 0 or args.first_seed < 0:
+        parser.error("--trials, --plans and --first-seed must be >= 0")
     if not args.problem.is_file():
         parser.error(f"no problem file {args.problem}")
     exec_backends = tuple(args.exec_backends)
@@ -356,7 +360,8 @@ def main() -> None:
         stepping = {name: stepping_rate(name, args.beads, args.steps) for name in BACKENDS}
         step_speedup = stepping["sapien"] / stepping["pybullet"]
         print_trials(args, summary, stepping)
-    plans = execute_plans(args.plans, args.problem, exec_backends, args.cache, args.max_time)
+    plans = execute_plans(args.plans, args.problem, exec_backends, args.cache, args.max_time,
+                          args.first_seed)
     plans_summary = plan_summary(plans, exec_backends)
     print_plans(args.problem.stem, plans, plans_summary, exec_backends)
     payload = {
@@ -374,6 +379,7 @@ def main() -> None:
         "problem": str(args.problem),
         "exec_backends": list(exec_backends),
         "max_time_s": args.max_time,
+        "first_seed": args.first_seed,
         "plans_summary": plans_summary,
         "plans": plans,
         "rows": [
