@@ -10,6 +10,20 @@ advantage with the whole-trial one, and (``--plans N``) solves ``--problem`` (de
 both backends (execution wall time, whether the goal holds physically). Prints tables;
 writes JSON to ``--out`` (default ``bench/results/backends.json``).
 
+Execution check of shipped problems (issue #20): ``--trials 0`` skips the trials and the
+stepping test; ``--exec-backends`` picks the executing engines; ``--cache`` (JSONL, one row
+per seed: planning CPU, per engine the execution's CPU seconds, verdicts, the failed step,
+every goal fact with its bead counts) makes a run resumable; ``--first-seed`` splits the
+seeds over processes; ``--max-time`` replaces the problem's wall-clock planning limit (on a
+loaded machine it is a far smaller CPU limit); ``--summarise-cache`` only tabulates the
+cached seeds (plans found, goals holding with Wilson 95 % intervals, median CPU per
+execution). E.g.
+
+    nice -n 5 .venv/bin/python bench/backends.py --trials 0 --plans 10 --max-time 600 \
+        --problem problems/kitchen3d/coffee.yaml --exec-backends pybullet \
+        --cache docs/results/exec3d/coffee_pybullet.jsonl \
+        --out docs/results/exec3d/coffee_pybullet.json
+
     OMP_NUM_THREADS=1 .venv/bin/python bench/backends.py --trials 20 --plans 3
     OMP_NUM_THREADS=1 .venv/bin/python bench/backends.py --skill push --trials 50 \
         --out /tmp/push.json
@@ -137,6 +151,19 @@ def _execution_row(report: object, cpu_s: float, wall_s: float) -> dict:
     }
 
 
+def cached_rows(cache: Path | None, path: Path, backends: tuple[str, ...]) -> dict[int, dict]:
+    """The seeds of problem ``path`` in the JSONL ``cache`` (seed -> row) that are done: not
+    solved, or executed on every one of ``backends``."""
+    done: dict[int, dict] = {}
+    if cache is not None and cache.exists():
+        for line in cache.read_text().splitlines():
+            row = json.loads(line)
+            if row.get("problem") == path.stem and (
+                    row["status"] != "solved" or all(b in row for b in backends)):
+                done[int(row["seed"])] = row
+    return done
+
+
 def execute_plans(n: int, path: Path = POUR_BLOCKED, backends: tuple[str, ...] = BACKENDS,
                   cache: Path | None = None, max_time: float | None = None,
                   first_seed: int = 0) -> list[dict]:
@@ -151,13 +178,7 @@ def execute_plans(n: int, path: Path = POUR_BLOCKED, backends: tuple[str, ...] =
     from ltamp_cli.planner.api import solve
     from ltamp_cli.planner.problem import load_problem
 
-    done: dict[int, dict] = {}
-    if cache is not None and cache.exists():
-        for line in cache.read_text().splitlines():
-            row = json.loads(line)
-            if row.get("problem") == path.stem and (
-                    row["status"] != "solved" or all(b in row for b in backends)):
-                done[int(row["seed"])] = row
+    done = cached_rows(cache, path, backends)
     problem = load_problem(path)
     rows = []
     for seed in tqdm(range(first_seed, first_seed + n), desc=path.stem, leave=False):
@@ -335,6 +356,8 @@ def main() -> None:
                         help="JSONL of executed seeds: reused, and appended to (resumable)")
     parser.add_argument("--first-seed", type=int, default=0,
                         help="the plans' seeds are first-seed .. first-seed + plans - 1")
+    parser.add_argument("--summarise-cache", action="store_true",
+                        help="no planning: tabulate every seed of --problem in --cache")
     parser.add_argument("--max-time", type=float, default=None,
                         help="planning wall-clock limit (s) instead of the problem's")
     args = parser.parse_args()
@@ -360,8 +383,14 @@ def main() -> None:
         stepping = {name: stepping_rate(name, args.beads, args.steps) for name in BACKENDS}
         step_speedup = stepping["sapien"] / stepping["pybullet"]
         print_trials(args, summary, stepping)
-    plans = execute_plans(args.plans, args.problem, exec_backends, args.cache, args.max_time,
-                          args.first_seed)
+    if args.summarise_cache:
+        if args.cache is None:
+            parser.error("--summarise-cache needs --cache")
+        done = cached_rows(args.cache, args.problem, exec_backends)
+        plans = [done[seed] for seed in sorted(done)]
+    else:
+        plans = execute_plans(args.plans, args.problem, exec_backends, args.cache,
+                              args.max_time, args.first_seed)
     plans_summary = plan_summary(plans, exec_backends)
     print_plans(args.problem.stem, plans, plans_summary, exec_backends)
     payload = {
