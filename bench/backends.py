@@ -10,6 +10,20 @@ advantage with the whole-trial one, and (``--plans N``) solves ``--problem`` (de
 both backends (execution wall time, whether the goal holds physically). Prints tables;
 writes JSON to ``--out`` (default ``bench/results/backends.json``).
 
+Execution check of shipped problems (issue #20): ``--trials 0`` skips the trials and the
+stepping test; ``--exec-backends`` picks the executing engines; ``--cache`` (JSONL, one row
+per seed: planning CPU, per engine the execution's CPU seconds, verdicts, the failed step,
+every goal fact with its bead counts) makes a run resumable; ``--first-seed`` splits the
+seeds over processes; ``--max-time`` replaces the problem's wall-clock planning limit (on a
+loaded machine it is a far smaller CPU limit); ``--summarise-cache`` only tabulates the
+cached seeds (plans found, goals holding with Wilson 95 % intervals, median CPU per
+execution). E.g.
+
+    nice -n 5 .venv/bin/python bench/backends.py --trials 0 --plans 10 --max-time 600 \
+        --problem problems/kitchen3d/coffee.yaml --exec-backends pybullet \
+        --cache docs/results/exec3d/coffee_pybullet.jsonl \
+        --out docs/results/exec3d/coffee_pybullet.json
+
     OMP_NUM_THREADS=1 .venv/bin/python bench/backends.py --trials 20 --plans 3
     OMP_NUM_THREADS=1 .venv/bin/python bench/backends.py --skill push --trials 50 \
         --out /tmp/push.json
@@ -19,6 +33,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import platform
 import time
@@ -111,33 +126,123 @@ def stepping_rate(name: str, beads: int, steps: int) -> float:
     return rate
 
 
-def execute_plans(n: int, path: Path = POUR_BLOCKED) -> list[dict]:
-    """Solve the problem at ``path`` with seeds ``0..n-1``; execute each plan on both
-    backends."""
+def _execution_row(report: object, cpu_s: float, wall_s: float) -> dict:
+    """What one execution's report says: the times, verdicts, the step that failed (if any)
+    and why, every goal fact with its measurements, and the bead counts each pour, scoop,
+    dump and stir left behind."""
+    details = report.details  # type: ignore[attr-defined]
+    goal = details.get("goal") or []
+    failed = [step for step in details.get("steps", []) if not step["ok"]]
+    beads = [{k: v for k, v in entry.items() if k in (
+        "action", "counts", "spoonful", "left_in_spoon", "stirred", "counts_after")}
+        for entry in details.get("log", [])
+        if entry.get("action") in ("pour", "scoop", "dump", "stir")]
+    return {
+        "wall_s": wall_s,
+        "cpu_s": cpu_s,
+        "executed": report.success,  # type: ignore[attr-defined]
+        "goal_holds": report.goal_holds,  # type: ignore[attr-defined]
+        "fraction": goal[0].get("fraction") if goal else None,
+        "sim_time_s": details.get("sim_time_s"),
+        "failed_step": failed[0] if failed else None,
+        "goal": goal,
+        "skill_actions": beads,
+        "initial_counts": details.get("initial_counts"),
+    }
+
+
+def cached_rows(cache: Path | None, path: Path, backends: tuple[str, ...]) -> dict[int, dict]:
+    """The seeds of problem ``path`` in the JSONL ``cache`` (seed -> row) that are done: not
+    solved, or executed on every one of ``backends``."""
+    done: dict[int, dict] = {}
+    if cache is not None and cache.exists():
+        for line in cache.read_text().splitlines():
+            row = json.loads(line)
+            if row.get("problem") == path.stem and (
+                    row["status"] != "solved" or all(b in row for b in backends)):
+                done[int(row["seed"])] = row
+    return done
+
+
+def execute_plans(n: int, path: Path = POUR_BLOCKED, backends: tuple[str, ...] = BACKENDS,
+                  cache: Path | None = None, max_time: float | None = None,
+                  first_seed: int = 0) -> list[dict]:
+    """Solve the problem at ``path`` with seeds ``first_seed .. first_seed + n - 1``;
+    execute each plan on every one of ``backends``. With ``cache`` (JSONL, one row per
+    seed) seeds already there with every backend are reused and each finished seed is
+    appended, so a stopped run resumes.
+    ``max_time`` (s, wall clock) replaces the problem's planning time limit (a loaded
+    machine makes a wall-clock limit a CPU limit several times smaller)."""
     from ltamp_cli.backends.execution import execute_plan
     from ltamp_cli.planner.algorithms.common import PlannerConfig
     from ltamp_cli.planner.api import solve
     from ltamp_cli.planner.problem import load_problem
 
+    done = cached_rows(cache, path, backends)
     problem = load_problem(path)
     rows = []
-    for seed in tqdm(range(n), desc=path.stem, leave=False):
-        result = solve(problem, PlannerConfig(**{**problem.planner_options, "seed": seed}))
-        row: dict = {"seed": seed, "status": result.status}
+    for seed in tqdm(range(first_seed, first_seed + n), desc=path.stem, leave=False):
+        if seed in done:
+            rows.append(done[seed])
+            continue
+        w0, c0 = time.perf_counter(), time.process_time()
+        options = {**problem.planner_options, "seed": seed}
+        if max_time is not None:
+            options["max_time"] = max_time
+        result = solve(problem, PlannerConfig(**options))
+        row: dict = {"problem": path.stem, "seed": seed, "status": result.status,
+                     "max_time_s": options.get("max_time"),
+                     "plan_cpu_s": time.process_time() - c0,
+                     "plan_wall_s": time.perf_counter() - w0,
+                     "actions": [step.name for step in (result.plan or ())]}
         if result.solved:
-            for name in BACKENDS:
-                start = time.perf_counter()
+            for name in backends:
+                w0, c0 = time.perf_counter(), time.process_time()
                 report = execute_plan(name, problem, result, seed)
-                goal = report.details["goal"][0] if report.details.get("goal") else {}
-                row[name] = {
-                    "wall_s": time.perf_counter() - start,
-                    "executed": report.success,
-                    "goal_holds": report.goal_holds,
-                    "fraction": goal.get("fraction"),
-                    "sim_time_s": report.details.get("sim_time_s"),
-                }
+                row[name] = _execution_row(report, time.process_time() - c0,
+                                           time.perf_counter() - w0)
         rows.append(row)
+        if cache is not None:
+            cache.parent.mkdir(parents=True, exist_ok=True)
+            with cache.open("a") as handle:
+                handle.write(json.dumps(row) + "\n")
     return rows
+
+
+def wilson(successes: int, n: int) -> list[float]:
+    """95 % Wilson score interval of ``successes / n`` (``[0, 1]`` when ``n`` is 0)."""
+    if n == 0:
+        return [0.0, 1.0]
+    z = 1.959963984540054
+    phat = successes / n
+    centre = (phat + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(phat * (1 - phat) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return [max(0.0, centre - half), min(1.0, centre + half)]
+
+
+def plan_summary(plans: list[dict], backends: tuple[str, ...]) -> dict:
+    """Plans found and, per backend, executions whose goal holds (Wilson 95 % intervals
+    over the seeds tried) and the median CPU seconds per execution."""
+    solved = [row for row in plans if row["status"] == "solved"]
+    out: dict = {"seeds": len(plans), "solved": len(solved),
+                 "solved_wilson95": wilson(len(solved), len(plans)),
+                 "plan_cpu_median_s": float(np.median([r["plan_cpu_s"] for r in plans]))
+                 if plans and "plan_cpu_s" in plans[0] else None}
+    for name in backends:
+        runs = [row[name] for row in solved if name in row]
+        held = sum(bool(r["goal_holds"]) for r in runs)
+        out[name] = {
+            "executed": len(runs),
+            "goal_holds": held,
+            "goal_holds_of_seeds_wilson95": wilson(held, len(plans)),
+            "goal_holds_of_plans_wilson95": wilson(held, len(runs)),
+            "cpu_median_s": float(np.median([r["cpu_s"] for r in runs]))
+            if runs and "cpu_s" in runs[0] else None,
+            "failures": [{"seed": row["seed"], "failed_step": row[name].get("failed_step"),
+                          "goal": row[name].get("goal")}
+                         for row in solved if name in row and not row[name]["goal_holds"]],
+        }
+    return out
 
 
 def summarise(rows: dict[str, list[dict]]) -> dict:
@@ -177,27 +282,8 @@ def summarise(rows: dict[str, list[dict]]) -> dict:
     }
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--trials", type=int, default=20)
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--beads", type=int, default=200, help="spheres for the stepping test")
-    parser.add_argument("--steps", type=int, default=480, help="steps for the stepping test")
-    parser.add_argument("--skill", choices=sorted(MEASURES), default="pour")
-    parser.add_argument("--plans", type=int, default=0, help="plans to execute")
-    parser.add_argument("--problem", type=Path, default=POUR_BLOCKED,
-                        help="problem whose plans --plans executes")
-    parser.add_argument("--out", type=Path, default=RESULTS_DIR / "backends.json")
-    args = parser.parse_args()
-    # Same generator draws for both backends: contexts and pre-checks are engine-independent.
-    probe = load_backend("pybullet")
-    inputs = skill_inputs(probe, args.skill, args.trials, args.seed)
-    probe.close()
-    rows = {name: time_trials(name, inputs, args.seed, args.skill) for name in BACKENDS}
-    summary = summarise(rows)
-    stepping = {name: stepping_rate(name, args.beads, args.steps) for name in BACKENDS}
-    plans = execute_plans(args.plans, args.problem)
-
+def print_trials(args: argparse.Namespace, summary: dict, stepping: dict) -> None:
+    """The whole-trial and stepping tables."""
     print(f"{'backend':<10}{'n':>4}{'wall med':>10}{'wall sum':>10}{'cpu med':>9}"
           f"{'steps/s':>9}{'success':>9}")
     for name in BACKENDS:
@@ -217,18 +303,96 @@ def main() -> None:
           f"{summary['clear_cut_trials']} clear-cut ones (PyBullet |score| >= {CLEAR_SCORE}); "
           f"disagreeing trials: {summary['disagreements']}; mean |{MEASURES[args.skill]} "
           f"difference| {summary['measure_mean_abs_diff']:.3f}")
-    executed = [row for row in plans if "sapien" in row]
-    if executed:
-        print(f"{'seed':>4}{'pyb exec s':>11}{'pyb goal':>9}{'sap exec s':>11}{'sap goal':>9}")
-        for row in executed:
-            pyb, sap = row["pybullet"], row["sapien"]
-            print(f"{row['seed']:>4}{pyb['wall_s']:>11.1f}{pyb['goal_holds']!s:>9}"
-                  f"{sap['wall_s']:>11.1f}{sap['goal_holds']!s:>9}")
-        same = sum(r["pybullet"]["goal_holds"] == r["sapien"]["goal_holds"] for r in executed)
-        ratio = sum(r["pybullet"]["wall_s"] for r in executed) / sum(
-            r["sapien"]["wall_s"] for r in executed)
-        print(f"{args.problem.stem} executions: goal verdicts agree on {same}/{len(executed)} "
-              f"plans; SAPIEN executes {ratio:.1f}x faster")
+
+
+def print_plans(problem: str, plans: list[dict], summary: dict,
+                backends: tuple[str, ...]) -> None:
+    """One line per seed (plan status, per backend: CPU s and whether the goal holds), then
+    the totals with Wilson intervals."""
+    if not plans:
+        return
+    header = f"{'seed':>4}{'status':>10}{'plan cpu':>9}"
+    for name in backends:
+        header += f"{name[:3] + ' cpu':>9}{name[:3] + ' goal':>9}"
+    print(header)
+    for row in plans:
+        line = f"{row['seed']:>4}{row['status']:>10}{row.get('plan_cpu_s', float('nan')):>9.1f}"
+        for name in backends:
+            run = row.get(name)
+            line += ("" if run is None else
+                     f"{run.get('cpu_s', float('nan')):>9.1f}{run['goal_holds']!s:>9}")
+        print(line)
+    print(f"{problem}: {summary['solved']}/{summary['seeds']} seeds planned "
+          f"(Wilson {summary['solved_wilson95'][0]:.2f}-{summary['solved_wilson95'][1]:.2f})")
+    for name in backends:
+        b = summary[name]
+        low, high = b["goal_holds_of_seeds_wilson95"]
+        cpu = b["cpu_median_s"]
+        print(f"  {name}: goal holds in {b['goal_holds']}/{summary['seeds']} seeds "
+              f"(Wilson {low:.2f}-{high:.2f}), median CPU per execution "
+              f"{'n/a' if cpu is None else f'{cpu:.1f} s'}")
+    if len(backends) == 2 and all(len(backends) == sum(n in r for n in backends)
+                                  for r in plans if r["status"] == "solved"):
+        executed = [r for r in plans if r["status"] == "solved"]
+        same = sum(r[backends[0]]["goal_holds"] == r[backends[1]]["goal_holds"]
+                   for r in executed)
+        print(f"  goal verdicts agree on {same}/{len(executed)} plans")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--trials", type=int, default=20)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--beads", type=int, default=200, help="spheres for the stepping test")
+    parser.add_argument("--steps", type=int, default=480, help="steps for the stepping test")
+    parser.add_argument("--skill", choices=sorted(MEASURES), default="pour")
+    parser.add_argument("--plans", type=int, default=0, help="plans to execute")
+    parser.add_argument("--problem", type=Path, default=POUR_BLOCKED,
+                        help="problem whose plans --plans executes")
+    parser.add_argument("--out", type=Path, default=RESULTS_DIR / "backends.json")
+    parser.add_argument("--exec-backends", nargs="+", choices=BACKENDS, default=list(BACKENDS),
+                        help="backends that execute the --plans plans")
+    parser.add_argument("--cache", type=Path, default=None,
+                        help="JSONL of executed seeds: reused, and appended to (resumable)")
+    parser.add_argument("--first-seed", type=int, default=0,
+                        help="the plans' seeds are first-seed .. first-seed + plans - 1")
+    parser.add_argument("--summarise-cache", action="store_true",
+                        help="no planning: tabulate every seed of --problem in --cache")
+    parser.add_argument("--max-time", type=float, default=None,
+                        help="planning wall-clock limit (s) instead of the problem's")
+    args = parser.parse_args()
+    if args.max_time is not None and args.max_time <= 0:
+        parser.error("--max-time must be positive")
+    if args.trials < 0 or args.plans < 0 or args.first_seed < 0:
+        parser.error("--trials, --plans and --first-seed must be >= 0")
+    if not args.problem.is_file():
+        parser.error(f"no problem file {args.problem}")
+    exec_backends = tuple(args.exec_backends)
+    summary: dict | None = None
+    stepping: dict | None = None
+    step_speedup = None
+    inputs: list[tuple[np.ndarray, np.ndarray]] = []
+    rows: dict[str, list[dict]] = {name: [] for name in BACKENDS}
+    if args.trials:  # --trials 0: only the plans
+        # Same generator draws for both backends: contexts and pre-checks are engine-independent.
+        probe = load_backend("pybullet")
+        inputs = skill_inputs(probe, args.skill, args.trials, args.seed)
+        probe.close()
+        rows = {name: time_trials(name, inputs, args.seed, args.skill) for name in BACKENDS}
+        summary = summarise(rows)
+        stepping = {name: stepping_rate(name, args.beads, args.steps) for name in BACKENDS}
+        step_speedup = stepping["sapien"] / stepping["pybullet"]
+        print_trials(args, summary, stepping)
+    if args.summarise_cache:
+        if args.cache is None:
+            parser.error("--summarise-cache needs --cache")
+        done = cached_rows(args.cache, args.problem, exec_backends)
+        plans = [done[seed] for seed in sorted(done)]
+    else:
+        plans = execute_plans(args.plans, args.problem, exec_backends, args.cache,
+                              args.max_time, args.first_seed)
+    plans_summary = plan_summary(plans, exec_backends)
+    print_plans(args.problem.stem, plans, plans_summary, exec_backends)
     payload = {
         "benchmark": "backends",
         "python": platform.python_version(),
@@ -241,6 +405,11 @@ def main() -> None:
         "summary": summary,
         "stepping": {"beads": args.beads, "steps": args.steps, "steps_per_s": stepping,
                      "speedup": step_speedup},
+        "problem": str(args.problem),
+        "exec_backends": list(exec_backends),
+        "max_time_s": args.max_time,
+        "first_seed": args.first_seed,
+        "plans_summary": plans_summary,
         "plans": plans,
         "rows": [
             {"context": c.tolist(), "control": u.tolist(),

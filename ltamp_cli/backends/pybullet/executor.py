@@ -1,8 +1,9 @@
 """Replaying kitchen3d plans in PyBullet and checking the goal in the simulated world.
 
 The arm is driven kinematically along the planned joint paths (one configuration per
-simulation step, at a bounded joint speed; a pour at the pour skill's own tool speeds, as in
-the trials its model learned from); a held object is rigidly carried at
+simulation step, at a bounded joint speed; a pour, scoop or stir moves its tool at the
+skill's own speeds, as in the trials a learned skill's model learned from,
+:data:`SKILL_TIMINGS`); a held object is rigidly carried at
 ``EE pose @ grasp`` with the velocity that reaches its next pose, so contacts push beads the
 way the pour trials do (and is made heavy while held, so a bead pile cannot push it down
 within a step); motions carrying contents start and stop each path segment at a bounded
@@ -37,9 +38,10 @@ Goal facts checked physically:
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -82,9 +84,12 @@ from ltamp_cli.backends.pybullet.skills.stir import TipTracker
 from ltamp_cli.backends.pybullet.tamp.grasping import object_grasps
 from ltamp_cli.backends.pybullet.tamp.planning import pose_of
 from ltamp_cli.backends.pybullet.tamp.scene import SceneSpec, scene_from_world
+from ltamp_cli.backends.pybullet.tamp.skill_paths import STIR_SPEED_M_S
 from ltamp_cli.backends.pybullet.tamp.values import ArmPath
 from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig
 from ltamp_cli.backends.skills3d.pour import POUR_SPEED_M_S, PourSettings
+from ltamp_cli.backends.skills3d.scoop import ScoopSettings
+from ltamp_cli.backends.skills3d.stir import STIR_ANGULAR_SPEED
 from ltamp_cli.motion.timing import MotionLimits, time_path
 
 #: Fraction of a material's beads that must end in a container for ``(Contains c m)``.
@@ -134,20 +139,43 @@ TOOL_KINDS = ("spoon", "stirrer")
 HELD_MASS_FACTOR = 50.0
 
 
+@dataclass(frozen=True)
+class SkillTiming:
+    """How a skill's trials move its tool: the tool frame's origin at ``speed`` m/s, its
+    orientation at ``angular_speed`` rad/s; each path segment takes the longer of the two
+    (:func:`~.paths.segment_steps`), with no stop at the waypoints."""
+
+    speed: float
+    angular_speed: float
+
+
+#: The timing of every skill whose tool path the executor follows as the skill's own trials
+#: move the tool, by path kind (:attr:`ArmPath.kind`): the learned pour and scoop at their
+#: trials' speeds (:data:`~.skills3d.pour.POUR_SPEED_M_S` and the pour's turn rate,
+#: :class:`~.skills3d.scoop.ScoopSettings`), the stir at the tip speed the kitchen's stir
+#: uses as its ``speed`` control (:data:`~.tamp.skill_paths.STIR_SPEED_M_S`) and its
+#: trials' turn rate. Other motions (transit, carries, picks, places, the engineered dump
+#: and push) are joint-speed and acceleration limited (:meth:`Kitchen3DRun.follow`).
+SKILL_TIMINGS: Mapping[str, SkillTiming] = MappingProxyType({
+    "pour": SkillTiming(POUR_SPEED_M_S, PourSettings().angular_speed),
+    "scoop": SkillTiming(ScoopSettings().speed, ScoopSettings().angular_speed),
+    "stir": SkillTiming(STIR_SPEED_M_S, STIR_ANGULAR_SPEED),
+})
+
+
 class ActionFailed(RuntimeError):
     """An action could not be carried out physically (e.g. the fingers missed the object)."""
 
 
 @dataclass(frozen=True)
 class ExecutionSettings:
-    """Joint speeds (rad/s) for transit, carrying contents and dumping a spoon (a pour follows
-    its skill's tool speeds); settle/hold times (s)."""
+    """Joint speeds (rad/s) for transit, carrying contents, dumping a spoon and pushing (a
+    pour, scoop or stir moves its tool at its skill's speeds, :data:`SKILL_TIMINGS`);
+    settle/hold times (s)."""
 
     free_speed: float = 1.5
     carry_speed: float = 0.8
     dump_speed: float = 1.2
-    scoop_speed: float = 0.6
-    stir_speed: float = 0.8
     push_speed: float = 0.4
     settle_s: float = 0.4
     pour_hold_s: float = 0.8
@@ -379,29 +407,35 @@ class Kitchen3DRun:
             if drive:
                 self._drive_joints(arm_index, np.zeros(arm.dof))
 
-    def follow_skill(self, path: ArmPath, speed: float, angular_speed: float) -> None:
-        """Drive the arm through ``path.configurations`` so that the held tool moves as in the
-        skill's trials: each segment takes the longer of its distance / ``speed`` (m/s) and
-        its turn / ``angular_speed`` (rad/s), with no stop at the (dense) waypoints.
+    def follow_skill(self, path: ArmPath, reverse: bool = False) -> None:
+        """Drive the arm through ``path.configurations`` (backwards with ``reverse``) so that
+        the held tool moves as in the trials of the skill ``path.kind``
+        (:data:`SKILL_TIMINGS`): each segment takes the longer of its distance / speed and
+        its turn / angular speed, with no stop at the (dense) waypoints.
 
         A learned skill succeeds at the timing it was trained with: at the joint-speed
         limited, stop-at-every-waypoint timing of :meth:`follow`, a pour tilted at ~0.4
         rad/s peak instead of its trials' 2 rad/s, so its beads slid out over the lip one by
         one, off the cup's axis, instead of falling out together, and 21 of 40 flew past a
         bowl that the trials fill (Kitchen3D coffee, PyBullet)."""
+        timing = SKILL_TIMINGS.get(path.kind)
+        if timing is None:
+            raise ActionFailed(f"{path.kind}: no skill timing for this kind of path")
         held = self.held.get(path.arm)
         if held is None:
             raise ActionFailed(f"{path.kind}: arm {path.arm} holds no tool")
         arm = self.scene.arms[path.arm]
         configurations = np.asarray(path.configurations, dtype=float)
+        if reverse:
+            configurations = configurations[::-1]
         start = arm.get_configuration()
         poses = []
         for q in configurations:
             arm.set_configuration(q)
             poses.append(arm.end_effector_pose() @ held[1])
         arm.set_configuration(start)
-        dense = skill_timed_configurations(configurations, poses, speed, angular_speed,
-                                           self.world.config.time_step)
+        dense = skill_timed_configurations(configurations, poses, timing.speed,
+                                           timing.angular_speed, self.world.config.time_step)
         self._follow_dense(path.arm, dense, held, drive=False)
 
     def _drive_joints(self, arm_index: int, velocities: np.ndarray) -> None:
@@ -571,8 +605,7 @@ class Kitchen3DRun:
     def pour(self, path: ArmPath) -> None:
         """Tilt the held cup along the pour path at the pour skill's own speeds (those of
         the trials its model learned from), hold, and carry it back upright."""
-        skill = PourSettings()
-        self.follow_skill(path, POUR_SPEED_M_S, skill.angular_speed)
+        self.follow_skill(path)
         self.step_n(self.world.steps_for(self.settings.pour_hold_s))
         self.follow(path.arm, path.configurations[::-1], self.settings.carry_speed)
         self.step_n(self.world.steps_for(self.settings.settle_s))
@@ -583,7 +616,7 @@ class Kitchen3DRun:
         spoonful of ``material`` once the beads in the head have settled."""
         if material not in self.beads:
             raise ActionFailed(f"scoop: no beads of {material!r} in the kitchen")
-        self.follow(path.arm, path.configurations, self.settings.scoop_speed)
+        self.follow_skill(path)
         self.step_n(self.world.steps_for(self.settings.settle_s))
         spoonful = int(self.inside(spoon, self.material_positions(material)).sum())
         self.spoonfuls[material] = spoonful
@@ -618,8 +651,8 @@ class Kitchen3DRun:
 
         self.probe = track
         try:
-            self.follow(path.arm, path.configurations, self.settings.stir_speed)
-            self.follow(path.arm, path.configurations[::-1], self.settings.stir_speed)
+            self.follow_skill(path)
+            self.follow_skill(path, reverse=True)
         finally:
             self.probe = None
         self.step_n(self.world.steps_for(self.settings.settle_s))
@@ -769,4 +802,5 @@ class Kitchen3DExecutor:
             run.close()
 
 
-__all__ = ["ActionFailed", "ExecutionSettings", "Kitchen3DExecutor", "Kitchen3DRun"]
+__all__ = ["SKILL_TIMINGS", "ActionFailed", "ExecutionSettings", "Kitchen3DExecutor",
+           "Kitchen3DRun", "SkillTiming", "skill_timed_configurations"]

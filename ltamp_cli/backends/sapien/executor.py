@@ -1,7 +1,8 @@
 """Replaying kitchen3d plans in SAPIEN and checking the goal in the simulated world.
 
 The action semantics are the PyBullet executor's (:class:`~ltamp_cli.backends.pybullet.
-executor.Kitchen3DRun`: joint-speed-limited following of the planned paths, picks that
+executor.Kitchen3DRun`: joint-speed-limited following of the planned paths, the pour,
+scoop and stir at their skills' own tool speeds (``SKILL_TIMINGS``), picks that
 verify both fingers are at the object, places checked where the object came to rest, the
 goal checked from bead positions); only the simulation underneath is replaced:
 

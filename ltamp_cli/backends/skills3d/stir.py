@@ -72,6 +72,9 @@ STIR_MIN_TRAVEL_M = 0.05
 #: Score: mean bead displacement (m) counted as mixing, and the fraction that must stay in.
 STIR_DISPLACEMENT_M = 0.012
 STIR_RETAIN = 0.95
+#: Turn rate (rad/s) bounding the stirrer's rotation along a trial's path (the rod stays
+#: upright, so only a path that turns it is slowed by it); the tip's speed is a control.
+STIR_ANGULAR_SPEED = 1.0
 IDENTITY_QUAT = np.array([0.0, 0.0, 0.0, 1.0])
 #: The stirrer's material (a tool: engines with true kinematic tools ignore the mass).
 STIRRER_MATERIAL = BodyMaterial(mass=0.05, rgba=(0.6, 0.6, 0.65, 1.0))
@@ -279,7 +282,8 @@ def run_stir(
     in_start = contained_mask(cup, start)
     assert cup_geometry.cavity is not None
     tracker = TipTracker(cup_geometry.cavity, dt)
-    timed = timed_poses(path, speed=float(trial.control[3]), angular_speed=1.0, dt=dt)
+    timed = timed_poses(path, speed=float(trial.control[3]), angular_speed=STIR_ANGULAR_SPEED,
+                        dt=dt)
     track = tracker.callback(
         lambda: world_to_object(stirrer.pose()[0][None, :], *cup.pose())[0], on_step
     )
@@ -292,7 +296,8 @@ def run_stir(
 
 
 __all__ = [
-    "STIR_CONTEXT", "STIR_CONTROL", "STIR_MIN_TIME_S", "STIR_MIN_TRAVEL_M", "STIR_SPEC",
+    "STIR_ANGULAR_SPEED", "STIR_CONTEXT", "STIR_CONTROL", "STIR_MIN_TIME_S",
+    "STIR_MIN_TRAVEL_M", "STIR_SPEC",
     "StirLatents", "StirSettings", "TipTracker", "check_stir", "cup_of", "prepare_stir",
     "run_stir", "sample_stir_context", "sample_stir_latents",
     "stir_is_valid", "stir_outcome", "stir_path", "stir_score",

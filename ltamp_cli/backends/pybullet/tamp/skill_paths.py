@@ -35,6 +35,9 @@ STIR_TIP_CLEARANCE_M = 0.015
 STIR_RADIUS_FRACTION = 0.45
 STIR_WAYPOINTS = 8
 STIR_TURNS = 2
+#: The kitchen stir's tip speed (m/s): the stir skill's ``speed`` control (its trials move the
+#: tip at it, :func:`~ltamp_cli.backends.skills3d.stir.run_stir`), which the executor keeps.
+STIR_SPEED_M_S = 0.1
 #: Push: lowest hand (grasp-target) height (m) above the table, clearance (m) behind the
 #: object before contact, and the lift (m) before and after. The closed fingertips reach
 #: ``FINGERTIP_BELOW_M`` below the grasp target and push ``PUSH_BELOW_TOP_M`` below the
