@@ -38,7 +38,7 @@ class SuperLevelSet:
 
     ``theta_star (dθ,)`` (normalised) is the most confident valid control found and
     ``phi_star`` its ``μ/σ``; ``seed_members (k, dθ)`` are the members of the uniform batch
-    scored while building the set (consumed once by :meth:`take_seed_members`).
+    scored while building the set, ``θ*`` excepted (consumed once by :meth:`take_seed_members`).
     """
 
     model: LevelSetModel
@@ -156,6 +156,9 @@ def build_superlevel_set(
     if beta is None:
         beta = relaxed_beta(phi_star, lam)
     passed = np.flatnonzero(ratios > beta)
+    # θ* is left out: samplers that start from it add it themselves, and a pool holding it
+    # twice could hand out the same control twice.
+    passed = passed[passed != star]
     passed = passed[probe._valid(u[passed])]
     return SuperLevelSet(
         model,
