@@ -73,13 +73,13 @@ def compile_satisfaction(problem: SatisfactionProblem, costs: bool = True) -> _C
     if not isinstance(problem, tuple) or len(problem) != 4:
         raise InputError("expected SatisfactionProblem(stream_pddl, stream_map, init, terms)")
     stream_pddl, stream_map, init, terms = problem
-    parameters: dict[str, None] = {}
+    parameters: dict[str, str] = {}  # PDDL name (lower-case) -> the user's spelling
     constants: dict[Any, str] = {}
     constant_values: list[Any] = []
 
     def argument(value: Any) -> str:
         if is_parameter(value):
-            parameters.setdefault(value.lower(), None)
+            parameters.setdefault(value.lower(), value)
             return value.lower()
         key = value_key(value)
         if key not in constants:
@@ -124,7 +124,7 @@ def compile_satisfaction(problem: SatisfactionProblem, costs: bool = True) -> _C
     value_facts = [(VALUE_PREDICATE.format(i), v) for i, v in enumerate(constant_values)]
     compiled = PDDLProblem(domain, {}, stream_pddl, stream_map, [*init, *value_facts],
                            (GOAL_PREDICATE,))
-    return _Compiled(compiled, tuple(parameters), bool(objectives))
+    return _Compiled(compiled, tuple(parameters.values()), bool(objectives))
 
 
 def _function_declarations(objectives: list[str]) -> str:

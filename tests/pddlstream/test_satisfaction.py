@@ -109,6 +109,14 @@ def test_bad_terms_are_one_line_errors(terms: list[object], message: str) -> Non
     assert "\n" not in str(raised.value)
 
 
+def test_bindings_keep_the_parameters_spelling() -> None:
+    problem = SatisfactionProblem(GRID_STREAM, grid_map(1), [("Cell", (0, 1))],
+                                  [("Adjacent", "?Next", (0, 1)), ("Free", "?next")])
+    solution = constraint_satisfaction(problem, max_time=20, verbose=False)
+    assert solution.bindings is not None and list(solution.bindings) == ["?Next"]
+    assert solution.bindings["?Next"] not in WALL
+
+
 def test_is_parameter() -> None:
     assert is_parameter("?x") and not is_parameter("x") and not is_parameter(("?x",))
 
