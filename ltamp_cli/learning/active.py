@@ -52,6 +52,7 @@ from ltamp_cli.learning.acquisition import evaluate, maximize, straddle
 from ltamp_cli.learning.baselines import SKLEARN_KINDS, RandomModel, SklearnModel
 from ltamp_cli.learning.defaults import DEFAULT_STRATEGY
 from ltamp_cli.learning.gp import DEFAULT_PRIOR, HyperBounds, LengthscalePrior, fit_gp
+from ltamp_cli.learning.held_context import HeldContext
 from ltamp_cli.learning.kernels import KERNEL_NAMES
 from ltamp_cli.learning.metrics import Evaluation, SkillEvaluator
 from ltamp_cli.learning.model import LevelSetModel, PhysicalValidity, SkillModel
@@ -97,6 +98,15 @@ class LearningConfig:
     #: ``DEFAULT_PRIOR.median``), fitted by MAP; ``None``: maximum marginal likelihood, the
     #: fit before issue #21 (see :class:`~ltamp_cli.learning.gp.LengthscalePrior`).
     lengthscale_prior_sd: float | None = DEFAULT_PRIOR.log_sd
+    #: GP strategies: upper bound of every ARD lengthscale, normalised units (the input box
+    #: is [-1, 1]); ``None``: ``HyperBounds().lengthscale``'s 20 ("irrelevant" allowed). The
+    #: reference learner bounds its push lengthscales by 0.5 raw units (0.1-0.5 here, see
+    #: ``gp_bounds``); ``docs/results/learning/README.md``, push section (issue #21).
+    lengthscale_max: float | None = None
+    #: ``lse``: 0 — the straddle chooses control and context; k > 0 — a context drawn from
+    #: the skill's distribution is kept for k consecutive trials, the straddle choosing the
+    #: control (:mod:`~ltamp_cli.learning.held_context`, issue #21).
+    context_repeats: int = 0
     threads: int | None = 1  # thread-pool limit while learning (ltamp_cli.threads)
 
     def __post_init__(self) -> None:
@@ -114,6 +124,12 @@ class LearningConfig:
             raise ValueError(f"refit_every must be >= 1, got {self.refit_every}")
         if self.lse2_candidates < 1:
             raise ValueError(f"lse2_candidates must be >= 1, got {self.lse2_candidates}")
+        if self.context_repeats < 0:
+            raise ValueError(f"context_repeats must be >= 0, got {self.context_repeats}")
+        low, high = HyperBounds().lengthscale
+        if self.lengthscale_max is not None and not low < self.lengthscale_max <= high:
+            raise ValueError(f"lengthscale_max must be in ({low}, {high}], "
+                             f"got {self.lengthscale_max}")
         if self.lengthscale_prior_sd is not None and not self.lengthscale_prior_sd > 0:
             raise ValueError(
                 f"lengthscale_prior_sd must be > 0 or None, got {self.lengthscale_prior_sd}"
@@ -135,13 +151,15 @@ class LearningResult:
     curve: list[Evaluation] = field(default_factory=list)
 
 
-def gp_bounds(spec: SkillSpec) -> HyperBounds:
+def gp_bounds(spec: SkillSpec, lengthscale_max: float | None = None) -> HyperBounds:
     """The GP hyperparameter bounds for ``spec``: the defaults, with the noise variance capped
-    at :data:`DETERMINISTIC_NOISE` when the skill's trials are deterministic."""
+    at :data:`DETERMINISTIC_NOISE` when the skill's trials are deterministic and the
+    lengthscales at ``lengthscale_max`` (normalised units) if given."""
     default = HyperBounds()
-    if not spec.deterministic:
-        return default
-    return HyperBounds(noise=(default.noise[0], DETERMINISTIC_NOISE))
+    noise = (default.noise[0], DETERMINISTIC_NOISE) if spec.deterministic else default.noise
+    lengthscale = (default.lengthscale if lengthscale_max is None
+                   else (default.lengthscale[0], lengthscale_max))
+    return HyperBounds(lengthscale=lengthscale, noise=noise)
 
 
 def fit_model(
@@ -167,7 +185,7 @@ def fit_model(
         restarts = config.gp_restarts if final or warm is None else 0
         gp = fit_gp(
             x, y, config.kernel, mean=config.mean, restarts=restarts, rng=rng, warm_start=warm,
-            bounds=gp_bounds(spec), prior=config.lengthscale_prior(),
+            bounds=gp_bounds(spec, config.lengthscale_max), prior=config.lengthscale_prior(),
         )
         return LevelSetModel(spec, gp)
     if config.strategy == "random":
@@ -294,10 +312,17 @@ def learn_online(
         desc=f"{config.strategy} {skill}",
         unit="trial",
     )
+    held = (HeldContext(spec, config.context_repeats,
+                        lambda r: np.asarray(backend.sample_context(skill, r), dtype=float))
+            if config.strategy == "lse" and config.context_repeats > 0 else None)
     with bar:
         while len(records) < config.budget:
             model = learner.current() if goes_active(config, learner.y) else None
-            context, control = _propose(backend, skill, spec, config, rng, model, is_valid)
+            if held is not None and isinstance(model, LevelSetModel):
+                context, control = held.propose(model, rng, is_valid, config.n_candidates,
+                                                config.acquisition_restarts)
+            else:
+                context, control = _propose(backend, skill, spec, config, rng, model, is_valid)
             index = len(records)
             seed = _trial_seed(config.seed, index)
             start = time.perf_counter()

@@ -1,0 +1,275 @@
+"""Kitchen2D push active learning (issue #21): why every learner sits at random's θ* rate.
+
+``python -m bench.push_al run --variant lse --seeds 0-4`` runs one learner variant × seed
+jobs on the Box2D push with exactly the standard paper run's protocol (``bench.paper.al2d``,
+mode ``standard``: 100 trials, 10 random first, θ* checkpoints every 25 trials, 50 held-out
+goals drawn from ``default_rng([2024, 4])``, θ* simulated live with seed ``1000 + seed``,
+5,000 candidates) and appends each finished job as one JSON line to
+``docs/results/learning/pushal-runs.jsonl`` (``--log``; a rerun skips logged jobs).
+``python -m bench.push_al report`` prints the table and paired comparisons (units: seed ×
+held-out goal; bootstrap interval of the mean difference, exact sign test) and writes
+``docs/results/learning/pushal.json``.
+
+Besides the θ* curve every job records where its training trials went (the diagnosis):
+
+* ``goal_norms`` — ‖goal‖ of every trial (the object starts at the origin; a goal within 2 of
+  it succeeds without moving the object, ~8 % of the held-out goals);
+* ``moved`` / ``moved_far`` — trials whose push moved the object at all (> 0.05) / by > 2;
+* ``circle_still`` — trials with the object left in place and the goal within 0.5 of the
+  circle ‖goal‖ = 2, where success is decided by the goal alone;
+* ``far_successes`` — training successes with ‖goal‖ > 2.5;
+* ``nn_success`` — a score-only baseline on the same trials: for each held-out goal, the
+  control of the training success whose goal is nearest, simulated;
+* ``replay_bound`` — the share of held-out goals within 2 of where some training push left
+  the object (the origin included): what a learner that knew every trial's outcome could
+  reach by replaying a training control. The learners see only the score, i.e. one distance
+  to that trial's own goal.
+
+Variants (:data:`VARIANTS`) are :class:`~ltamp_cli.learning.active.LearningConfig` settings.
+Times are CPU seconds of this process (the machine is shared).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from bench.paper.al2d import SIZES as AL2D_SIZES
+from bench.paper.common import live_score
+from ltamp_cli.backends import load_backend
+from ltamp_cli.learning.active import LearningConfig, learn_online
+from ltamp_cli.learning.metrics import SkillEvaluator
+from ltamp_cli.learning.model import LevelSetModel
+
+REPO = Path(__file__).resolve().parents[1]
+DEFAULT_LOG = REPO / "docs" / "results" / "learning" / "pushal-runs.jsonl"
+DEFAULT_JSON = REPO / "docs" / "results" / "learning" / "pushal.json"
+SKILL = "push"
+STANDARD = AL2D_SIZES["standard"]
+SIZES: dict[str, int] = {"budget": STANDARD["budget"], "init": STANDARD["init"],
+                         "eval_every": STANDARD["eval_every"],
+                         "contexts": STANDARD["contexts"],
+                         "candidates": STANDARD["candidates"]}
+
+#: Variant name -> LearningConfig settings (besides budget, init, seed).
+VARIANTS: dict[str, dict[str, Any]] = {
+    "random": {"strategy": "random"},
+    "lse": {"strategy": "lse"},
+    "lse2": {"strategy": "lse2"},
+    # The reference learner's GP (zi-w/Kitchen2D): zero prior mean, maximum likelihood, every
+    # lengthscale bounded to a few percent of its range (push: 0.5 raw units = 0.1-0.16 of
+    # the normalised box's half width; one cap for all inputs here).
+    "lse-ref": {"strategy": "lse", "mean": "zero", "lengthscale_prior_sd": None,
+                "lengthscale_max": 0.16},
+    "lse-cap": {"strategy": "lse", "lengthscale_prior_sd": None, "lengthscale_max": 0.16},
+    "lse-zero": {"strategy": "lse", "mean": "zero"},
+}
+#: The report's paired comparisons (a, b): "a scores higher than b".
+COMPARISONS = (("lse-ref", "lse"), ("lse-ref", "random"), ("lse", "random"),
+               ("lse-cap", "lse"), ("lse-zero", "lse"), ("lse2", "lse"))
+
+
+def _contexts(backend: Any) -> np.ndarray:
+    rng = np.random.default_rng([2024, len(SKILL)])  # bench.paper.al2d's held-out goals
+    return np.array([backend.sample_context(SKILL, rng)
+                     for _ in range(SIZES["contexts"])]).reshape(-1, 2)
+
+
+def run_job(variant: str, seed: int, budget: int | None = None) -> dict[str, Any]:
+    """One variant × seed job: θ* curve, training diagnostics (module doc), CPU seconds."""
+    sizes = dict(SIZES)
+    if budget is not None:
+        sizes["budget"] = budget
+    backend = load_backend("box2d")
+    try:
+        spec = backend.skills()[SKILL]
+        contexts = _contexts(backend)
+
+        def is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
+            return backend.is_valid(SKILL, context, controls)
+
+        evaluator = SkillEvaluator(spec, None, live_score(backend, SKILL, seed=1000 + seed),
+                                   contexts, is_valid, seed=seed,
+                                   n_candidates=sizes["candidates"])
+        config = LearningConfig(budget=sizes["budget"], init=sizes["init"], seed=seed,
+                                **VARIANTS[variant])
+        cpu0 = time.process_time()
+        result = learn_online(backend, SKILL, config, evaluator=evaluator,
+                              eval_every=sizes["eval_every"])
+        cpu = time.process_time() - cpu0
+        records = result.records
+        goals = np.array([r.context for r in records])
+        controls = np.array([r.control for r in records])
+        scores = np.array([r.score for r in records])
+        finals = np.array([[float(r.info.get("final_x", 0.0)), float(r.info.get("final_y", 0.0))]
+                           for r in records])
+        moved = np.linalg.norm(finals, axis=1)
+        norms = np.linalg.norm(goals, axis=1)
+        success = scores > 0
+        # score-only baseline: nearest successful training goal's control
+        nearest = np.flatnonzero(success)
+        nn = np.array([controls[nearest[np.argmin(np.linalg.norm(goals[nearest] - c, axis=1))]]
+                       for c in contexts]) if len(nearest) else None
+        nn_scores = (live_score(backend, SKILL, seed=2000 + seed)(contexts, nn)
+                     if nn is not None else np.full(len(contexts), -1.0))
+        landings = np.vstack([np.zeros((1, 2)), finals])
+        covered = (np.linalg.norm(contexts[:, None, :] - landings[None], axis=2) < 2.0).any(1)
+    finally:
+        backend.close()
+    job: dict[str, Any] = {
+        "skill": SKILL, "variant": variant, "config": VARIANTS[variant], "seed": seed,
+        "sizes": sizes, "cpu_s": round(cpu, 1),
+        "training_successes": int(success.sum()),
+        "far_successes": int((success & (norms > 2.5)).sum()),
+        "moved": int((moved > 0.05).sum()), "moved_far": int((moved > 2.0).sum()),
+        "circle_still": int(((moved <= 0.05) & (np.abs(norms - 2.0) < 0.5)).sum()),
+        "goal_norms": [round(float(v), 2) for v in norms],
+        "scores": [round(float(v), 3) for v in scores],
+        "nn_success": [bool(v) for v in nn_scores > 0],
+        "replay_bound": [bool(v) for v in covered],
+        "curve": [{"n_trials": p.n_trials, "success_rate": p.success_rate,
+                   "successes": list(p.successes or ())} for p in result.curve]}
+    if isinstance(result.model, LevelSetModel):
+        gp = result.model.gp
+        job["gp"] = {"lengthscales": [round(float(v), 3) for v in gp.lengthscales],
+                     "outputscale": round(gp.outputscale, 3), "noise": gp.noise,
+                     "mean": round(gp.mean_constant, 3)}
+    return job
+
+
+def _read_log(path: Path) -> dict[tuple[str, int], dict[str, Any]]:
+    jobs: dict[tuple[str, int], dict[str, Any]] = {}
+    if path.exists():
+        for line in path.read_text().splitlines():
+            if line.strip():
+                job = json.loads(line)
+                jobs[(job["variant"], int(job["seed"]))] = job
+    return jobs
+
+
+def _seeds(text: str) -> list[int]:
+    if "-" in text:
+        low, high = text.split("-", 1)
+        return list(range(int(low), int(high) + 1))
+    return [int(v) for v in text.split(",")]
+
+
+def _wilson(k: int, n: int) -> list[float]:
+    from scipy.stats import binomtest
+
+    if n == 0:
+        return [0.0, 1.0]
+    ci = binomtest(k, n).proportion_ci(confidence_level=0.95, method="wilson")
+    return [round(float(ci.low), 3), round(float(ci.high), 3)]
+
+
+def report(log: Path, out: Path) -> dict[str, Any]:
+    """Per variant: pooled final θ* rate [Wilson 95 %], the training diagnostics, and the
+    paired comparisons of :data:`COMPARISONS` over the seeds both variants ran."""
+    from bench.paper.stats import paired_comparison
+
+    jobs = _read_log(log)
+    rows: dict[str, Any] = {}
+    finals: dict[str, dict[int, list[bool]]] = {}
+    for variant in VARIANTS:
+        mine = {seed: job for (v, seed), job in sorted(jobs.items()) if v == variant
+                and job["sizes"]["budget"] == SIZES["budget"]}
+        if not mine:
+            continue
+        finals[variant] = {seed: list(job["curve"][-1]["successes"])
+                           for seed, job in mine.items()}
+        k = sum(sum(v) for v in finals[variant].values())
+        n = sum(len(v) for v in finals[variant].values())
+
+        def pooled(key: str, mine: dict[int, dict[str, Any]] = mine) -> dict[str, Any]:
+            hits = sum(sum(job[key]) for job in mine.values())
+            total = sum(len(job[key]) for job in mine.values())
+            return {"rate": round(hits / total, 3), "wilson95": _wilson(hits, total)}
+
+        rows[variant] = {
+            "config": VARIANTS[variant], "seeds": sorted(mine),
+            "final_per_seed": {str(s): job["curve"][-1]["success_rate"]
+                               for s, job in mine.items()},
+            "final_pooled": round(k / n, 3), "final_wilson95": _wilson(k, n),
+            "nn_success": pooled("nn_success"), "replay_bound": pooled("replay_bound"),
+            **{key: {str(s): job[key] for s, job in mine.items()}
+               for key in ("training_successes", "far_successes", "moved", "moved_far",
+                           "circle_still", "cpu_s")},
+            "gp": {str(s): job.get("gp") for s, job in mine.items()}}
+    comparisons = []
+    for a, b in COMPARISONS:
+        if a not in finals or b not in finals:
+            continue
+        seeds = sorted(set(finals[a]) & set(finals[b]))
+        if not seeds:
+            continue
+        c = paired_comparison(a, [float(v) for s in seeds for v in finals[a][s]],
+                              b, [float(v) for s in seeds for v in finals[b][s]])
+        comparisons.append({"a": a, "b": b, "seeds": seeds, "text": c.describe(),
+                            "verdict": c.verdict})
+    payload = {"experiment": "push active learning (issue #21)", "sizes": SIZES,
+               "variants": rows, "comparisons": comparisons}
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(payload, indent=1) + "\n")
+    print(f"push: final θ* success at {SIZES['budget']} trials (per seed; pooled [Wilson 95 %]); "
+          "training: successes / far successes / moved / moved > 2 / still on the circle "
+          "(sums over seeds); nn-success, replay bound (pooled)")
+    for variant, row in rows.items():
+        per_seed = " ".join(f"{v:.2f}" for v in row["final_per_seed"].values())
+        low, high = row["final_wilson95"]
+        sums = "/".join(str(sum(row[key].values())) for key in
+                        ("training_successes", "far_successes", "moved", "moved_far",
+                         "circle_still"))
+        print(f"{variant:9} {per_seed:30} {row['final_pooled']:.3f} [{low:.3f}, {high:.3f}]  "
+              f"{sums:18} nn {row['nn_success']['rate']:.3f} "
+              f"replay {row['replay_bound']['rate']:.3f}")
+    for comparison in comparisons:
+        print(f"  {comparison['text']}: {comparison['verdict']}")
+    return payload
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m bench.push_al",
+                                     description=__doc__.split("\n\n")[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    run_p = sub.add_parser("run", help="run variant x seed jobs (skips logged ones)")
+    run_p.add_argument("--variant", choices=sorted(VARIANTS), required=True)
+    run_p.add_argument("--seeds", default="0-4", help="e.g. 0-4 or 0,2")
+    run_p.add_argument("--log", type=Path, default=DEFAULT_LOG)
+    rep = sub.add_parser("report", help="table + paired comparisons -> JSON")
+    rep.add_argument("--log", type=Path, default=DEFAULT_LOG)
+    rep.add_argument("--out", type=Path, default=DEFAULT_JSON)
+    args = parser.parse_args(argv)
+    if args.command == "report":
+        if not args.log.exists():
+            print(f"error: no log {args.log}", file=sys.stderr)
+            return 2
+        report(args.log, args.out)
+        return 0
+    try:
+        seeds = _seeds(args.seeds)
+    except ValueError:
+        print(f"error: bad --seeds {args.seeds!r} (e.g. 0-4 or 0,2)", file=sys.stderr)
+        return 2
+    done = _read_log(args.log)
+    args.log.parent.mkdir(parents=True, exist_ok=True)
+    for seed in seeds:
+        if (args.variant, seed) in done:
+            continue
+        job = run_job(args.variant, seed)
+        with args.log.open("a") as handle:
+            handle.write(json.dumps(job) + "\n")
+        print(f"{args.variant} seed {seed}: θ* {job['curve'][-1]['success_rate']:.2f}, "
+              f"{job['training_successes']} training successes ({job['far_successes']} far), "
+              f"{job['cpu_s']} s CPU", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
