@@ -20,6 +20,7 @@ Besides the θ* curve every job records where its training trials went (the diag
 * ``far_successes`` — training successes with ‖goal‖ > 2.5;
 * ``nn_success`` — a score-only baseline on the same trials: for each held-out goal, the
   control of the training success whose goal is nearest, simulated;
+* ``theta_star_moved`` — per held-out goal, whether the last checkpoint's θ* moved the object;
 * ``replay_bound`` — the share of held-out goals within 2 of where some training push left
   the object (the origin included): what a learner that knew every trial's outcome could
   reach by replaying a training control. The learners see only the score, i.e. one distance
@@ -67,11 +68,19 @@ VARIANTS: dict[str, dict[str, Any]] = {
     # the normalised box's half width; one cap for all inputs here).
     "lse-ref": {"strategy": "lse", "mean": "zero", "lengthscale_prior_sd": None,
                 "lengthscale_max": 0.16},
+    # The paper's Algorithm 1 per training context: a drawn goal kept for 15 trials.
+    "lse-hold": {"strategy": "lse", "context_repeats": 15},
+    "lse-hold-ref": {"strategy": "lse", "context_repeats": 15, "mean": "zero",
+                     "lengthscale_prior_sd": None, "lengthscale_max": 0.16},
+    "lse-hold30-ref": {"strategy": "lse", "context_repeats": 30, "mean": "zero",
+                       "lengthscale_prior_sd": None, "lengthscale_max": 0.16},
     "lse-cap": {"strategy": "lse", "lengthscale_prior_sd": None, "lengthscale_max": 0.16},
     "lse-zero": {"strategy": "lse", "mean": "zero"},
 }
 #: The report's paired comparisons (a, b): "a scores higher than b".
 COMPARISONS = (("lse-ref", "lse"), ("lse-ref", "random"), ("lse", "random"),
+               ("lse-hold", "lse"), ("lse-hold-ref", "lse"), ("lse-hold30-ref", "lse"),
+               ("lse-hold-ref", "lse-ref"),
                ("lse-cap", "lse"), ("lse-zero", "lse"), ("lse2", "lse"))
 
 
@@ -94,8 +103,8 @@ def run_job(variant: str, seed: int, budget: int | None = None) -> dict[str, Any
         def is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
             return backend.is_valid(SKILL, context, controls)
 
-        evaluator = SkillEvaluator(spec, None, live_score(backend, SKILL, seed=1000 + seed),
-                                   contexts, is_valid, seed=seed,
+        scorer = live_score(backend, SKILL, seed=1000 + seed, key="distance")
+        evaluator = SkillEvaluator(spec, None, scorer, contexts, is_valid, seed=seed,
                                    n_candidates=sizes["candidates"])
         config = LearningConfig(budget=sizes["budget"], init=sizes["init"], seed=seed,
                                 **VARIANTS[variant])
@@ -104,6 +113,11 @@ def run_job(variant: str, seed: int, budget: int | None = None) -> dict[str, Any
                               eval_every=sizes["eval_every"])
         cpu = time.process_time() - cpu0
         records = result.records
+        # The last checkpoint's θ* trials: did θ* move the object at all? (An unmoved object
+        # ends exactly ‖goal‖ from the goal.)
+        last = scorer.infos[-len(contexts):]  # type: ignore[attr-defined]
+        theta_moved = [abs(float(info["distance"]) - float(np.linalg.norm(c))) > 0.05
+                       for info, c in zip(last, contexts, strict=True)]
         goals = np.array([r.context for r in records])
         controls = np.array([r.control for r in records])
         scores = np.array([r.score for r in records])
@@ -133,6 +147,7 @@ def run_job(variant: str, seed: int, budget: int | None = None) -> dict[str, Any
         "scores": [round(float(v), 3) for v in scores],
         "nn_success": [bool(v) for v in nn_scores > 0],
         "replay_bound": [bool(v) for v in covered],
+        "theta_star_moved": theta_moved,
         "curve": [{"n_trials": p.n_trials, "success_rate": p.success_rate,
                    "successes": list(p.successes or ())} for p in result.curve]}
     if isinstance(result.model, LevelSetModel):
@@ -143,13 +158,38 @@ def run_job(variant: str, seed: int, budget: int | None = None) -> dict[str, Any
     return job
 
 
+def run_check(skill: str, variant: str, seed: int) -> dict[str, Any]:
+    """One variant × seed job on another skill of ``bench.lse2`` (``pour``: the al2d standard
+    protocol; ``saturated4d``/``narrowing5d``: synthetic), θ* at the budget only."""
+    from bench.lse2 import SIZES as LSE2_SIZES
+    from bench.lse2 import _backend, _evaluator
+
+    sizes = dict(LSE2_SIZES[skill])
+    backend = _backend(skill)
+    try:
+        evaluator = _evaluator(backend, skill, seed)
+        config = LearningConfig(budget=sizes["budget"], init=sizes["init"], seed=seed,
+                                **VARIANTS[variant])
+        cpu0 = time.process_time()
+        result = learn_online(backend, skill, config, evaluator=evaluator,
+                              eval_every=sizes["budget"])
+        cpu = time.process_time() - cpu0
+    finally:
+        backend.close()
+    return {"skill": skill, "variant": variant, "config": VARIANTS[variant], "seed": seed,
+            "sizes": sizes, "cpu_s": round(cpu, 1),
+            "training_successes": sum(1 for r in result.records if r.score > 0),
+            "curve": [{"n_trials": p.n_trials, "success_rate": p.success_rate,
+                       "successes": list(p.successes or ())} for p in result.curve]}
+
+
 def _read_log(path: Path) -> dict[tuple[str, int], dict[str, Any]]:
     jobs: dict[tuple[str, int], dict[str, Any]] = {}
     if path.exists():
         for line in path.read_text().splitlines():
             if line.strip():
                 job = json.loads(line)
-                jobs[(job["variant"], int(job["seed"]))] = job
+                jobs[(job.get("skill", SKILL) + "/" + job["variant"], int(job["seed"]))] = job
     return jobs
 
 
@@ -178,8 +218,8 @@ def report(log: Path, out: Path) -> dict[str, Any]:
     rows: dict[str, Any] = {}
     finals: dict[str, dict[int, list[bool]]] = {}
     for variant in VARIANTS:
-        mine = {seed: job for (v, seed), job in sorted(jobs.items()) if v == variant
-                and job["sizes"]["budget"] == SIZES["budget"]}
+        mine = {seed: job for (v, seed), job in sorted(jobs.items())
+                if v == f"{SKILL}/{variant}" and job["sizes"]["budget"] == SIZES["budget"]}
         if not mine:
             continue
         finals[variant] = {seed: list(job["curve"][-1]["successes"])
@@ -213,8 +253,9 @@ def report(log: Path, out: Path) -> dict[str, Any]:
                               b, [float(v) for s in seeds for v in finals[b][s]])
         comparisons.append({"a": a, "b": b, "seeds": seeds, "text": c.describe(),
                             "verdict": c.verdict})
+    checks = _check_report(jobs)
     payload = {"experiment": "push active learning (issue #21)", "sizes": SIZES,
-               "variants": rows, "comparisons": comparisons}
+               "variants": rows, "comparisons": comparisons, "other_skills": checks}
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(payload, indent=1) + "\n")
     print(f"push: final θ* success at {SIZES['budget']} trials (per seed; pooled [Wilson 95 %]); "
@@ -231,7 +272,47 @@ def report(log: Path, out: Path) -> dict[str, Any]:
               f"replay {row['replay_bound']['rate']:.3f}")
     for comparison in comparisons:
         print(f"  {comparison['text']}: {comparison['verdict']}")
+    for skill, entry in checks.items():
+        print(f"{skill}: final θ* " + "; ".join(
+            f"{variant} {row['per_seed']} pooled {row['pooled']:.3f} {row['wilson95']}"
+            for variant, row in entry["variants"].items()))
+        for comparison in entry["comparisons"]:
+            print(f"  {comparison['text']}: {comparison['verdict']}")
     return payload
+
+
+def _check_report(jobs: dict[tuple[str, int], dict[str, Any]]) -> dict[str, Any]:
+    """Other skills (``run --skill``): per variant the final θ* per seed, pooled [Wilson], and
+    every variant against ``lse`` on the seeds both ran."""
+    from bench.paper.stats import paired_comparison
+
+    out: dict[str, Any] = {}
+    skills = sorted({key.split("/")[0] for key, _ in jobs} - {SKILL})
+    for skill in skills:
+        finals: dict[str, dict[int, list[bool]]] = {}
+        for (key, seed), job in sorted(jobs.items()):
+            if key.startswith(skill + "/"):
+                finals.setdefault(job["variant"], {})[seed] = job["curve"][-1]["successes"]
+        variants = {}
+        for variant, per in finals.items():
+            k = sum(sum(v) for v in per.values())
+            n = sum(len(v) for v in per.values())
+            variants[variant] = {"seeds": sorted(per), "per_seed": [round(sum(v) / len(v), 3)
+                                                                    for v in per.values()],
+                                 "pooled": round(k / n, 3), "wilson95": _wilson(k, n)}
+        comparisons = []
+        for variant in finals:
+            if variant == "lse" or "lse" not in finals:
+                continue
+            seeds = sorted(set(finals[variant]) & set(finals["lse"]))
+            if not seeds:
+                continue
+            c = paired_comparison(variant, [float(v) for s in seeds for v in finals[variant][s]],
+                                  "lse", [float(v) for s in seeds for v in finals["lse"][s]])
+            comparisons.append({"a": variant, "b": "lse", "seeds": seeds, "text": c.describe(),
+                                "verdict": c.verdict})
+        out[skill] = {"variants": variants, "comparisons": comparisons}
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -242,6 +323,9 @@ def main(argv: list[str] | None = None) -> int:
     run_p.add_argument("--variant", choices=sorted(VARIANTS), required=True)
     run_p.add_argument("--seeds", default="0-4", help="e.g. 0-4 or 0,2")
     run_p.add_argument("--log", type=Path, default=DEFAULT_LOG)
+    run_p.add_argument("--skill", default=SKILL,
+                       choices=[SKILL, "pour", "saturated4d", "narrowing5d"],
+                       help="another skill of bench.lse2 (θ* at the budget only)")
     rep = sub.add_parser("report", help="table + paired comparisons -> JSON")
     rep.add_argument("--log", type=Path, default=DEFAULT_LOG)
     rep.add_argument("--out", type=Path, default=DEFAULT_JSON)
@@ -260,13 +344,16 @@ def main(argv: list[str] | None = None) -> int:
     done = _read_log(args.log)
     args.log.parent.mkdir(parents=True, exist_ok=True)
     for seed in seeds:
-        if (args.variant, seed) in done:
+        if (f"{args.skill}/{args.variant}", seed) in done:
             continue
-        job = run_job(args.variant, seed)
+        job = (run_job(args.variant, seed) if args.skill == SKILL
+               else run_check(args.skill, args.variant, seed))
         with args.log.open("a") as handle:
             handle.write(json.dumps(job) + "\n")
-        print(f"{args.variant} seed {seed}: θ* {job['curve'][-1]['success_rate']:.2f}, "
-              f"{job['training_successes']} training successes ({job['far_successes']} far), "
+        print(f"{args.skill} {args.variant} seed {seed}: "
+              f"θ* {job['curve'][-1]['success_rate']:.2f}, "
+              f"{job['training_successes']} training successes "
+              f"({job.get('far_successes', '-')} far), "
               f"{job['cpu_s']} s CPU", flush=True)
     return 0
 
