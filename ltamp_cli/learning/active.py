@@ -105,7 +105,8 @@ class LearningConfig:
     lengthscale_max: float | None = None
     #: ``lse``: 0 — the straddle chooses control and context; k > 0 — a context drawn from
     #: the skill's distribution is kept for k consecutive trials, the straddle choosing the
-    #: control (:mod:`~ltamp_cli.learning.held_context`, issue #21).
+    #: control (:mod:`~ltamp_cli.learning.held_context`, issue #21). Online learning only
+    #: (pool mode picks pool trials).
     context_repeats: int = 0
     threads: int | None = 1  # thread-pool limit while learning (ltamp_cli.threads)
 
