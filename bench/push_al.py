@@ -26,6 +26,10 @@ Besides the θ* curve every job records where its training trials went (the diag
   reach by replaying a training control. The learners see only the score, i.e. one distance
   to that trial's own goal.
 
+``run --skill pour|saturated4d|narrowing5d`` runs a variant on another skill of
+``bench.lse2`` (its protocol and held-out contexts; θ* at the budget only) to check that a
+change does not hurt elsewhere; ``report`` compares every variant there with ``lse``.
+
 Variants (:data:`VARIANTS`) are :class:`~ltamp_cli.learning.active.LearningConfig` settings.
 Times are CPU seconds of this process (the machine is shared).
 """

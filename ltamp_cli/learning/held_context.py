@@ -15,7 +15,10 @@ object), the joint straddle keeps choosing contexts on that context-only boundar
 trial says nothing about the controls; and one query per fresh context never climbs towards
 a rare success set (a needle in the control box). On a held context ψ = −|μ| + 1.96σ, with
 μ < 0 everywhere, is an upper confidence bound on the score, so successive queries climb
-towards the context's successes.
+towards the context's successes — provided the GP does not call the controls irrelevant.
+Measured (``docs/results/learning/README.md``, push section): with the default GP fit it
+changed nothing on the push; with the reference's short lengthscales it gained 0.05 there
+and lost 0.2–0.4 on the pour and two synthetic skills. An option, not a default.
 """
 
 from __future__ import annotations
