@@ -157,10 +157,12 @@ def main(argv: list[str] | None = None) -> int:
         totals["solve"] += cpu
         rows.append({"seed": seed, "status": result.status, "cpu_s": cpu,
                      "plan_length": len(result.plan) if result.plan is not None else None,
+                     "iterations": result.stats.get("iterations"),
                      "searches": searches, "phases_s": dict(phases),
                      "stream_calls": {k: v["calls"] for k, v in
                                       result.stats.get("streams", {}).items()}})
-        print(f"seed {seed}: {result.status}, {cpu:.3f} s CPU, {len(searches)} searches")
+        print(f"seed {seed}: {result.status}, {cpu:.3f} s CPU, {len(searches)} searches, "
+              f"{result.stats.get('iterations')} iterations")
         print("  #  kind         objects actions solved len  expanded evaluated guess  CPU s")
         for number, s in enumerate(searches, 1):
             print(f"  {number:<2} {s['kind']:<12} {s['objects']:>7} {s['actions']:>7} "
