@@ -13,7 +13,7 @@ wrappers add a few percent, so compare runs of this script with each other, not 
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/planner_profile.py [--example kitchen_fluent]
         [--algorithm adaptive] [--seeds 0-9] [--out bench/results/planner_profile.json]
-        [--incremental-grounding]
+        [--incremental-grounding] [--search lazy-greedy]
 """
 
 from __future__ import annotations
@@ -130,15 +130,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
     parser.add_argument("--incremental-grounding", action="store_true",
                         help="solve with PlannerConfig.incremental_grounding")
+    parser.add_argument("--search", default=None,
+                        help="override PlannerConfig.search (e.g. lazy-greedy)")
     args = parser.parse_args(argv)
+    overrides: dict[str, Any] = {}
+    if args.incremental_grounding:
+        overrides["incremental_grounding"] = True
+    if args.search:
+        overrides["search"] = args.search
     use_one_thread()
     problem = load_problem(REPO / "problems" / "examples" / f"{args.example}.yaml")
     rows: list[dict[str, Any]] = []
     totals: Counter = Counter()
     for seed in parse_seeds(args.seeds):
         config = config_for(problem, args.algorithm, seed, args.max_time, None,
-                            {"incremental_grounding": True} if args.incremental_grounding
-                            else None)
+                            overrides or None)
         phases: Counter = Counter()
         searches: list[dict[str, Any]] = []
         start = time.thread_time()
@@ -151,10 +157,12 @@ def main(argv: list[str] | None = None) -> int:
         totals["solve"] += cpu
         rows.append({"seed": seed, "status": result.status, "cpu_s": cpu,
                      "plan_length": len(result.plan) if result.plan is not None else None,
+                     "iterations": result.stats.get("iterations"),
                      "searches": searches, "phases_s": dict(phases),
                      "stream_calls": {k: v["calls"] for k, v in
                                       result.stats.get("streams", {}).items()}})
-        print(f"seed {seed}: {result.status}, {cpu:.3f} s CPU, {len(searches)} searches")
+        print(f"seed {seed}: {result.status}, {cpu:.3f} s CPU, {len(searches)} searches, "
+              f"{result.stats.get('iterations')} iterations")
         print("  #  kind         objects actions solved len  expanded evaluated guess  CPU s")
         for number, s in enumerate(searches, 1):
             print(f"  {number:<2} {s['kind']:<12} {s['objects']:>7} {s['actions']:>7} "

@@ -9,7 +9,7 @@ on *static* predicates (never changed by an action), which are decided exactly.
 from __future__ import annotations
 
 from collections import defaultdict
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from ltamp_cli.planner.pddl.syntax import (
@@ -391,39 +391,81 @@ def ground_task(
     ordered_init = sorted(init_facts)
     for fact in ordered_init:
         index.add(fact)
-    rules = [_make_rule(a, a.precondition) for a in actions]
-    rules += [_make_rule(a, a.body) for a in axioms]
-    on_demand = _negative_only_predicates(actions, axioms)
-    demanded: dict[str, list[_Rule]] = defaultdict(list)
-    for rule in rules:
-        if isinstance(rule.source, NormalAxiom) and rule.source.predicate in on_demand:
-            demanded[rule.source.predicate].append(rule)
-    rules = [rule for rule in rules if not (isinstance(rule.source, NormalAxiom)
-                                            and rule.source.predicate in on_demand)]
-    by_predicate: dict[str, list[tuple[_Rule, int]]] = defaultdict(list)
-    for rule in rules:
-        for position, literal in enumerate(rule.positive):
-            by_predicate[literal.predicate].append((rule, position))
+    rule_set = RuleSet(actions, axioms)
 
     seen: set[tuple[int, tuple[str, ...]]] = set()
     result = Grounding([], [], index.members, frozenset(), frozenset(derived))
-    # Semi-naive: one full join per rule over the initial facts, then joins triggered only by
-    # the facts that rules add (a rule instance over initial facts is found once, not once
-    # per positive literal).
-    delta: list[Fact] = []
-    for rule in rules:
-        check_deadline(deadline)
-        if not rule.positive:  # e.g. a parameterless action with an empty precondition
-            _emit(rule, {}, index, init_facts, fluent, function_values, seen, result, delta)
-            continue
-        for binding in _run_join(_compile_join(rule.positive, set(), index), index, {}):
-            _emit(rule, binding, index, init_facts, fluent, function_values, seen, result,
-                  delta)
+
+    def emit(rule: _Rule, binding: dict[str, str], delta: list[Fact]) -> None:
+        _emit(rule, binding, index, init_facts, fluent, function_values, seen, result, delta)
+
+    semi_naive_fixpoint(rule_set, index, None, emit, deadline)
+    _ground_on_demand(rule_set.demanded, index, init_facts, fluent, function_values, seen,
+                      result, deadline)
+    result.static_predicates = frozenset(
+        {fact[0] for fact in index.members} - fluent
+    )
+    # A canonical order (the search breaks ties by operator index): plans then do not
+    # depend on the order in which the joins happened to find the instances.
+    result.actions.sort(key=lambda a: (a.name, a.args, a.pre_pos, a.pre_neg, a.static_pre))
+    result.axioms.sort(key=lambda a: (a.head, a.body_pos, a.body_neg, a.static_pos))
+    return result
+
+
+class RuleSet:
+    """A grounding's rules: ``rules``, grounded by reachability, and ``demanded`` (the
+    rules of negative-only derived predicates, by predicate, see
+    :func:`_negative_only_predicates`), with ``by_predicate``: each main rule's positive
+    literals by predicate, as (rule, literal position) pairs."""
+
+    def __init__(self, actions: Sequence[NormalAction], axioms: Sequence[NormalAxiom]
+                 ) -> None:
+        rules = [_make_rule(a, a.precondition) for a in actions]
+        rules += [_make_rule(a, a.body) for a in axioms]
+        self.on_demand = _negative_only_predicates(actions, axioms)
+        self.demanded: dict[str, list[_Rule]] = defaultdict(list)
+        self.rules: list[_Rule] = []
+        for rule in rules:
+            source = rule.source
+            if isinstance(source, NormalAxiom) and source.predicate in self.on_demand:
+                self.demanded[source.predicate].append(rule)
+            else:
+                self.rules.append(rule)
+        self.by_predicate: dict[str, list[tuple[_Rule, int]]] = defaultdict(list)
+        for rule in self.rules:
+            for position, literal in enumerate(rule.positive):
+                self.by_predicate[literal.predicate].append((rule, position))
+
+
+# ``emit(rule, binding, delta)``: record the instance of ``rule`` for ``binding`` and append
+# the facts it makes reachable for the first time to ``delta``.
+Emit = Callable[[_Rule, dict[str, str], list[Fact]], object]
+
+
+def semi_naive_fixpoint(rule_set: RuleSet, index: FactIndex, delta: list[Fact] | None,
+                        emit: Emit, deadline: float, stride: int = 1) -> None:
+    """Semi-naive evaluation of ``rule_set``'s main rules over ``index``, instances handed
+    to ``emit``. ``delta=None``: from scratch, one full join per rule over the facts in
+    ``index`` (a rule instance over them is found once, not once per positive literal);
+    else ``delta`` holds facts just added to ``index``, whose consequences are joined.
+    Then, until no new fact comes, only the joins that use a new fact run (the rule's
+    other literals joined from the new fact's binding, compiled once per rule and
+    position). The deadline is checked every ``stride`` new facts."""
+    if delta is None:
+        delta = []
+        for rule in rule_set.rules:
+            check_deadline(deadline)
+            if not rule.positive:  # e.g. a parameterless action with an empty precondition
+                emit(rule, {}, delta)
+                continue
+            for binding in _run_join(_compile_join(rule.positive, set(), index), index, {}):
+                emit(rule, binding, delta)
     while delta:
         current, delta = delta, []
-        for fact in current:
-            check_deadline(deadline)
-            for rule, position in by_predicate.get(fact[0], ()):
+        for number, fact in enumerate(current):
+            if number % stride == 0:
+                check_deadline(deadline)
+            for rule, position in rule_set.by_predicate.get(fact[0], ()):
                 start = _match(rule.positive[position], fact[1:])
                 if start is None:
                     continue
@@ -433,18 +475,21 @@ def ground_task(
                     steps = _compile_join(others, set(start), index)
                     rule.joins[position] = steps
                 for binding in _run_join(steps, index, start):
-                    _emit(rule, binding, index, init_facts, fluent, function_values, seen,
-                          result, delta)
-    _ground_on_demand(demanded, index, init_facts, fluent, function_values, seen, result,
-                      deadline)
-    result.static_predicates = frozenset(
-        {fact[0] for fact in index.members} - fluent
-    )
-    # A canonical order (the search breaks ties by operator index): plans then do not
-    # depend on the order in which the joins happened to find the instances.
-    result.actions.sort(key=lambda a: (a.name, a.args, a.pre_pos, a.pre_neg, a.static_pre))
-    result.axioms.sort(key=lambda a: (a.head, a.body_pos, a.body_neg, a.static_pos))
-    return result
+                    emit(rule, binding, delta)
+
+
+def head_bindings(rule: _Rule, fact: Fact, index: FactIndex) -> Iterator[dict[str, str]]:
+    """The bindings of a derived ``rule`` whose head is ``fact`` and whose positive body
+    holds in ``index`` (the join from the head's arguments, compiled once per rule)."""
+    head = LiftedLiteral(fact[0], rule.source.head_args)  # type: ignore[union-attr]
+    binding = _match(head, fact[1:])
+    if binding is None:
+        return
+    steps = rule.joins.get(HEAD_POSITION)
+    if steps is None:
+        steps = _compile_join(rule.positive, set(binding), index)
+        rule.joins[HEAD_POSITION] = steps
+    yield from _run_join(steps, index, binding)
 
 
 def _negative_only_predicates(actions: Sequence[NormalAction], axioms: Sequence[NormalAxiom]
@@ -499,15 +544,7 @@ def _ground_on_demand(demanded: Mapping[str, list[_Rule]], index: FactIndex, ini
             done.add(fact)
             check_deadline(deadline)
             for rule in demanded[fact[0]]:
-                head = LiftedLiteral(fact[0], rule.source.head_args)  # type: ignore[union-attr]
-                binding = _match(head, fact[1:])
-                if binding is None:
-                    continue
-                steps = rule.joins.get(HEAD_POSITION)
-                if steps is None:
-                    steps = _compile_join(rule.positive, set(binding), index)
-                    rule.joins[HEAD_POSITION] = steps
-                for extended in _run_join(steps, index, binding):
+                for extended in head_bindings(rule, fact, index):
                     _emit(rule, extended, index, init, fluent, function_values, seen, result,
                           [])
 

@@ -46,24 +46,21 @@ import numpy as np
 from ltamp_cli.planner.pddl.syntax import EQUALITY, FunctionTerm, Number
 from ltamp_cli.planner.search.clock import check_deadline
 from ltamp_cli.planner.search.ground import (
-    HEAD_POSITION,
     Fact,
     FactIndex,
     GroundAction,
     GroundAxiom,
     GroundEffect,
     Grounding,
-    LiftedLiteral,
-    _compile_join,
+    RuleSet,
     _compile_rule,
     _ground,
-    _make_rule,
-    _match,
-    _negative_only_predicates,
     _new_fact_seeds,
     _Rule,
     _run_join,
     ground_task,
+    head_bindings,
+    semi_naive_fixpoint,
     static_predicates,
 )
 from ltamp_cli.planner.search.normalize import NormalAction, NormalAxiom
@@ -137,21 +134,9 @@ class _Union:
         self.index = FactIndex()
         self.facts: list[Fact] = [("%never",), ("%always",)]
         self.fact_ids: dict[Fact, int] = {}
-        rules = [_make_rule(a, a.precondition) for a in actions]
-        rules += [_make_rule(a, a.body) for a in axioms]
-        self.on_demand_predicates = _negative_only_predicates(actions, axioms)
-        self.demanded_rules: dict[str, list[_Rule]] = defaultdict(list)
-        self.rules: list[_Rule] = []
-        for rule in rules:
-            source = rule.source
-            if isinstance(source, NormalAxiom) and source.predicate in self.on_demand_predicates:
-                self.demanded_rules[source.predicate].append(rule)
-            else:
-                self.rules.append(rule)
-        self.by_predicate: dict[str, list[tuple[_Rule, int]]] = defaultdict(list)
-        for rule in self.rules:
-            for position, literal in enumerate(rule.positive):
-                self.by_predicate[literal.predicate].append((rule, position))
+        self.rule_set = RuleSet(actions, axioms)
+        self.on_demand_predicates = self.rule_set.on_demand
+        self.demanded_rules = self.rule_set.demanded
         self.seen: set[tuple[int, tuple[str, ...]]] = set()
         self.layouts: dict[int, tuple[tuple[tuple[str, tuple[str, ...]], ...],
                                       tuple[int, ...], tuple[int, ...]]] = {}
@@ -190,33 +175,10 @@ class _Union:
         since = self.index.sizes() if self.started else None
         for fact in delta:
             self.index.add(fact)
-        if not self.started:
-            self.started = True
-            delta = []
-            for rule in self.rules:
-                check_deadline(deadline)
-                if not rule.positive:
-                    self._emit(rule, {}, delta)
-                    continue
-                for binding in _run_join(_compile_join(rule.positive, set(), self.index),
-                                         self.index, {}):
-                    self._emit(rule, binding, delta)
-        while delta:
-            current, delta = delta, []
-            for number, fact in enumerate(current):
-                if number % DEADLINE_STRIDE == 0:
-                    check_deadline(deadline)
-                for rule, position in self.by_predicate.get(fact[0], ()):
-                    start = _match(rule.positive[position], fact[1:])
-                    if start is None:
-                        continue
-                    steps = rule.joins.get(position)
-                    if steps is None:
-                        others = [lit for i, lit in enumerate(rule.positive) if i != position]
-                        steps = _compile_join(others, set(start), self.index)
-                        rule.joins[position] = steps
-                    for binding in _run_join(steps, self.index, start):
-                        self._emit(rule, binding, delta)
+        first = not self.started
+        self.started = True
+        semi_naive_fixpoint(self.rule_set, self.index, None if first else delta, self._emit,
+                            deadline, DEADLINE_STRIDE)
         if since is not None:
             self._extend_demanded(since, deadline)
         self._ground_demanded(deadline)
@@ -249,15 +211,7 @@ class _Union:
             self.demanded_done.add(fact)
             check_deadline(deadline)
             for rule in self.demanded_rules[fact[0]]:
-                head = LiftedLiteral(fact[0], rule.source.head_args)  # type: ignore[union-attr]
-                binding = _match(head, fact[1:])
-                if binding is None:
-                    continue
-                steps = rule.joins.get(HEAD_POSITION)
-                if steps is None:
-                    steps = _compile_join(rule.positive, set(binding), self.index)
-                    rule.joins[HEAD_POSITION] = steps
-                for extended in _run_join(steps, self.index, binding):
+                for extended in head_bindings(rule, fact, self.index):
                     instance = self._emit(rule, extended, None)
                     if instance is not None:
                         pending.extend(instance.all_demands)
