@@ -93,6 +93,11 @@ class LearningConfig:
     explore_until_success: bool = True
     #: ``lse2``: uniform controls per drawn context among which ψ picks (module doc).
     lse2_candidates: int = 100
+    #: ``lse2``: when ψ ≤ 0 for every candidate of the drawn context (the GP classifies the
+    #: whole slice at 95 %, so the straddle has no boundary there and ψ ranks by σ alone),
+    #: take a uniform valid control instead of the largest ψ (module doc). ``False``: the
+    #: choice before this fallback.
+    lse2_uniform_if_classified: bool = True
     #: GP strategies: log-sd of the log-normal prior on the lengthscales (median
     #: ``DEFAULT_PRIOR.median``), fitted by MAP; ``None``: maximum marginal likelihood, the
     #: fit before issue #21 (see :class:`~ltamp_cli.learning.gp.LengthscalePrior`).
@@ -375,14 +380,21 @@ def _lse2_control(
     is_valid: PhysicalValidity,
 ) -> np.ndarray | None:
     """The control ``(dθ,)`` with the largest ψ for physical ``context (dα,)`` among
-    ``config.lse2_candidates`` uniform ones that pass the pre-check; ``None`` if none does."""
+    ``config.lse2_candidates`` uniform ones that pass the pre-check (a uniform one of them if
+    ψ ≤ 0 for all and ``config.lse2_uniform_if_classified``); ``None`` if none passes."""
     controls = spec.control.sample_uniform(rng, config.lse2_candidates)
     controls = controls[np.asarray(is_valid(context, controls), dtype=bool)]
     if len(controls) == 0:
         return None
     contexts = np.repeat(np.asarray(context, dtype=float).reshape(1, -1), len(controls), axis=0)
     values = evaluate(model.gp, straddle, model.to_unit(contexts, controls))
-    return controls[int(np.argmax(values))]
+    best = int(np.argmax(values))
+    if config.lse2_uniform_if_classified and not values[best] > 0:
+        # No candidate is unclassified: the straddle has nothing to refine in this slice and
+        # its argmax is the largest σ, i.e. the candidate farthest from the data (module doc).
+        # The candidates are uniform and valid, so the first one is a uniform valid control.
+        return controls[0]
+    return controls[best]
 
 
 @limits_threads
