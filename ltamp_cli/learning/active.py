@@ -25,7 +25,20 @@ control box's boundary on the 2D pour (seed 0, issue #21; the corners all failed
 failures there the GP's control lengthscales rose to their upper bound, so the next slice
 looked unexplored too: 1 success in 47 straddle trials). Among 100 uniform valid controls the
 choice stays in the body of the box unless ψ really singles out an edge (seed 0: 9 of 47 on the
-boundary, 13 successes; seed 1: 11 of 50). ``budget`` counts all trials. After every trial the
+boundary, 13 successes; seed 1: 11 of 50).
+
+When ψ ≤ 0 for *every* candidate of the drawn context (each is classified at 95 %: the GP is
+sure no control of this context reaches the level, or sure they all do), the straddle has no
+boundary to refine in the slice and its argmax is merely the largest σ — the candidate farthest
+from the data, near the box's edges. That is how ``lse2`` stalled after one early success
+explained by the context alone (synthetic ``saturated4d``, seed 7, issue #21): the fit put a
+context lengthscale at ~0.09 and the outputscale at its lower bound (σ_f ≈ 0.22 score units
+against a mean of −0.93, so 1.96 σ_f < |mean|: nothing unexplored could reach the level), ψ ≤ 0
+held on 83 of 87 drawn contexts, the σ-ranked choices sat near the corners and found no second
+success in 88 trials, so the fit never recovered. ``lse2`` then takes a uniform valid control
+instead (``lse2_uniform_if_classified``), as ``explore_until_success`` does before the first
+success: same candidates, same random draws, so runs whose slices always hold an unclassified
+candidate are unchanged. ``budget`` counts all trials. After every trial the
 GP is conditioned on the new data; its hyperparameters are re-optimised (warm-started) after
 every trial up to ``dense_refit`` trials and every ``refit_every`` trials after that, and fully
 (with random restarts) at the end. Online learning runs live trials through a
