@@ -13,6 +13,7 @@ successes in the same 100 trials (``docs/results/learning/README.md``).
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from bench.lse2 import saturated_backend
 from ltamp_cli.learning.active import LearningConfig, _lse2_control, learn_online
@@ -68,3 +69,13 @@ def test_a_fully_classified_slice_gets_a_uniform_control_not_the_largest_sigma()
     # the first (uniform) candidate, because ψ ≤ 0 everywhere in this slice.
     assert picks[True] == [0] * 40
     assert sum(p == 0 for p in picks[False]) <= 5
+
+
+@pytest.mark.slow
+def test_the_fallback_alone_rescues_the_old_fit_too():
+    """``saturated4d`` seed 1 with the fit before the lengthscale prior (maximum marginal
+    likelihood): θ* 0.01 with the largest-ψ choice (``test_lengthscale_prior.py``), 0.93 with
+    the uniform choice on classified slices. The rule does not rely on the prior."""
+    from test_lengthscale_prior import _theta_star_success
+
+    assert _theta_star_success(None, seed=1, fallback=True) > 0.5
