@@ -12,7 +12,10 @@ model meet the same 40 contexts per skill (checked here) and the same trial seed
 ``successes`` list), the two model directories' hyperparameters, prints per skill the θ* rates
 with Wilson 95 % intervals, the paired comparison refit − old over the 40 contexts (exact
 McNemar test = two-sided sign test on the discordant contexts; bootstrap interval of the mean
-difference) and the hyperparameters side by side, and writes ``--out`` (JSON).
+difference) and the hyperparameters side by side, and writes ``--out`` (JSON). ``--new``
+defaults to ``models/kitchen2d``, where the pour and push refits are shipped; the scoop refit
+was not shipped (worse), so reproducing the table needs ``--new`` pointing at refitted copies
+of all three.
 """
 
 from __future__ import annotations
