@@ -43,13 +43,18 @@ POUR_MODEL = REPO / "models" / "kitchen2d" / "pour"
 
 def _pour_data() -> tuple[Any, np.ndarray, np.ndarray, dict[str, Any]]:
     """The shipped pour model's skill, training inputs ``(250, 8)`` normalised, scores
-    ``(250,)`` and saved hyperparameters."""
+    ``(250,)`` and its hyperparameters before the refit with the prior (the maximum
+    likelihood fit it was trained with)."""
     from ltamp_cli.learning.model import LevelSetModel
     from ltamp_cli.learning.model_dir import load_model
 
     model = load_model(str(POUR_MODEL)).model
     assert isinstance(model, LevelSetModel)
-    shipped = json.loads((POUR_MODEL / "model.json").read_text())["hyperparameters"]
+    metadata = json.loads((POUR_MODEL / "model.json").read_text())
+    # Since the shipped model was itself refitted with the prior (``ltamp train --refit``),
+    # the fit it was shipped with before is kept under ``refit``.
+    shipped = (metadata.get("refit", {}).get("previous_hyperparameters")
+               or metadata["hyperparameters"])
     return model.spec, model.gp.x_np, model.gp.y_np, shipped
 
 

@@ -175,9 +175,12 @@ def _evaluator(backend: SkillBackend, skill: str, seed: int) -> SkillEvaluator:
 
 def run_job(skill: str, learner: str, seed: int,
             prior_sd: float | None = LearningConfig.lengthscale_prior_sd,
-            final_only: bool = False) -> dict[str, Any]:
+            final_only: bool = False,
+            uniform_if_classified: bool = LearningConfig.lse2_uniform_if_classified,
+            ) -> dict[str, Any]:
     """One learner × seed job: its θ* curve (only the final point with ``final_only``),
-    training successes and CPU seconds."""
+    training successes and CPU seconds. ``uniform_if_classified``:
+    ``LearningConfig.lse2_uniform_if_classified`` (``lse2`` only)."""
     sizes = dict(SIZES[skill])
     if final_only:
         sizes["eval_every"] = sizes["budget"]
@@ -185,7 +188,8 @@ def run_job(skill: str, learner: str, seed: int,
     try:
         evaluator = _evaluator(backend, skill, seed)
         config = LearningConfig(strategy=learner, budget=sizes["budget"], init=sizes["init"],
-                                seed=seed, lengthscale_prior_sd=prior_sd)
+                                seed=seed, lengthscale_prior_sd=prior_sd,
+                                lse2_uniform_if_classified=uniform_if_classified)
         cpu0 = time.process_time()
         result = learn_online(backend, skill, config, evaluator=evaluator,
                               eval_every=sizes["eval_every"])
@@ -194,6 +198,8 @@ def run_job(skill: str, learner: str, seed: int,
         backend.close()
     return {"skill": skill, "learner": learner, "seed": seed, "sizes": dict(sizes),
             "lengthscale_prior_sd": prior_sd, "cpu_s": round(cpu, 1),
+            **({"lse2_uniform_if_classified": uniform_if_classified} if learner == "lse2"
+               else {}),
             "training_successes": sum(1 for r in result.records if r.score > 0),
             "curve": [{"n_trials": p.n_trials, "success_rate": p.success_rate,
                        "successes": list(p.successes or ())} for p in result.curve]}
@@ -351,6 +357,9 @@ def main(argv: list[str] | None = None) -> int:
     run_p.add_argument("--final-only", action="store_true",
                        help="evaluate θ* only after the last trial (same final number, "
                             "less CPU)")
+    run_p.add_argument("--no-uniform-if-classified", action="store_true",
+                       help="lse2: keep the largest-ψ control when ψ ≤ 0 for every candidate "
+                            "(the choice before LearningConfig.lse2_uniform_if_classified)")
     rep = sub.add_parser("report", help="print the table and write the JSON")
     rep.add_argument("--log", type=Path, default=DEFAULT_LOG)
     rep.add_argument("--out", type=Path, default=DEFAULT_JSON)
@@ -380,7 +389,8 @@ def main(argv: list[str] | None = None) -> int:
         if (args.skill, args.learner, seed) in _read_log(args.log):
             print(f"{args.skill} {args.learner} seed {seed}: logged already", flush=True)
             continue
-        job = run_job(args.skill, args.learner, seed, prior_sd, args.final_only)
+        job = run_job(args.skill, args.learner, seed, prior_sd, args.final_only,
+                      not args.no_uniform_if_classified)
         with args.log.open("a") as handle:
             handle.write(json.dumps(job) + "\n")
         print(f"{args.skill} {args.learner} seed {seed}: θ* "

@@ -10,7 +10,10 @@ it passes the pre-check, the true score and the GP hyperparameters. A summary (s
 boundary share of active choices, mean σ/|μ|) is printed at the end. ``--skill saturated4d``
 (or ``narrowing5d``) runs ``bench.lse2``'s synthetic skill instead of Box2D. ``--prior-sd``
 sets ``LearningConfig.lengthscale_prior_sd`` (``none``: maximum marginal likelihood, the fit
-before issue #21's prior).
+before issue #21's prior); ``--no-uniform-if-classified`` turns off ``lse2``'s uniform choice
+when ψ ≤ 0 for every candidate (then a chosen ``psi <= 0`` means every candidate had ψ ≤ 0;
+with the fallback on it marks a fallback choice). ``python -m bench.lse2_diag show FILE [K]``
+prints the logged hyperparameters every K trials (:func:`show`).
 """
 
 from __future__ import annotations
@@ -32,7 +35,30 @@ from ltamp_cli.learning.model import LevelSetModel
 BOUNDARY = 0.95
 
 
+def show(path: Path, every: int) -> None:
+    """Print the hyperparameters a diagnostics file logged, every ``every`` trials and at each
+    success: lengthscales (normalised units), outputscale σ_f² and constant mean (score units),
+    whether the prior straddle can see the level (1.96 σ_f > |mean|) and ψ at the choice."""
+    successes = 0
+    print(f"{'trial':>5} {'succ':>4} {'lengthscales':34} {'σ_f²':>6} {'mean':>6} "
+          f"{'1.96σ_f':>7} {'ψ':>6} score")
+    for line in path.read_text().splitlines():
+        row = json.loads(line)
+        shown = "lengthscales" in row and (row["index"] % every == 0 or row["score"] > 0)
+        if shown:
+            reach = 1.96 * float(row["outputscale"]) ** 0.5
+            print(f"{row['index']:5d} {successes:4d} {row['lengthscales']!s:34} "
+                  f"{row['outputscale']:6.3f} {row['mean_constant']:6.2f} {reach:7.2f} "
+                  f"{row['psi']:6.2f} {row['score']:.2f}")
+        successes += float(row["score"]) > 0
+
+
 def main(argv: list[str] | None = None) -> int:
+    if argv is None:
+        argv = sys.argv[1:]
+    if argv[:1] == ["show"]:
+        show(Path(argv[1]), int(argv[2]) if len(argv) > 2 else 5)
+        return 0
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--backend", default="box2d")
     parser.add_argument("--skill", default="pour")
@@ -42,6 +68,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--init", type=int, default=10)
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--prior-sd", default=str(LearningConfig.lengthscale_prior_sd))
+    parser.add_argument("--no-uniform-if-classified", action="store_true",
+                        help="lse2: keep the largest-ψ control when ψ <= 0 for every candidate "
+                             "(before LearningConfig.lse2_uniform_if_classified)")
     args = parser.parse_args(argv)
     if args.trials < 1:
         print("lse2_diag: --trials must be >= 1", file=sys.stderr)
@@ -60,7 +89,8 @@ def main(argv: list[str] | None = None) -> int:
         backend = load_backend(args.backend)
     spec = backend.skills()[args.skill]
     config = LearningConfig(strategy=args.strategy, budget=args.trials, init=args.init,
-                            seed=args.seed, lengthscale_prior_sd=prior_sd)
+                            seed=args.seed, lengthscale_prior_sd=prior_sd,
+                            lse2_uniform_if_classified=not args.no_uniform_if_classified)
     rng = np.random.default_rng([config.seed, 0])
     learner = _Learner(spec, config, rng)
     template = RandomModel(spec, 0.0)

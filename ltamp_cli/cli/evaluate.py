@@ -83,9 +83,15 @@ def evaluate_command(
                 f1 = heldout.f1(model)
                 report["n_test"] = len(heldout.scores)
             report["f1"] = f1
-            rates = _live_success_rates(physics, skill, model, trials, seed)
-            report["success_rate"], report["random_success_rate"] = rates
+            star, baseline, contexts = _live_outcomes(physics, skill, model, trials, seed)
+            report["success_rate"] = sum(star) / trials if trials else None
+            report["random_success_rate"] = sum(baseline) / trials if trials else None
             report["n_contexts"] = trials
+            # Per context, in draw order (the same contexts for every model at one --seed):
+            # for paired comparisons of two models (e.g. a refit against the shipped one).
+            report["successes"] = star
+            report["random_successes"] = baseline
+            report["contexts"] = contexts
     finally:
         physics.close()
     emit(report, as_json)
@@ -98,13 +104,29 @@ def _live_success_rates(
     same ``trials`` contexts drawn from the backend's context distribution (seeded)."""
     if trials == 0:
         return None, None
+    star, baseline, _contexts = _live_outcomes(physics, skill, model, trials, seed)
+    return sum(star) / trials, sum(baseline) / trials
+
+
+def _live_outcomes(
+    physics: SkillBackend, skill: str, model: SkillModel, trials: int, seed: int
+) -> tuple[list[int], list[int], list[list[float]]]:
+    """Per context (``trials`` of them, drawn from the backend's context distribution with
+    ``seed``): 1 if θ* succeeded, and 1 if a uniformly random valid control did (each run once,
+    same trial seed), else 0; and the contexts ``(trials, dα)`` in physical units. Contexts
+    depend on ``seed`` only (θ*'s search draws a fixed number of candidates), so two models
+    evaluated at one seed are paired per context."""
+    if trials == 0:
+        return [], [], []
     import numpy as np  # lazy, like every command's heavy imports: keeps `ltamp --help` fast
     from tqdm import tqdm
 
     rng = np.random.default_rng(seed)
     baseline_rng = np.random.default_rng([seed, 1])
     space = physics.skills()[skill].control
-    successes = baseline = 0
+    successes: list[int] = []
+    baseline: list[int] = []
+    contexts: list[list[float]] = []
     for index in tqdm(
         range(trials),
         disable=not progress_enabled(),
@@ -113,16 +135,19 @@ def _live_success_rates(
         unit="trial",
     ):
         context = physics.sample_context(skill, rng)
+        contexts.append([round(float(v), 6) for v in np.ravel(context)])
         control, _ = model.most_confident_control(
             context, rng, lambda c, u: physics.is_valid(skill, c, u)
         )
         result = physics.run_trial(skill, context, control, seed=seed * 100_003 + index)
-        successes += bool(result.valid and result.score > 0)
+        successes.append(int(result.valid and result.score > 0))
         # The baseline: the first valid control of a uniform batch (invalid if none is).
         candidates = space.sample_uniform(baseline_rng, 1000)
         valid = np.flatnonzero(physics.is_valid(skill, context, candidates))
         if len(valid):
             random_result = physics.run_trial(skill, context, candidates[valid[0]],
                                               seed=seed * 100_003 + index)
-            baseline += bool(random_result.valid and random_result.score > 0)
-    return successes / trials, baseline / trials
+            baseline.append(int(random_result.valid and random_result.score > 0))
+        else:
+            baseline.append(0)
+    return successes, baseline, contexts

@@ -100,11 +100,21 @@ def train_command(
             "collisions and slip fail). The model and its trials are tagged pybullet+panda.",
         ),
     ] = "none",
+    refit: Annotated[
+        bool,
+        typer.Option(
+            "--refit",
+            help="Run no trial: refit OUT's GP on OUT/trials.jsonl with today's default fit "
+            "(strategy, kernel and seed from OUT/model.json; --budget etc. are ignored) and "
+            "save it in place, keeping the training metadata.",
+        ),
+    ] = False,
 ) -> None:
     """Learn SKILL's success constraint and save the model to --out.
 
     Live mode runs trials on --backend and appends them to OUT/trials.jsonl (a rerun resumes);
-    pool mode (--data) picks trials from recorded ones instead.
+    pool mode (--data) picks trials from recorded ones instead; --refit refits an existing
+    model directory on its own trials.
     """
     from ltamp_cli.backends import load_backend
     from ltamp_cli.cli.collect import check_robot
@@ -117,6 +127,19 @@ def train_command(
     from ltamp_cli.trials.record import TrialDataset
 
     use_one_thread()
+    if refit:
+        if data is not None or ask:
+            raise InputError("--refit refits OUT on its own trials: it cannot be used with "
+                             "--data or --ask")
+        from ltamp_cli.learning.refit import refit_model_dir
+
+        refitted = refit_model_dir(out, skill=skill)
+        emit({"model": str(out), "kind": refitted.model.kind,
+              "n_trials": refitted.metadata["training"]["n_trials"],
+              "hyperparameters": refitted.metadata["hyperparameters"],
+              "previous_hyperparameters": refitted.metadata["refit"]["previous_hyperparameters"]},
+             as_json)
+        return
     seed = usable_seed(seed)
     try:
         config = LearningConfig(

@@ -25,7 +25,20 @@ control box's boundary on the 2D pour (seed 0, issue #21; the corners all failed
 failures there the GP's control lengthscales rose to their upper bound, so the next slice
 looked unexplored too: 1 success in 47 straddle trials). Among 100 uniform valid controls the
 choice stays in the body of the box unless ψ really singles out an edge (seed 0: 9 of 47 on the
-boundary, 13 successes; seed 1: 11 of 50). ``budget`` counts all trials. After every trial the
+boundary, 13 successes; seed 1: 11 of 50).
+
+When ψ ≤ 0 for *every* candidate of the drawn context (each is classified at 95 %: the GP is
+sure no control of this context reaches the level, or sure they all do), the straddle has no
+boundary to refine in the slice and its argmax is merely the largest σ — the candidate farthest
+from the data, near the box's edges. That is how ``lse2`` stalled after one early success
+explained by the context alone (synthetic ``saturated4d``, seed 7, issue #21): the fit put a
+context lengthscale at ~0.09 and the outputscale at its lower bound (σ_f ≈ 0.22 score units
+against a mean of −0.93, so 1.96 σ_f < |mean|: nothing unexplored could reach the level), ψ ≤ 0
+held on 83 of 87 drawn contexts, the σ-ranked choices sat near the corners and found no second
+success in 88 trials, so the fit never recovered. ``lse2`` then takes a uniform valid control
+instead (``lse2_uniform_if_classified``), as ``explore_until_success`` does before the first
+success: same candidates, same random draws, so runs whose slices always hold an unclassified
+candidate are unchanged. ``budget`` counts all trials. After every trial the
 GP is conditioned on the new data; its hyperparameters are re-optimised (warm-started) after
 every trial up to ``dense_refit`` trials and every ``refit_every`` trials after that, and fully
 (with random restarts) at the end. Online learning runs live trials through a
@@ -94,6 +107,11 @@ class LearningConfig:
     explore_until_success: bool = True
     #: ``lse2``: uniform controls per drawn context among which ψ picks (module doc).
     lse2_candidates: int = 100
+    #: ``lse2``: when ψ ≤ 0 for every candidate of the drawn context (the GP classifies the
+    #: whole slice at 95 %, so the straddle has no boundary there and ψ ranks by σ alone),
+    #: take a uniform valid control instead of the largest ψ (module doc). ``False``: the
+    #: choice before this fallback.
+    lse2_uniform_if_classified: bool = True
     #: GP strategies: log-sd of the log-normal prior on the lengthscales (median
     #: ``DEFAULT_PRIOR.median``), fitted by MAP; ``None``: maximum marginal likelihood, the
     #: fit before issue #21 (see :class:`~ltamp_cli.learning.gp.LengthscalePrior`).
@@ -401,14 +419,21 @@ def _lse2_control(
     is_valid: PhysicalValidity,
 ) -> np.ndarray | None:
     """The control ``(dθ,)`` with the largest ψ for physical ``context (dα,)`` among
-    ``config.lse2_candidates`` uniform ones that pass the pre-check; ``None`` if none does."""
+    ``config.lse2_candidates`` uniform ones that pass the pre-check (a uniform one of them if
+    ψ ≤ 0 for all and ``config.lse2_uniform_if_classified``); ``None`` if none passes."""
     controls = spec.control.sample_uniform(rng, config.lse2_candidates)
     controls = controls[np.asarray(is_valid(context, controls), dtype=bool)]
     if len(controls) == 0:
         return None
     contexts = np.repeat(np.asarray(context, dtype=float).reshape(1, -1), len(controls), axis=0)
     values = evaluate(model.gp, straddle, model.to_unit(contexts, controls))
-    return controls[int(np.argmax(values))]
+    best = int(np.argmax(values))
+    if config.lse2_uniform_if_classified and not values[best] > 0:
+        # No candidate is unclassified: the straddle has nothing to refine in this slice and
+        # its argmax is the largest σ, i.e. the candidate farthest from the data (module doc).
+        # The candidates are uniform and valid, so the first one is a uniform valid control.
+        return controls[0]
+    return controls[best]
 
 
 @limits_threads

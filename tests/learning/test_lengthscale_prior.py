@@ -6,7 +6,10 @@ explained the successes by short context lengthscales; θ* (argmax μ/σ over co
 arbitrary. ``bench.lse2``'s ``saturated4d`` skill, ``lse2``, seed 1, 100 trials, θ* over 100
 held-out contexts: 0.01 with the old fit (``lengthscale_prior_sd=None``; also
 ``docs/results/learning/lse2-runs.jsonl``), 1.00 with the default prior. The threshold 0.5 is
-far from both. The gradient test checks the hand-written prior term against finite differences.
+far from both. Both runs keep ``lse2``'s largest-ψ choice on fully classified slices
+(``lse2_uniform_if_classified=False``): that later fix alone also rescues the old fit here
+(``tests/learning/test_lse2_classified_slice.py``). The gradient test checks the hand-written
+prior term against finite differences.
 """
 
 from __future__ import annotations
@@ -21,10 +24,12 @@ from ltamp_cli.learning.active import LearningConfig, learn_online
 from ltamp_cli.learning.gp import DEFAULT_PRIOR, LengthscalePrior, fit_gp
 
 
-def _theta_star_success(prior_sd: float | None, seed: int = 1) -> float:
+def _theta_star_success(prior_sd: float | None, seed: int = 1, fallback: bool = False) -> float:
+    """θ* success of ``lse2`` (``fallback``: ``lse2_uniform_if_classified``, off by default
+    here so that the prior's effect is measured alone)."""
     backend = saturated_backend()
     config = LearningConfig(strategy="lse2", budget=100, init=10, seed=seed,
-                            lengthscale_prior_sd=prior_sd)
+                            lengthscale_prior_sd=prior_sd, lse2_uniform_if_classified=fallback)
     model = learn_online(backend, "saturated4d", config).model
     rng = np.random.default_rng([2025, 11])
     contexts = np.array([backend.sample_context("saturated4d", rng) for _ in range(100)])

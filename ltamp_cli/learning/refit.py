@@ -1,0 +1,101 @@
+"""Refit a saved GP model directory on its own trials with today's default fit.
+
+A model directory written by ``ltamp train`` (live mode) is a GP fitted on ``DIR/trials.jsonl``
+(:mod:`.model_dir`). When the fit changes (e.g. issue #21's lengthscale prior), the model can be
+brought up to date without running a trial: :func:`refit_model_dir` reads the trials, fits the GP
+exactly as the end of ``ltamp train`` does (:func:`~.active.fit_model` with ``final=True``: a
+cold fit with ``gp_restarts`` random restarts, the skill's noise bound, the configured
+lengthscale prior; the same random generator as a resumed run at the same budget) and rewrites
+the directory, keeping the trainer's metadata (``backend``, ``strategy``, ``training`` …) and
+recording the previous hyperparameters under ``refit``. ``ltamp train SKILL --out DIR --refit``
+is the command-line form.
+"""
+
+from __future__ import annotations
+
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
+
+from ltamp_cli.errors import InputError, location_in
+from ltamp_cli.learning.active import GP_STRATEGIES, LearningConfig, _training_score, fit_model
+from ltamp_cli.learning.baselines import RandomModel
+from ltamp_cli.learning.defaults import DEFAULT_STRATEGY
+from ltamp_cli.learning.gp import DEFAULT_PRIOR
+from ltamp_cli.learning.model_dir import METADATA_FILE, LoadedModel, load_model, save_model
+from ltamp_cli.trials.record import TrialDataset, without_duplicates
+
+#: Keys :func:`~.model_dir.save_model` writes itself: never copied from the old metadata.
+_WRITTEN_BY_SAVE = frozenset({
+    "format", "version", "ltamp_version", "saved_at", "kind", "skill", "input_order",
+    "normalization", "kernel", "hyperparameters", "n_train", "weights_sha256", "constant",
+    "estimator",
+})
+
+
+def refit_model_dir(
+    directory: str | Path,
+    lengthscale_prior_sd: float | None = DEFAULT_PRIOR.log_sd,
+    skill: str | None = None,
+) -> LoadedModel:
+    """Refit the GP of model ``directory`` on its ``trials.jsonl`` and save it in place.
+
+    ``lengthscale_prior_sd``: log-sd of the lengthscale prior (``None``: maximum marginal
+    likelihood, the fit before issue #21). ``skill``, if given, must be the model's skill.
+    Strategy, kernel, mean mode and seed come from ``model.json``; every trial in the file
+    counts (``training.n_trials`` is updated). Returns the refitted model and its metadata.
+    Raises ``InputError`` for a directory that is not a GP model with its trials.
+    """
+    directory = Path(directory)
+    old = load_model(directory)
+    spec, metadata = old.model.spec, old.metadata
+    where = location_in(directory / METADATA_FILE)
+    if metadata.get("kind") != "gp":
+        raise InputError(f"only GP models can be refitted, this one is {metadata.get('kind')!r}",
+                         where)
+    if skill is not None and skill != spec.name:
+        raise InputError(f"the model in {directory} is of skill {spec.name!r}, not {skill!r}")
+    training = metadata.get("training") if isinstance(metadata.get("training"), dict) else {}
+    trials_file = str(training.get("trials_file", "trials.jsonl"))
+    path = directory / trials_file
+    if Path(trials_file).name != trials_file or not path.is_file():
+        raise InputError(f"no trials file {trials_file!r} beside the model: only a model "
+                         "trained in live mode (its trials in the directory) can be refitted",
+                         where)
+    records, _repeats = without_duplicates(TrialDataset(path).read())
+    strangers = [r for r in records if r.skill != spec.name]
+    if strangers or not records:
+        raise InputError(f"{path} must hold trials of skill {spec.name!r} only, and at least one")
+    strategy = str(metadata.get("strategy", DEFAULT_STRATEGY))
+    hyper = metadata.get("hyperparameters") or {}
+    try:
+        config = LearningConfig(
+            strategy=strategy if strategy in GP_STRATEGIES else "gp",
+            kernel=str(metadata.get("kernel", "matern52")),
+            budget=len(records),
+            init=max(1, int(training.get("init", 1))),
+            seed=int(training.get("seed", 0)),
+            mean=str(hyper.get("mean_mode", "constant")),
+            lengthscale_prior_sd=lengthscale_prior_sd,
+        )
+    except (TypeError, ValueError) as error:
+        raise InputError(f"model.json: {error}", where) from None
+    template = RandomModel(spec, 0.0)  # normalisation only
+    x = np.array([template.to_unit(r.context, r.control)[0] for r in records])
+    y = np.array([_training_score(spec, r.score) for r in records])
+    # The generator a resumed `ltamp train` at the same budget uses for its final fit.
+    rng = np.random.default_rng([config.seed, len(records)])
+    model = fit_model(spec, config, x, y, final=True, rng=rng)
+    kept = {k: v for k, v in metadata.items() if k not in _WRITTEN_BY_SAVE}
+    kept["training"] = {**training, "n_trials": len(records),
+                        "n_valid": sum(bool(r.valid) for r in records),
+                        "n_success": sum(r.score > 0 for r in records)}
+    kept["refit"] = {
+        "at": datetime.now(UTC).isoformat(timespec="seconds"),
+        "lengthscale_prior_sd": lengthscale_prior_sd,
+        "previous_hyperparameters": hyper,
+        "previous_saved_at": metadata.get("saved_at"),
+    }
+    save_model(model, directory, **kept)
+    return load_model(directory)
