@@ -34,7 +34,7 @@ from ltamp_cli.planner.pddl.syntax import (
     StreamFunction,
     TypedName,
 )
-from ltamp_cli.planner.problem import PlanningProblem
+from ltamp_cli.planner.problem import PlanningProblem, with_negated_tests
 from ltamp_cli.planner.streams import FINITE_ITERATORS, Binding, External, Stream, WildOutput
 from ltamp_cli.planner.streams import PartialInputs as PlannerPartialInputs
 from ltamp_cli.planner.streams import StreamInfo as PlannerStreamInfo
@@ -199,11 +199,11 @@ def to_planning_problem(problem: PDDLProblem, stream_info: Mapping[str, Info] | 
     if stream_file is not None:
         factory = _bindings_factory(stream_file, _lowered(stream_map, "stream_map"),
                                     _lowered(stream_info, "stream_info"))
-    return PlanningProblem(
+    return with_negated_tests(PlanningProblem(
         "pddlstream", _label(domain_pddl, "domain.pddl"), domain, stream_file, factory,
         "stream_map", {}, {n: (names.types[n], names.table.value(n))
                            for n in names.table.names()},
-        tuple(atoms), tuple(values), goal_formula)
+        tuple(atoms), tuple(values), goal_formula))
 
 
 @dataclass(frozen=True)

@@ -220,6 +220,10 @@ class _Context:
 
     # --- Python bindings ---------------------------------------------------------------
     def binding(self, name: str) -> Callable[..., Any]:
+        external = self.streams.get(name) or self.external_predicates.get(name)
+        if external is not None and external.negates:  # a negated test (pddl/negation.py)
+            test = self.binding(external.negates)
+            return lambda *args: not test(*args)
         if self._bindings is None:
             factory = self.problem.streams_factory
             if factory is None:
