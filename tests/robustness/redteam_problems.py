@@ -347,3 +347,76 @@ def sensors_problem(folder: Path, seed: int = 0) -> tuple[PDDLProblem, Check]:
 
 BUILDERS: dict[str, Callable[..., tuple[PDDLProblem, Check]]] = {
     "rover": rover_problem, "conveyor": conveyor_problem, "sensors": sensors_problem}
+
+
+# --------------------------------------------------------------------------- YAML route
+_BINDINGS = '''"""Bindings of the red-team problem {name!r}: the same samplers as the Python API."""
+
+import sys
+
+from ltamp_cli.planner.streams import WildOutput
+
+sys.path.insert(0, {here!r})
+import redteam_problems as problems  # noqa: E402
+
+
+def make_streams(world, rng):
+    seed = int(rng.integers(0, 2**31))
+    samplers = problems.{name}_samplers(seed{extra})
+    if {name!r} == "sensors":  # a test-shaped stream returns its WildOutput (never yields)
+        survey = samplers["survey"]
+        samplers["survey"] = lambda sensor, mount: next(survey(sensor, mount))
+    return samplers  # the rover's cost function stays keyed 'Length' (case-insensitive)
+'''
+
+_YAML = {
+    "rover": """name: rover-yaml
+domain: domain
+bindings: streams.py
+objects:
+  home: [0.0, 0.0]
+  rock1: null
+  d1: null
+  l0: null
+  l1: null
+  l2: null
+  l3: null
+init: ["(Conf home)", "(At home)", "(Charger home)", "(Rock rock1)", "(Debris d1)",
+       "(OnGround d1)", "(Level l0)", "(Level l1)", "(Level l2)", "(Level l3)",
+       "(Battery l1)", "(Down l3 l2)", "(Down l2 l1)", "(Down l1 l0)", "(Full l3)"]
+goal: (and (Analyzed rock1) (At home))
+""",
+    "conveyor": """name: conveyor-yaml
+domain: domain
+bindings: streams.py
+objects: {b1: null, b2: null}
+init: ["(Box b1)", "(Waiting b1)", "(Box b2)", "(Waiting b2)"]
+goal: (forall (?b) (imply (Box ?b) (Checked ?b)))
+""",
+    "sensors": """name: sensors-yaml
+domain: domain
+bindings: streams.py
+objects: {kitchen: null, hall: null, s1: null, s2: null}
+init: ["(Room kitchen)", "(Room hall)", "(Sensor s1)", "(Sensor s2)", "(Carrying s1)",
+       "(Carrying s2)"]
+goal: (and (Reported kitchen) (Reported hall))
+""",
+}
+
+_FILES = {"rover": (ROVER_DOMAIN, ROVER_STREAMS), "conveyor": (CONVEYOR_DOMAIN, CONVEYOR_STREAMS),
+          "sensors": (SENSORS_DOMAIN, SENSORS_STREAMS)}
+
+
+def write_yaml_problem(folder: Path, name: str) -> Path:
+    """Write ``name``'s domain folder, bindings module and ``problem.yaml`` under ``folder``
+    (the ``ltamp solve`` route); returns the problem file."""
+    domain_text, stream_text = _FILES[name]
+    (folder / "domain").mkdir(parents=True, exist_ok=True)
+    write(folder / "domain", "domain.pddl", domain_text)
+    write(folder / "domain", "stream.pddl", stream_text)
+    extra = ", wild=WildOutput" if name == "sensors" else ""
+    (folder / "streams.py").write_text(_BINDINGS.format(
+        name=name, here=str(Path(__file__).resolve().parent), extra=extra))
+    problem = folder / "problem.yaml"
+    problem.write_text(_YAML[name])
+    return problem
