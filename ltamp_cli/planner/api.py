@@ -10,6 +10,8 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import replace
 
+import numpy as np
+
 from ltamp_cli.errors import InputError
 from ltamp_cli.planner.algorithms.common import (
     ALGORITHMS,
@@ -126,6 +128,11 @@ def check_config(config: PlannerConfig) -> None:
     if (isinstance(max_time, bool) or not isinstance(max_time, int | float)
             or math.isnan(max_time) or max_time <= 0):
         raise InputError(f"max time: expected a positive number of seconds, got {max_time!r}")
+    for flag in ("unit_costs", "eager_cheap_streams", "incremental_grounding"):
+        value = getattr(config, flag)
+        if not (isinstance(value, bool | np.bool_) or value in (0, 1)):  # "no" would be true
+            raise InputError(f"{flag.replace('_', ' ')}: expected True or False, got "
+                             f"{value!r:.40}")
     success_cost = config.success_cost
     if (isinstance(success_cost, bool) or not isinstance(success_cost, int | float)
             or math.isnan(success_cost) or success_cost < 0):

@@ -45,3 +45,9 @@ def test_good_skeleton_still_solves() -> None:
     result = solve(load_problem(PROBLEM),
                    PlannerConfig(max_time=30, skeleton=("...", "pick ? ? ? ?", "...")))
     assert result.solved
+
+
+def test_flag_that_is_no_boolean_is_refused() -> None:
+    """unit_costs="no" was taken as true (a non-empty string)."""
+    with pytest.raises(InputError, match="unit costs: expected True or False"):
+        solve(load_problem(PROBLEM), PlannerConfig(max_time=5, unit_costs="no"))  # type: ignore[arg-type]
