@@ -192,7 +192,7 @@ def load_model(directory: str | Path) -> LoadedModel:
                          "code): train the model again to write weights.npz", location_in(path))
     _check_weights(directory, metadata, path)
     try:
-        spec = _checked_spec(metadata["skill"])
+        spec = checked_spec(metadata["skill"])
         kind = metadata["kind"]
         weights = _read_arrays(directory / "weights.npz")
         dim = spec.context.dim + spec.control.dim
@@ -248,7 +248,7 @@ def _scalar(arrays: dict[str, np.ndarray], name: str) -> float:
     return float(arrays[name])
 
 
-def _checked_spec(data: Any) -> SkillSpec:
+def checked_spec(data: Any) -> SkillSpec:
     """The skill of ``model.json``: names and finite ``low <= high`` bounds of equal length."""
     if not isinstance(data, dict):
         raise ValueError("'skill' must be an object")
