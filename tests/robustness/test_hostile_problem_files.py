@@ -57,3 +57,21 @@ def test_yaml_integer_too_long_for_python(tmp_path: Path) -> None:
     for command in ("check", "solve"):
         code, lines = _cli(command, str(path))
         assert code == 2 and len(lines) == 1 and "invalid YAML" in lines[0], lines
+
+
+BLOCKS = Path(__file__).resolve().parents[2] / "domains" / "blocksworld"
+
+
+def test_metric_maximize_is_refused(tmp_path: Path) -> None:
+    """(:metric maximize (total-cost)) was accepted and the cheapest plan returned."""
+    from ltamp_cli.pddlstream import solve_from_pddl
+
+    text = (BLOCKS / "blocks8.pddl").read_text().replace("(:metric minimize",
+                                                         "(:metric maximize")
+    assert "maximize" in text
+    problem = tmp_path / "blocks_max.pddl"
+    problem.write_text(text)
+    with pytest.raises(InputError, match="only \\(:metric minimize"):
+        solve_from_pddl((BLOCKS / "domain.pddl").read_text(), text)
+    code, lines = _cli("solve", str(problem), "--domain", str(BLOCKS), "--no-stats")
+    assert code == 2 and len(lines) == 1 and "metric" in lines[0], lines
