@@ -80,3 +80,26 @@ def test_shipped_domains_unchanged() -> None:
         assert loaded.stream_file is not None
         assert not any(s.negates for s in loaded.stream_file.streams), name
         assert not any(a.head.name.endswith(("~t", "~f")) for a in loaded.domain.axioms)
+
+
+PREDICATE_STREAMS = """
+(define (stream conveyor)
+  (:stream sample-pos
+    :inputs (?b) :domain (Box ?b)
+    :outputs (?x) :certified (Pos ?b ?x))
+  (:predicate (Collide ?b ?x ?b2 ?x2) (and (Pos ?b ?x) (Pos ?b2 ?x2))))
+"""
+
+
+@pytest.mark.parametrize("algorithm", ALGORITHMS)
+def test_negated_external_predicate(tmp_path: Path, algorithm: str,
+                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    """The same with Collide a :predicate (evaluated lazily): also never assumed false."""
+    monkeypatch.setattr(problems, "CONVEYOR_STREAMS", PREDICATE_STREAMS)
+    problem, check = problems.conveyor_problem(tmp_path, seed=0)
+    stream_map = {"sample-pos": problem.stream_map["sample-pos"],
+                  "Collide": problem.stream_map["test-collide"]}
+    solution = solve(problem._replace(stream_map=stream_map), algorithm=algorithm,
+                     max_time=20, verbose=False)
+    assert solution.plan is not None
+    check(solution.plan)
