@@ -97,3 +97,14 @@ def test_validator_finds_bindings_whatever_their_case(tmp_path: Path) -> None:
     samplers = problems.conveyor_samplers(0)
     shouting = {name.upper(): function for name, function in samplers.items()}
     assert validate_plan(loaded, result, streams=shouting).valid
+
+
+def test_check_counts_the_stream_file_s_own_streams(tmp_path: Path) -> None:
+    """The conveyor's stream file declares 2 streams; the negated collision test the loader
+    adds is not one of them."""
+    path = problems.write_yaml_problem(tmp_path, "conveyor")
+    out, err = io.StringIO(), io.StringIO()
+    with redirect_stdout(out), redirect_stderr(err), pytest.raises(SystemExit) as done:
+        main(["check", str(path), "--json"])
+    assert done.value.code in (0, None), err.getvalue()
+    assert json.loads(out.getvalue())["streams"] == 2
