@@ -5,6 +5,8 @@ lock on their output while they run. A second writer of the same output either f
 with one :class:`~ltamp_cli.errors.InputError` line (exit 2) or, with ``wait=True``
 (``--wait``), blocks until the first one is done. The lock is an OS file lock (``filelock``):
 it is released by the kernel when its holder dies, so a killed writer never blocks later runs.
+The lock belongs to the resolved path, so a symlink to an output shares the output's lock
+(hard links are not recognised).
 """
 
 from __future__ import annotations
@@ -37,8 +39,10 @@ def exclusive_writer(output: str | Path, *, is_directory: bool, wait: bool = Fal
     lock file cannot be created (an unwritable output).
     """
     output = Path(output)
-    path = lock_path(output, is_directory)
     try:
+        # The lock of the file itself, however it is named: a symlink (or ``dir/../x``) to
+        # an output another writer holds must find that writer's lock, not a new one.
+        path = lock_path(output.resolve(), is_directory)
         path.parent.mkdir(parents=True, exist_ok=True)
         lock = FileLock(str(path), timeout=-1 if wait else 0)
         lock.acquire()

@@ -60,6 +60,8 @@ class YamlDocument:
         except RecursionError:
             raise InputError(f"invalid YAML: nested deeper than {MAX_YAML_DEPTH} levels",
                              SourceLocation(self.path)) from None
+        except ValueError as error:  # a value PyYAML cannot build (an int of 5000 digits)
+            raise InputError(f"invalid YAML: {error}", SourceLocation(self.path)) from None
         except yaml.MarkedYAMLError as error:
             mark = error.problem_mark or error.context_mark
             line, column = (mark.line + 1, mark.column + 1) if mark else (0, 0)

@@ -23,6 +23,7 @@ from typing import Generic, TypeVar
 import numpy as np
 
 from ltamp_cli.backends.protocol import SkillBackend, TrialResult, skill_spec
+from ltamp_cli.trials.record import MAX_SCORE_MAGNITUDE
 
 # Longest error message kept in a failed trial's record (one line).
 REASON_CHARS = 300
@@ -182,17 +183,28 @@ def run_trial_safely(
 ) -> tuple[TrialResult, bool]:
     """``(result, crashed)`` of ``backend.run_trial``, never raising for one trial's physics.
 
-    A trial that raises (``crashed``: the backend's world may be left mid-trial), scores a
-    non-finite value or reports measurements that are not strict JSON (NaN, inf) is an
-    invalid trial with the skill's invalid score and the reason in ``info["reason"]``.
+    A trial that raises (``crashed``: the backend's world may be left mid-trial), returns
+    something other than a :class:`TrialResult`, scores a non-finite value or one beyond
+    ``±MAX_SCORE_MAGNITUDE`` or reports measurements that are not strict JSON (NaN, inf) is
+    an invalid trial with the skill's invalid score and the reason in ``info["reason"]``.
     """
     invalid_score = skill_spec(backend, skill).invalid_score
     try:
         result = backend.run_trial(skill, context, control, seed)
     except Exception as error:  # one trial's physics must not end a collection or training
         return failed_result(invalid_score, f"trial raised {type(error).__name__}: {error}"), True
-    if not math.isfinite(float(result.score)):
+    if not isinstance(result, TrialResult):  # a plugin's run_trial returned None, a float...
+        return failed_result(invalid_score, f"run_trial returned {result!r:.60}, not a "
+                                            "TrialResult"), False
+    try:
+        score = float(result.score)
+    except (TypeError, ValueError):
+        return failed_result(invalid_score, f"score {result.score!r:.40} is no number"), False
+    if not math.isfinite(score):
         return failed_result(invalid_score, f"non-finite score {result.score}"), False
+    if abs(score) > MAX_SCORE_MAGNITUDE:  # a learner's arithmetic would overflow on it
+        return failed_result(invalid_score, f"score {score:g} beyond "
+                                            f"±{MAX_SCORE_MAGNITUDE:g}"), False
     try:  # a record must be strict JSON; NaN in the measurements means the physics went wrong
         json.dumps(dict(result.info), allow_nan=False)
     except (TypeError, ValueError) as error:

@@ -48,7 +48,10 @@ def check_problem_file(path: Path, domain_dir: Path | None = None, seed: int = 0
     where = SourceLocation(str(path))
     streams = 0
     if loaded.stream_file is not None:
-        streams = len(loaded.stream_file.external_names())
+        # the file's own streams: not the negated tests the loader adds (pddl/negation.py)
+        streams = len(loaded.stream_file.external_names()) - sum(
+            1 for external in (*loaded.stream_file.streams, *loaded.stream_file.predicates)
+            if external.negates)
         if loaded.streams_factory is not None:
             try:
                 provided = loaded.streams_factory(dict(loaded.world),

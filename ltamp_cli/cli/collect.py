@@ -72,7 +72,7 @@ def collect_command(
     ] = "none",
 ) -> None:
     """Collect N random trials (uniform control; context from the backend), resumably."""
-    from ltamp_cli.cli.conventions import emit
+    from ltamp_cli.cli.conventions import emit, progress_enabled
     from ltamp_cli.trials.collect import CollectJob, collect
 
     if n < 0:
@@ -84,7 +84,8 @@ def collect_command(
     check_robot(robot, backend, skill)
     job = CollectJob(skill=skill, backend=backend, n=n, seed=seed, valid_only=valid_only,
                      robot=robot)
-    added = collect(job, out, workers=workers, ray_address=ray, wait=wait)
+    added = collect(job, out, workers=workers, ray_address=ray, wait=wait,
+                    progress=progress_enabled())
     if as_json:
         emit({"out": str(out), "added": added, "n": n}, as_json)
     else:

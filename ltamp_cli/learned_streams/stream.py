@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 from collections.abc import Callable, Hashable, Iterator, Mapping
 from dataclasses import dataclass
@@ -30,6 +31,7 @@ import numpy as np
 
 from ltamp_cli.backends.protocol import SkillSpec
 from ltamp_cli.errors import InputError
+from ltamp_cli.learning.confidence import LAMBDA_RANGE
 from ltamp_cli.learning.model import LevelSetModel
 from ltamp_cli.learning.model_dir import load_model
 from ltamp_cli.planner.streams import Binding, StreamInfo
@@ -111,12 +113,19 @@ class LearnedStreamConfig:
         if kernel_file is not None and not isinstance(kernel_file, str):
             raise InputError(f"{where}.kernel_file: expected a path")
         lam = number("lambda")
+        beta = number("beta")
+        # the same limits as `ltamp sample --lambda/--beta` (ltamp_cli/cli/options.py)
+        if lam is not None and not LAMBDA_RANGE[0] <= lam <= LAMBDA_RANGE[1]:
+            raise InputError(f"{where}.lambda: expected a value in [{LAMBDA_RANGE[0]}, "
+                             f"{LAMBDA_RANGE[1]}], got {lam}")
+        if beta is not None and not math.isfinite(beta):
+            raise InputError(f"{where}.beta: expected a finite number, got {beta}")
         try:
             return LearnedStreamConfig(
                 model_dir=(base / data["model"]).resolve(),
                 sampler=str(data.get("sampler", "adaptive")),
                 lam=DEFAULT_LAMBDA if lam is None else lam,
-                beta=number("beta"),
+                beta=beta,
                 kernel_file=None if kernel_file is None else (base / kernel_file).resolve(),
             )
         except InputError as error:

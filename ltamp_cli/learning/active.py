@@ -70,7 +70,7 @@ from ltamp_cli.learning.kernels import KERNEL_NAMES
 from ltamp_cli.learning.metrics import Evaluation, SkillEvaluator
 from ltamp_cli.learning.model import LevelSetModel, PhysicalValidity, SkillModel
 from ltamp_cli.threads import limits_threads
-from ltamp_cli.trials.record import TrialDataset, TrialRecord
+from ltamp_cli.trials.record import TrialDataset, TrialRecord, check_against_spec
 
 #: Upper bound of the GP's noise variance (in RMS-scaled score units) for a skill whose
 #: trials are deterministic (:attr:`SkillSpec.deterministic`); others keep
@@ -457,6 +457,7 @@ def learn_from_pool(
     pool = [r for r in pool if r.skill == spec.name]
     if not pool:
         raise ValueError(f"the pool has no trials of skill {spec.name!r}")
+    check_against_spec(pool, spec)  # wrong lengths, far-off values: one ValueError
     rng = np.random.default_rng(config.seed)
     template = RandomModel(spec, 0.0)
     x_pool = np.array([template.to_unit(r.context, r.control)[0] for r in pool]).reshape(

@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ltamp_cli.backends.protocol import SkillBackend
+from ltamp_cli.backends.protocol import SkillBackend, SkillSpec
 from ltamp_cli.errors import InputError, location_in
 from ltamp_cli.jsondata import read_json_data
 from ltamp_cli.learning.active import (
@@ -30,8 +30,18 @@ from ltamp_cli.learning.active import (
 )
 from ltamp_cli.learning.baselines import RandomModel
 from ltamp_cli.learning.model import SkillModel
-from ltamp_cli.learning.model_dir import METADATA_FILE, load_model, spec_from_json, spec_to_json
-from ltamp_cli.trials.record import TrialDataset, TrialRecord
+from ltamp_cli.learning.model_dir import (
+    METADATA_FILE,
+    checked_spec,
+    load_model,
+    spec_to_json,
+)
+from ltamp_cli.trials.record import (
+    MAX_SCORE_MAGNITUDE,
+    TrialDataset,
+    TrialRecord,
+    check_against_spec,
+)
 from ltamp_cli.writer_lock import exclusive_writer
 
 PENDING_FILE = "pending.json"
@@ -142,14 +152,37 @@ def _read_pending(directory: Path) -> dict[str, Any]:
         )
     try:
         data = read_json_data(path)
-        spec_from_json(data["spec"])
+        spec = checked_spec(data["spec"])
         LearningConfig(**data["config"])
-        Proposal(**data["proposal"])
+        proposal = Proposal(**data["proposal"])
+        _pending_record(spec, proposal)
     except (ValueError, KeyError, TypeError, AttributeError) as error:
         raise InputError(
             f"corrupt pending trial ({type(error).__name__}: {error})", location_in(path)
         ) from None
     return data
+
+
+def _pending_record(spec: SkillSpec, proposal: Proposal) -> TrialRecord:
+    """The trial record of ``proposal`` (score 0 until told), checked like a line of a
+    trial file: the spec's names exactly, finite numbers near the skill's box, integer
+    seed and index >= 0, the spec's skill (``ValueError``/``TypeError``/``KeyError``)."""
+    for part, values, space in (("context", proposal.context, spec.context),
+                                ("control", proposal.control, spec.control)):
+        if not isinstance(values, dict) or sorted(values) != sorted(space.names):
+            raise ValueError(f"proposal {part} must name {', '.join(space.names)}, got "
+                             f"{values!r:.60}")
+    if proposal.skill != spec.name:
+        raise ValueError(f"proposal of skill {proposal.skill!r:.40}, spec of {spec.name!r}")
+    record = TrialRecord.from_dict({
+        "skill": proposal.skill, "backend": proposal.backend, "seed": proposal.seed,
+        "index": proposal.index, "score": 0.0, "valid": True,
+        "context": [proposal.context[n] for n in spec.context.names],
+        "control": [proposal.control[n] for n in spec.control.names]})
+    if record.index < 0:
+        raise ValueError(f"proposal index must be >= 0, got {record.index}")
+    check_against_spec([record], spec)
+    return record
 
 
 def tell(directory: str | Path, score: float, valid: bool = True, *,
@@ -161,6 +194,8 @@ def tell(directory: str | Path, score: float, valid: bool = True, *,
     directory = Path(directory)
     if not np.isfinite(score):
         raise InputError(f"--score: expected a finite number, got {score}")
+    if abs(score) > MAX_SCORE_MAGNITUDE:  # the refit would overflow (and training refuses it)
+        raise InputError(f"--score: {score:g} is beyond ±{MAX_SCORE_MAGNITUDE:g}")
     if not directory.is_dir():
         raise InputError("no pending trial: run `ltamp train SKILL --ask --out DIR` first",
                          location_in(directory))
@@ -174,22 +209,13 @@ def _tell_locked(directory: Path, score: float, valid: bool) -> TrialRecord:
     pending = _read_pending(directory)
     if not np.isfinite(score):
         raise InputError(f"--score: expected a finite number, got {score}")
-    spec = spec_from_json(pending["spec"])
+    spec = checked_spec(pending["spec"])
     config = LearningConfig(**pending["config"])
     proposal = Proposal(**pending["proposal"])
     dataset = TrialDataset(directory / TRIALS_FILE)
     records = dataset.read()
-    record = TrialRecord(
-        skill=proposal.skill,
-        context=tuple(proposal.context[n] for n in spec.context.names),
-        control=tuple(proposal.control[n] for n in spec.control.names),
-        score=float(score),
-        valid=bool(valid),
-        seed=proposal.seed,
-        backend=proposal.backend,
-        index=proposal.index,
-        info={"strategy": config.strategy, "source": "tell"},
-    )
+    record = replace(_pending_record(spec, proposal), score=float(score), valid=bool(valid),
+                     info={"strategy": config.strategy, "source": "tell"})
     # A crash between appending and clearing pending.json must not duplicate the trial.
     if not any(r.index == proposal.index for r in records):
         dataset.append(record)

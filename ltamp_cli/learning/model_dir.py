@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -41,6 +42,9 @@ from ltamp_cli.learning.estimator_arrays import export_estimator, import_estimat
 from ltamp_cli.learning.gp import KERNEL_NAMES, GaussianProcess, n_kernel_params
 from ltamp_cli.learning.model import LevelSetModel, SkillModel
 from ltamp_cli.learning.normalize import joint_space
+
+# The prior means fit_gp knows (ltamp_cli.learning.gp): a fitted constant or zero.
+MEAN_MODES = ("constant", "zero")
 
 FORMAT = "ltamp-skill-model"
 VERSION = 1
@@ -188,7 +192,7 @@ def load_model(directory: str | Path) -> LoadedModel:
                          "code): train the model again to write weights.npz", location_in(path))
     _check_weights(directory, metadata, path)
     try:
-        spec = _checked_spec(metadata["skill"])
+        spec = checked_spec(metadata["skill"])
         kind = metadata["kind"]
         weights = _read_arrays(directory / "weights.npz")
         dim = spec.context.dim + spec.control.dim
@@ -223,9 +227,11 @@ def _read_arrays(path: Path) -> dict[str, np.ndarray]:
     with np.load(path, allow_pickle=False) as weights:
         arrays = {name: weights[name] for name in weights.files}
     for name, array in arrays.items():
-        if array.dtype.hasobject or not (np.issubdtype(array.dtype, np.number)
+        # complex numbers are numbers too, but casting them to float drops a part silently
+        if array.dtype.hasobject or not (np.issubdtype(array.dtype, np.integer)
+                                         or np.issubdtype(array.dtype, np.floating)
                                          or array.dtype == bool):
-            raise ValueError(f"array {name!r} has dtype {array.dtype}, expected numbers")
+            raise ValueError(f"array {name!r} has dtype {array.dtype}, expected real numbers")
     return arrays
 
 
@@ -242,10 +248,11 @@ def _scalar(arrays: dict[str, np.ndarray], name: str) -> float:
     return float(arrays[name])
 
 
-def _checked_spec(data: Any) -> SkillSpec:
+def checked_spec(data: Any) -> SkillSpec:
     """The skill of ``model.json``: names and finite ``low <= high`` bounds of equal length."""
     if not isinstance(data, dict):
         raise ValueError("'skill' must be an object")
+    seen: set[str] = set()
     for part in ("context", "control"):
         space = data.get(part)
         if not isinstance(space, dict) or not all(
@@ -257,6 +264,17 @@ def _checked_spec(data: Any) -> SkillSpec:
                 low > high for low, high in zip(lows, highs, strict=True)):
             raise ValueError(f"skill {part!r}: names, lows and highs must have equal lengths "
                              "and lows <= highs")
+        # a width that overflows (-1e308 .. 1e308) normalises every value to inf or NaN
+        if any(not math.isfinite(high - low) for low, high in zip(lows, highs, strict=True)):
+            raise ValueError(f"skill {part!r}: every bound pair must have a finite width "
+                             "(high - low)")
+        for name in space["names"]:
+            if not isinstance(name, str) or not name:
+                raise ValueError(f"skill {part!r} names must be non-empty strings, not "
+                                 f"{name!r:.40}")
+            if name in seen:  # --context name=value would be ambiguous
+                raise ValueError(f"skill {part!r}: the name {name!r:.40} is used twice")
+            seen.add(name)
     return spec_from_json(data)
 
 
@@ -267,8 +285,9 @@ def _gaussian_process(metadata: dict[str, Any], arrays: dict[str, np.ndarray],
     if kernel not in KERNEL_NAMES:
         raise ValueError(f"unknown kernel {kernel!r}")
     mean_mode = metadata["hyperparameters"].get("mean_mode", "constant")
-    if not isinstance(mean_mode, str):
-        raise ValueError("'mean_mode' must be a string")
+    if mean_mode not in MEAN_MODES:
+        raise ValueError(f"'mean_mode' must be one of {', '.join(MEAN_MODES)}, not "
+                         f"{mean_mode!r:.40}")
     for name in ("x", "y", "theta", "y_scale"):
         if name not in arrays:
             raise ValueError(f"missing array {name!r}")

@@ -34,7 +34,7 @@ from ltamp_cli.planner.pddl.syntax import (
     StreamFunction,
     TypedName,
 )
-from ltamp_cli.planner.problem import PlanningProblem
+from ltamp_cli.planner.problem import PlanningProblem, with_negated_tests
 from ltamp_cli.planner.streams import FINITE_ITERATORS, Binding, External, Stream, WildOutput
 from ltamp_cli.planner.streams import PartialInputs as PlannerPartialInputs
 from ltamp_cli.planner.streams import StreamInfo as PlannerStreamInfo
@@ -124,7 +124,13 @@ def _stream_file(stream_pddl: Any) -> StreamFile | None:
     """One stream file from ``None``, a text or a list of texts (rules renumbered)."""
     if stream_pddl is None:
         return None
-    texts = [stream_pddl] if isinstance(stream_pddl, str) else list(stream_pddl)
+    if isinstance(stream_pddl, str):
+        texts = [stream_pddl]
+    elif isinstance(stream_pddl, list | tuple) and all(isinstance(t, str) for t in stream_pddl):
+        texts = list(stream_pddl)
+    else:
+        raise InputError(f"stream_pddl: expected None, a PDDL text or a list of texts, got "
+                         f"{stream_pddl!r:.60}")
     files = [parse_stream_file(text, _label(text, "stream.pddl")) for text in texts]
     if not files:
         return None
@@ -172,6 +178,9 @@ def to_planning_problem(problem: PDDLProblem, stream_info: Mapping[str, Info] | 
         raise InputError("expected PDDLProblem(domain_pddl, constant_map, stream_pddl, "
                          "stream_map, init, goal)")
     domain_pddl, constant_map, stream_pddl, stream_map, init, goal = problem
+    if not isinstance(domain_pddl, str):
+        raise InputError(f"domain_pddl: expected a PDDL text (str, e.g. from read(path)), got "
+                         f"{domain_pddl!r:.60}")
     domain = parse_domain(domain_pddl, _label(domain_pddl, "domain.pddl"))
     names = ObjectNames()
     constants = _lowered(constant_map, "constant_map")
@@ -199,11 +208,11 @@ def to_planning_problem(problem: PDDLProblem, stream_info: Mapping[str, Info] | 
     if stream_file is not None:
         factory = _bindings_factory(stream_file, _lowered(stream_map, "stream_map"),
                                     _lowered(stream_info, "stream_info"))
-    return PlanningProblem(
+    return with_negated_tests(PlanningProblem(
         "pddlstream", _label(domain_pddl, "domain.pddl"), domain, stream_file, factory,
         "stream_map", {}, {n: (names.types[n], names.table.value(n))
                            for n in names.table.names()},
-        tuple(atoms), tuple(values), goal_formula)
+        tuple(atoms), tuple(values), goal_formula))
 
 
 @dataclass(frozen=True)

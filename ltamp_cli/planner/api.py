@@ -10,6 +10,8 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import replace
 
+import numpy as np
+
 from ltamp_cli.errors import InputError
 from ltamp_cli.planner.algorithms.common import (
     ALGORITHMS,
@@ -24,6 +26,7 @@ from ltamp_cli.planner.pddl.syntax import Stream
 from ltamp_cli.planner.problem import PlanningProblem
 from ltamp_cli.planner.result import INFEASIBLE, TIMEOUT, Certificate, PlanResult
 from ltamp_cli.planner.search.engine import SEARCH_ALGORITHMS
+from ltamp_cli.planner.search.skeleton import ANY_ACTION, parse_skeleton
 from ltamp_cli.planner.statistics import StreamStatistics
 from ltamp_cli.planner.watchdog import CallTracker, RunningCall, run_until
 from ltamp_cli.seeds import usable_seed
@@ -99,6 +102,7 @@ def solve(problem: PlanningProblem, config: PlannerConfig | None = None) -> Plan
         raise InputError(f"seed must be an integer, got {config.seed!r}")
     config = replace(config, seed=usable_seed(config.seed))
     check_config(config)
+    check_skeleton(problem, config.skeleton)
     start = time.perf_counter()
     tracker = CallTracker()
     holder: list[PlannerState] = []
@@ -124,6 +128,32 @@ def check_config(config: PlannerConfig) -> None:
     if (isinstance(max_time, bool) or not isinstance(max_time, int | float)
             or math.isnan(max_time) or max_time <= 0):
         raise InputError(f"max time: expected a positive number of seconds, got {max_time!r}")
+    for flag in ("unit_costs", "eager_cheap_streams", "incremental_grounding"):
+        value = getattr(config, flag)
+        if not (isinstance(value, bool | np.bool_) or value in (0, 1)):  # "no" would be true
+            raise InputError(f"{flag.replace('_', ' ')}: expected True or False, got "
+                             f"{value!r:.40}")
+    success_cost = config.success_cost
+    if (isinstance(success_cost, bool) or not isinstance(success_cost, int | float)
+            or math.isnan(success_cost) or success_cost < 0):
+        # as the YAML field planner.success_cost: NaN would compare false with every cost
+        raise InputError(f"success cost: expected a number >= 0 (or inf), got {success_cost!r}")
+
+
+def check_skeleton(problem: PlanningProblem, skeleton: tuple[str, ...]) -> None:
+    """Every skeleton pattern names an action of the domain ('*' any) with its number of
+    arguments: a misspelt pattern would otherwise only make the problem infeasible."""
+    patterns, _gaps = parse_skeleton(skeleton)
+    arities = {action.name: len(action.parameters) for action in problem.domain.actions}
+    for pattern in patterns:
+        if pattern.name == ANY_ACTION:
+            continue
+        if pattern.name not in arities:
+            raise InputError(f"skeleton pattern {pattern.name!r}: the domain has no such action "
+                             f"(actions: {', '.join(sorted(arities))})")
+        if pattern.args is not None and len(pattern.args) != arities[pattern.name]:
+            raise InputError(f"skeleton pattern {pattern.name!r} gives {len(pattern.args)} "
+                             f"argument(s); the action takes {arities[pattern.name]}")
 
 
 def refuse_unsupported(problem: PlanningProblem, algorithm: str) -> None:

@@ -26,13 +26,14 @@ import importlib.util
 import re
 import sys
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from ltamp_cli.errors import InputError, SourceLocation
 from ltamp_cli.extras import missing_module_hint
 from ltamp_cli.planner.pddl.check import check_domain, check_problem, prepare_streams
+from ltamp_cli.planner.pddl.negation import guard_negated_tests
 from ltamp_cli.planner.pddl.parse import (
     parse_domain,
     parse_formula,
@@ -294,7 +295,7 @@ def load_problem(path: str | Path, domain_dir: str | Path | None = None) -> Plan
         loaded = _from_pddl_problem(problem_path, domain, str(path), dict(planner_options))
         loaded.stream_file, loaded.streams_factory = stream_file, factory
         loaded.bindings_source, loaded.world, loaded.raw = bindings_source, world, doc.data
-        return loaded
+        return with_negated_tests(loaded)
     objects = _parse_objects(doc, domain)
     atoms, values = _parse_facts(doc)
     goal = _parse_goal(doc)
@@ -302,9 +303,22 @@ def load_problem(path: str | Path, domain_dir: str | Path | None = None) -> Plan
     problem = Problem(str(doc.get("name", path.stem)), domain.name, typed, tuple(atoms),
                       tuple(values), goal, False, doc.location())
     check_problem(problem, domain)
-    return PlanningProblem(problem.name, str(path), domain, stream_file, factory,
-                           bindings_source, world, objects, problem.init,
-                           problem.function_values, goal, dict(planner_options), doc.data)
+    return with_negated_tests(PlanningProblem(
+        problem.name, str(path), domain, stream_file, factory, bindings_source, world, objects,
+        problem.init, problem.function_values, goal, dict(planner_options), doc.data))
+
+
+def with_negated_tests(problem: PlanningProblem) -> PlanningProblem:
+    """``problem`` with the test facts its formulas need false compiled into negated tests,
+    as PDDLStream plans with them (:mod:`ltamp_cli.planner.pddl.negation`)."""
+    if problem.stream_file is None:
+        return problem
+    domain, stream_file, goals = guard_negated_tests(problem.domain, problem.stream_file,
+                                                     [problem.goal],
+                                                     {atom.predicate for atom in problem.init})
+    if domain is problem.domain:
+        return problem
+    return replace(problem, domain=domain, stream_file=stream_file, goal=goals[0])
 
 
 def _from_pddl_problem(path: Path, domain: Domain, source: str, options: dict[str, Any]

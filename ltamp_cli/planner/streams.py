@@ -143,10 +143,14 @@ def resolve_bindings(stream_file: StreamFile, provided: Mapping[str, Any], sourc
     bindings: dict[str, Binding] = {}
     externals: list[External] = [*stream_file.streams, *stream_file.functions,
                                  *stream_file.predicates]
+    negated: list[Stream | ExternalPredicate] = []
     for external in externals:
         name = external.name
         if isinstance(external, Stream) and external.is_rule:
             bindings[name] = RULE_BINDING
+            continue
+        if isinstance(external, Stream | ExternalPredicate) and external.negates:
+            negated.append(external)  # bound below, from the binding of the test it negates
             continue
         kind = ("stream" if isinstance(external, Stream) else
                 "function" if isinstance(external, StreamFunction) else "predicate")
@@ -184,7 +188,22 @@ def resolve_bindings(stream_file: StreamFile, provided: Mapping[str, Any], sourc
             # incremental algorithm would.
             bindings[name] = replace(bindings[name], info=replace(bindings[name].info,
                                                                   eager=True))
+    for external in negated:
+        bindings[external.name] = negated_binding(bindings[external.negates], external.negates)
     return bindings
+
+
+def negated_binding(binding: Binding, name: str) -> Binding:
+    """The binding of a negated test (:mod:`ltamp_cli.planner.pddl.negation`): true exactly
+    when ``binding``'s test returns false; the same overhead, the opposite success prior."""
+    test = binding.function
+
+    def negated(*inputs: Any, **fluents: Any) -> bool:
+        return not _truth_value(name, test(*inputs, **fluents))
+
+    info = binding.info
+    p_success = min(max(1.0 - info.p_success, 0.01), 0.99)
+    return Binding(negated, replace(info, p_success=p_success, opt_gen_fn=None))
 
 
 @dataclass(frozen=True)

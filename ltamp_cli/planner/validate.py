@@ -170,7 +170,9 @@ class _Context:
             self.stream_functions = {f.name: f for f in problem.stream_file.functions}
             self.external_predicates = {p.name: p for p in problem.stream_file.predicates}
         self._streams_given = streams
-        self._bindings: Mapping[str, Any] | None = streams
+        # keyed by lower-cased name: PDDL names, and so binding keys, are case-insensitive
+        self._bindings: Mapping[str, Any] | None = (
+            None if streams is None else {str(k).lower(): v for k, v in streams.items()})
         # Object universe: the problem's objects (typed) and every object the run created.
         self.types: dict[str, str] = {name: t for name, (t, _) in problem.objects.items()}
         for name in result.objects:
@@ -220,11 +222,16 @@ class _Context:
 
     # --- Python bindings ---------------------------------------------------------------
     def binding(self, name: str) -> Callable[..., Any]:
+        external = self.streams.get(name) or self.external_predicates.get(name)
+        if external is not None and external.negates:  # a negated test (pddl/negation.py)
+            test = self.binding(external.negates)
+            return lambda *args: not test(*args)
         if self._bindings is None:
             factory = self.problem.streams_factory
             if factory is None:
                 raise _Invalid(f"{name!r} needs a Python binding but the problem has none")
-            self._bindings = factory(dict(self.problem.world), np.random.default_rng(0))
+            made = factory(dict(self.problem.world), np.random.default_rng(0))
+            self._bindings = {str(k).lower(): v for k, v in made.items()}
         provided = self._bindings.get(name) if self._bindings is not None else None
         if provided is None:
             raise _Invalid(f"no Python binding for {name!r}")

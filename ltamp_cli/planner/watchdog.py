@@ -93,7 +93,9 @@ def run_until(work: Callable[[], T], deadline: float, tracker: CallTracker,
     worker = threading.Thread(target=target, name=name, daemon=True)
     worker.start()
     timeout = deadline + ABANDON_GRACE_S - time.perf_counter()
-    worker.join(None if timeout == float("inf") else max(0.0, timeout))
+    # A limit beyond what a lock wait takes (max_time=1e308) is no limit: join() would
+    # raise OverflowError ("timestamp out of range for platform time_t").
+    worker.join(None if timeout >= threading.TIMEOUT_MAX else max(0.0, timeout))
     if not outcome.done:
         tracker.cancel()
         return False, None

@@ -43,6 +43,7 @@ def make_sampler(
     """
     if name not in SAMPLER_NAMES:
         raise ValueError(f"unknown sampler {name!r}: expected one of {', '.join(SAMPLER_NAMES)}")
+    context = _checked_context(model, context)
     superlevel = build_superlevel_set(model, context, rng, beta, lam, is_valid, n_proposals)
     if name == "rejection":
         return RejectionSampler(superlevel, rng)
@@ -51,3 +52,17 @@ def make_sampler(
     return DiverseSampler(
         superlevel, rng, kernel=kernel, learn=name == "diverse-lk", n=n_proposals, m=buffer_size
     )
+
+
+def _checked_context(model: SkillModel, context: np.ndarray) -> np.ndarray:
+    """``context`` as a ``(dα,)`` float array; ``ValueError`` naming the skill's context
+    when its length is wrong or a value is NaN/inf (a NaN context used to give an empty
+    sampler without a word, a wrong length a numpy reshape error)."""
+    names = model.spec.context.names
+    values = np.asarray(context, dtype=float).reshape(-1)
+    if len(values) != len(names):
+        raise ValueError(f"context has {len(values)} value(s), skill {model.spec.name!r} has "
+                         f"{len(names)} ({', '.join(names) or 'none'})")
+    if not np.all(np.isfinite(values)):
+        raise ValueError(f"context {values.tolist()} of skill {model.spec.name!r} is not finite")
+    return values

@@ -22,7 +22,7 @@ from typing import Any
 
 from ltamp_cli.backends.protocol import ParamSpace, SkillSpec
 from ltamp_cli.errors import InputError, location_in
-from ltamp_cli.trials.record import TrialDataset, TrialRecord
+from ltamp_cli.trials.record import MAX_SCORE_MAGNITUDE, TrialDataset, TrialRecord
 
 ScoreFromFraction = Callable[[str, float], float]
 """``(skill, fraction in [0, 1]) -> score``; ``score > 0`` means success."""
@@ -58,8 +58,29 @@ def read_rows(path: Path) -> Iterator[tuple[int, Mapping[str, Any]]]:
         )
 
 
+def _text_errors(path: Path, rows: Iterator[tuple[int, Mapping[str, Any]]]
+                 ) -> Iterator[tuple[int, Mapping[str, Any]]]:
+    """``rows`` with undecodable bytes and CSV syntax errors as one :class:`InputError`."""
+    line = 0
+    try:
+        for line, row in rows:
+            yield line, row
+    except UnicodeDecodeError as error:
+        # the decoder reads blocks ahead of the rows: the line is where reading stopped
+        raise InputError(f"not UTF-8 text (byte {error.object[error.start]:#x}): save the "
+                         "file as UTF-8", location_in(path, line + 1, 1)) from None
+    except csv.Error as error:
+        raise InputError(f"invalid CSV: {error}", location_in(path, line + 1, 1)) from None
+
+
 def _csv_rows(path: Path) -> Iterator[tuple[int, Mapping[str, Any]]]:
-    with path.open(newline="", encoding="utf-8") as handle:
+    return _text_errors(path, _csv_rows_raw(path))
+
+
+def _csv_rows_raw(path: Path) -> Iterator[tuple[int, Mapping[str, Any]]]:
+    # utf-8-sig: spreadsheet programs start CSV files with a byte-order mark, which would
+    # otherwise become part of the first column's name ("missing field 'phase'")
+    with path.open(newline="", encoding="utf-8-sig") as handle:
         reader = csv.reader(handle)
         header: list[str] | None = None
         for fields in reader:
@@ -86,7 +107,11 @@ def _csv_rows(path: Path) -> Iterator[tuple[int, Mapping[str, Any]]]:
 
 
 def _jsonl_rows(path: Path) -> Iterator[tuple[int, Mapping[str, Any]]]:
-    with path.open(encoding="utf-8") as handle:
+    return _text_errors(path, _jsonl_rows_raw(path))
+
+
+def _jsonl_rows_raw(path: Path) -> Iterator[tuple[int, Mapping[str, Any]]]:
+    with path.open(encoding="utf-8-sig") as handle:
         for line, text in enumerate(handle, start=1):
             if not text.strip():
                 continue
@@ -173,7 +198,11 @@ def _score(
     where: tuple[Path, int],
 ) -> float:
     if row.get("score") not in (None, ""):
-        return _number(row, "score", where)
+        score = _number(row, "score", where)
+        if abs(score) > MAX_SCORE_MAGNITUDE:  # training would refuse the record
+            raise InputError(f"field 'score': {score:g} is beyond ±{MAX_SCORE_MAGNITUDE:g}",
+                             location_in(where[0], where[1], 1))
+        return score
     if row.get("fraction") in (None, ""):
         raise InputError(
             "missing field 'score' (or a measured 'fraction')", location_in(where[0], where[1], 1)

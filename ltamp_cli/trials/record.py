@@ -14,11 +14,14 @@ import os
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ltamp_cli.errors import InputError, location_in
+
+if TYPE_CHECKING:
+    from ltamp_cli.backends.protocol import SkillSpec
 
 
 @dataclass(frozen=True)
@@ -53,19 +56,64 @@ class TrialRecord:
 
     @staticmethod
     def from_dict(data: Mapping[str, Any]) -> TrialRecord:
+        """A record from its JSON object. Fields must have their own JSON types (``"valid":
+        "false"`` is no boolean, ``"context": "5"`` no list): ``ValueError``/``TypeError``
+        name the field. ``context`` and ``control`` must be finite; ``score`` is a finite
+        number or ``null``/``NaN`` (an invalid trial)."""
+        if not isinstance(data, Mapping):
+            raise TypeError(f"expected a JSON object, got {type(data).__name__}")
         score = data["score"]
         return TrialRecord(
-            skill=str(data["skill"]),
-            context=tuple(float(v) for v in data["context"]),
-            control=tuple(float(v) for v in data["control"]),
-            score=float("nan") if score is None else float(score),
-            valid=bool(data["valid"]),
-            seed=int(data["seed"]),
-            backend=str(data["backend"]),
-            wall_time_s=float(data.get("wall_time_s", 0.0)),
-            index=int(data.get("index", -1)),
-            info=dict(data.get("info", {})),
+            skill=_text(data["skill"], "skill"),
+            context=_finite_values(data["context"], "context"),
+            control=_finite_values(data["control"], "control"),
+            score=float("nan") if score is None else _number(score, "score", nan_ok=True),
+            valid=_boolean(data["valid"], "valid"),
+            seed=_integer(data["seed"], "seed"),
+            backend=_text(data["backend"], "backend"),
+            wall_time_s=_number(data.get("wall_time_s", 0.0), "wall_time_s", nan_ok=True),
+            index=_integer(data.get("index", -1), "index"),
+            info=_mapping(data.get("info", {}), "info"),
         )
+
+
+def _text(value: Any, name: str) -> str:
+    if not isinstance(value, str):
+        raise TypeError(f"field {name!r} must be a string, got {value!r:.40}")
+    return value
+
+
+def _boolean(value: Any, name: str) -> bool:
+    if not isinstance(value, bool):
+        raise TypeError(f"field {name!r} must be true or false, got {value!r:.40}")
+    return value
+
+
+def _integer(value: Any, name: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise TypeError(f"field {name!r} must be an integer, got {value!r:.40}")
+    return value
+
+
+def _number(value: Any, name: str, nan_ok: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise TypeError(f"field {name!r} must be a number, got {value!r:.40}")
+    number = float(value)
+    if math.isinf(number) or (math.isnan(number) and not nan_ok):
+        raise ValueError(f"field {name!r} must be finite, got {value!r:.40}")
+    return number
+
+
+def _finite_values(value: Any, name: str) -> tuple[float, ...]:
+    if not isinstance(value, list | tuple):
+        raise TypeError(f"field {name!r} must be a list of numbers, got {value!r:.40}")
+    return tuple(_number(item, name) for item in value)
+
+
+def _mapping(value: Any, name: str) -> dict[str, Any]:
+    if not isinstance(value, Mapping):
+        raise TypeError(f"field {name!r} must be an object, got {value!r:.40}")
+    return dict(value)
 
 
 def _finite_or_none(value: float) -> float | None:
@@ -161,6 +209,35 @@ def without_duplicates(records: Sequence[TrialRecord]) -> tuple[list[TrialRecord
         seen.add(key)
         kept.append(record)
     return kept, len(records) - len(kept)
+
+
+# Scores beyond this overflow the GP's squares (1e300² is inf): such a record is refused.
+MAX_SCORE_MAGNITUDE = 1e100
+
+
+def check_against_spec(records: Sequence[TrialRecord], spec: SkillSpec) -> None:
+    """Raise ``ValueError`` naming the first record of ``spec``'s skill whose context or
+    control has the wrong length or lies far outside the skill's box (more than one box
+    width beyond a bound), or whose score's magnitude exceeds :data:`MAX_SCORE_MAGNITUDE`:
+    such values make the GP's arithmetic overflow (NaN everywhere). Records of other skills
+    are not checked."""
+    for record in records:
+        if record.skill != spec.name:
+            continue
+        where = f"trial record (seed {record.seed}, index {record.index})"
+        for part, values, space in (("context", record.context, spec.context),
+                                    ("control", record.control, spec.control)):
+            if len(values) != len(space.names):
+                raise ValueError(f"{where}: {part} has {len(values)} value(s), skill "
+                                 f"{spec.name!r} has {len(space.names)} ({', '.join(space.names)})")
+            for name, value, low, high in zip(space.names, values, space.lows, space.highs,
+                                              strict=True):
+                width = max(high - low, 1e-9)
+                if not low - width <= value <= high + width:
+                    raise ValueError(f"{where}: {part} {name}={value:g} lies far outside the "
+                                     f"skill's bounds [{low:g}, {high:g}]")
+        if math.isfinite(record.score) and abs(record.score) > MAX_SCORE_MAGNITUDE:
+            raise ValueError(f"{where}: score {record.score:g} is beyond ±{MAX_SCORE_MAGNITUDE:g}")
 
 
 def records_to_arrays(

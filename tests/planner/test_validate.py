@@ -272,7 +272,9 @@ def test_external_predicate_is_evaluated(line: PlanningProblem) -> None:
     result = plan_result([PlanStep("move", ("p0", "@q0"), (0.0, 3.0), 6.0)], [NEXT, SAFE],
                          {"p0": 0.0, "@q0": 3.0})
     report = validate_plan(line, result)
-    assert not report.valid and "(not (hot @q0))" in report.errors[0]
+    # (not (Hot ?q)) needs the predicate's answer "false": the negated predicate ~hot
+    # (ltamp_cli/planner/pddl/negation.py)
+    assert not report.valid and "(~hot @q0)" in report.errors[0]
 
 
 def test_values_must_match_objects(line: PlanningProblem) -> None:

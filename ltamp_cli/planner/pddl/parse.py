@@ -375,6 +375,12 @@ def parse_problem(text: str, path: str | Path) -> Problem:
                 raise InputError("expected (:goal FORMULA)", section.location)
             goal = parse_formula(body[0], "the goal")
         elif key == ":metric":
+            # the planner minimises the plan's total cost: anything else would be ignored
+            direction = body[0].text.lower() if body and isinstance(body[0], Symbol) else ""
+            if direction != "minimize":
+                raise InputError("only (:metric minimize (total-cost)) is supported, got "
+                                 f"(:metric {' '.join(str(b) for b in body)[:60]})",
+                                 section.location)
             minimize = True
         else:
             raise InputError(

@@ -56,7 +56,8 @@ def read_sexprs(text: str, path: str, line_offset: int = 0, column_offset: int =
     stack: list[tuple[list[SExpr], SourceLocation]] = []
     top: list[SExpr] = []
     line, column = 1, 1
-    index, length = 0, len(text)
+    # A byte-order mark (files saved by Windows editors) is not text: skip it.
+    index, length = (1 if text.startswith("\ufeff") else 0), len(text)
 
     def here() -> SourceLocation:
         col = column + (column_offset if line == 1 else 0)

@@ -231,6 +231,9 @@ class Stream:
     is_rule: bool = False
     fluent_domain: tuple[Atom, ...] = ()
     fluents_location: SourceLocation = _loc()  # noqa: RUF009
+    # The test this one negates (certifies ``~P`` when that test's binding returns false;
+    # see :mod:`ltamp_cli.planner.pddl.negation`), '' for streams of the stream file.
+    negates: str = ""
 
     @property
     def is_test(self) -> bool:
@@ -257,6 +260,7 @@ class ExternalPredicate:
     head: Atom
     domain: tuple[Atom, ...]
     location: SourceLocation = _loc()  # noqa: RUF009
+    negates: str = ""  # the predicate this one negates (see Stream.negates)
 
     @property
     def name(self) -> str:

@@ -176,11 +176,17 @@ def _last_count(pattern: str, log: str) -> int:
     return int(found[-1]) if found else 0
 
 
+# subprocess waits with poll(), whose timeout is an int of milliseconds: ~24.8 days at most.
+SUBPROCESS_TIMEOUT_MAX_S = (2**31 - 1) / 1000
+
+
 def _run(command: list[str], workdir: Path, deadline: float, stdin_path: Path | None = None
          ) -> subprocess.CompletedProcess[str]:
-    remaining = deadline - time.perf_counter()
-    if remaining <= 0:
+    remaining: float | None = deadline - time.perf_counter()
+    if remaining is not None and remaining <= 0:
         raise SearchTimeout
+    if remaining is not None and remaining >= SUBPROCESS_TIMEOUT_MAX_S:
+        remaining = None  # no limit (max_time=inf, 1e9): poll() overflows on such timeouts
     try:
         if stdin_path is None:
             return subprocess.run(command, cwd=workdir, capture_output=True, text=True,

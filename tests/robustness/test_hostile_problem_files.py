@@ -1,0 +1,77 @@
+"""Problem files as other editors and tools write them. Before the fix: a domain.pddl or
+stream.pddl starting with a byte-order mark (Windows editors) was refused ("expected '('",
+although the YAML problem beside it with a BOM was read), and a YAML integer of 5000 digits
+escaped as a ValueError traceback."""
+
+from __future__ import annotations
+
+import io
+import sys
+from contextlib import redirect_stderr, redirect_stdout
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+import redteam_problems as problems
+
+from ltamp_cli.cli.app import main
+from ltamp_cli.errors import InputError
+from ltamp_cli.pddlstream import solve
+from ltamp_cli.planner.problem import load_problem
+
+
+def _cli(*args: str) -> tuple[int, list[str]]:
+    out, err = io.StringIO(), io.StringIO()
+    with redirect_stdout(out), redirect_stderr(err), pytest.raises(SystemExit) as done:
+        main(list(args))
+    return int(done.value.code or 0), err.getvalue().strip().splitlines()
+
+
+@pytest.mark.parametrize("name", ["domain.pddl", "stream.pddl"])
+def test_byte_order_mark_in_pddl(tmp_path: Path, name: str) -> None:
+    path = problems.write_yaml_problem(tmp_path, "conveyor")
+    pddl = tmp_path / "domain" / name
+    pddl.write_bytes(b"\xef\xbb\xbf" + pddl.read_bytes())
+    code, lines = _cli("check", str(path))
+    assert code == 0, lines
+    code, lines = _cli("solve", str(path), "--max-time", "20", "--no-stats")
+    assert code == 0, lines
+
+
+def test_byte_order_mark_in_api_text(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(problems, "CONVEYOR_STREAMS", "\ufeff" + problems.CONVEYOR_STREAMS)
+    problem, check = problems.conveyor_problem(tmp_path)
+    solution = solve(problem, max_time=20, verbose=False)
+    assert solution.plan is not None
+    check(solution.plan)
+
+
+def test_yaml_integer_too_long_for_python(tmp_path: Path) -> None:
+    path = problems.write_yaml_problem(tmp_path, "conveyor")
+    path.write_text(path.read_text().replace("{b1: null, b2: null}",
+                                             "{b1: null, b2: null, big: " + "9" * 5000 + "}"))
+    with pytest.raises(InputError, match="invalid YAML"):
+        load_problem(path)
+    for command in ("check", "solve"):
+        code, lines = _cli(command, str(path))
+        assert code == 2 and len(lines) == 1 and "invalid YAML" in lines[0], lines
+
+
+BLOCKS = Path(__file__).resolve().parents[2] / "domains" / "blocksworld"
+
+
+def test_metric_maximize_is_refused(tmp_path: Path) -> None:
+    """(:metric maximize (total-cost)) was accepted and the cheapest plan returned."""
+    from ltamp_cli.pddlstream import solve_from_pddl
+
+    text = (BLOCKS / "blocks8.pddl").read_text().replace("(:metric minimize",
+                                                         "(:metric maximize")
+    assert "maximize" in text
+    problem = tmp_path / "blocks_max.pddl"
+    problem.write_text(text)
+    with pytest.raises(InputError, match="only \\(:metric minimize"):
+        solve_from_pddl((BLOCKS / "domain.pddl").read_text(), text)
+    code, lines = _cli("solve", str(problem), "--domain", str(BLOCKS), "--no-stats")
+    assert code == 2 and len(lines) == 1 and "metric" in lines[0], lines
