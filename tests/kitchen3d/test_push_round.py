@@ -81,8 +81,12 @@ def _push(run_class: type, closed: bool = False) -> tuple[dict, float]:
     try:
         poses = skill_paths.push_hand_poses(spec.objects["bowl"], BOWL_AT, FAR_GOAL,
                                             planning.table_z, heading)
-        push = planning.follow_hand_path(poses, 1, np.random.default_rng(0), "push",
-                                         touching="bowl")
+        push = None
+        for seed in range(5):  # the Cartesian follower's IK restarts are random
+            push = planning.follow_hand_path(poses, 1, np.random.default_rng(seed), "push",
+                                             touching="bowl")
+            if push is not None:
+                break
         assert push is not None
         reach = planning.plan_motion(ArmConf.of(1, np.asarray(PANDA_HOME)), push.start, None,
                                      seed=0)

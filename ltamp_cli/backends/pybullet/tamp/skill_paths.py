@@ -180,6 +180,9 @@ def push_hand_poses(obj: ObjectSpec, start: XY, goal: XY, table_z: float, hand_y
     direction = (g - s) / max(float(np.linalg.norm(g - s)), 1e-9)
     across = fingers_across(np.array([-math.sin(hand_yaw), math.cos(hand_yaw)]), direction)
     behind = push_contact_distance(obj, push_finger_gap(obj, across))
+    # The approach starts clear of the whole footprint (as for closed fingers) whatever the
+    # gap: open fingers then meet the wall a little later, which nothing depends on.
+    clear = push_contact_distance(obj, 0.0)
     down = Pose.from_euler(np.zeros(3), roll=math.pi, yaw=0.0)
     turn = Pose.from_euler(np.zeros(3), yaw=hand_yaw)
     z = table_z + push_hand_height(obj)
@@ -187,7 +190,7 @@ def push_hand_poses(obj: ObjectSpec, start: XY, goal: XY, table_z: float, hand_y
     def at(xy: np.ndarray, height: float) -> Pose:
         return Pose(np.array([xy[0], xy[1], height])) @ turn @ down
 
-    first = s - direction * (behind + PUSH_GAP_M)
+    first = s - direction * (clear + PUSH_GAP_M)
     last = g - direction * behind
     back = last - direction * PUSH_GAP_M
     return [at(first, z + PUSH_LIFT_M), at(first, z), at(last, z), at(back, z),
