@@ -17,7 +17,6 @@ import pytest
 
 from ltamp_cli.backends.pybullet.executor import (
     PUSH_TOLERANCE_M,
-    ActionFailed,
     ExecutionSettings,
     Kitchen3DRun,
 )
@@ -71,10 +70,10 @@ def _kitchen_runs() -> list[type]:
     return [Kitchen3DRun, SapienKitchen3DRun]
 
 
-def _push(run_class: type, closed: bool = False) -> tuple[dict, float]:
+def _push(run_class: type, offset: float = 0.0) -> tuple[dict, float]:
     """Plan push_to_reach's far push with the fingers across the line, execute it with
-    ``run_class``; the push's log entry and the bowl's largest distance (m) from the line.
-    ``closed``: the executor keeps the fingers closed (the former push)."""
+    ``run_class``; the push's log entry and the bowl's distance (m) from the planned line at
+    the end. ``offset`` (m): the bowl really stands that far to the left of the planned line."""
     spec = _spec()
     heading = math.atan2(FAR_GOAL[1] - BOWL_AT[1], FAR_GOAL[0] - BOWL_AT[0])
     planning = PlanningWorld(spec)
@@ -93,26 +92,20 @@ def _push(run_class: type, closed: bool = False) -> tuple[dict, float]:
         assert reach is not None
     finally:
         planning.close()
-    run = run_class(spec, {"cup": CUP_AT, "bowl": BOWL_AT}, 0, ExecutionSettings(), None)
     direction = np.subtract(FAR_GOAL, BOWL_AT) / np.linalg.norm(np.subtract(FAR_GOAL, BOWL_AT))
+    actual = (BOWL_AT[0] - offset * direction[1], BOWL_AT[1] + offset * direction[0])
+    run = run_class(spec, {"cup": CUP_AT, "bowl": actual}, 0, ExecutionSettings(), None)
     off_line = [0.0]
     try:
-        if closed:
-            run.push_finger_gap = lambda *args: 0.0  # type: ignore[method-assign]
         run.run_step("move-free", [None, reach, None, 1], ["q1", "t0", "q2", "r1"])
 
         def record() -> None:
             rel = np.subtract(run.object_xy("bowl"), BOWL_AT)
-            off_line[0] = max(off_line[0], abs(rel[0] * direction[1] - rel[1] * direction[0]))
+            off_line[0] = abs(rel[0] * direction[1] - rel[1] * direction[0])
 
         run.probe = record
-        try:
-            run.run_step("push", ["bowl", BOWL_AT, FAR_GOAL, None, None, push, 1],
-                         ["bowl", "p0", "p1", "q2", "q3", "t1", "r1"])
-        except ActionFailed as error:  # the closed push is expected to miss
-            if not closed:
-                raise
-            assert "came to rest" in str(error)
+        run.run_step("push", ["bowl", BOWL_AT, FAR_GOAL, None, None, push, 1],
+                     ["bowl", "p0", "p1", "q2", "q3", "t1", "r1"])
         return run.log[-1], off_line[0]
     finally:
         run.close()
@@ -130,9 +123,13 @@ def test_a_long_push_keeps_the_bowl_on_its_line(run_class: type) -> None:
 
 
 @pytest.mark.slow
-def test_closed_fingers_let_the_bowl_slide_off_the_line() -> None:
-    """The premise: the same push with the fingers closed (one contact) loses the bowl."""
-    entry, off_line = _push(Kitchen3DRun, closed=True)
-    assert entry["finger_gap_m"] == 0.0
-    assert off_line > 0.03
-    assert entry["error_m"] > PUSH_TOLERANCE_M
+def test_open_fingers_bring_an_off_centre_bowl_back_to_the_line() -> None:
+    """The bowl stands 1 cm off the planned line (as an executed plan leaves objects a few
+    millimetres from their planned poses): the open fingers centre it between them and
+    deliver it. (With the fingers closed the same push ended 0.028 m from the target, just
+    inside the 0.03 m tolerance, on a loaded machine; main's closed push_to_reach seed 1
+    ended 0.187 m off: ``docs/results/exec3d/push_to_reach_seed1_diag.json``.)"""
+    entry, off_line = _push(Kitchen3DRun, offset=0.01)
+    assert entry["finger_gap_m"] == skill_paths.PUSH_FINGER_GAP_M
+    assert entry["error_m"] <= PUSH_TOLERANCE_M
+    assert off_line < 0.005
