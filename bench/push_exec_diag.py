@@ -8,7 +8,9 @@ overrides the executor's finger gap for the push (``auto``: the executor's own r
 ``skill_paths.push_finger_gap``). Prints and writes (``--out``, JSON) the summary: the
 planned hand path's contact line, the object's largest distance from the line, its final
 error, its largest yaw, which links touched it, the goal's bead counts, CPU seconds; and
-the trajectory every ``--every`` steps.
+the trajectory every ``--every`` steps. ``--pour-trials N``: the plan's pour control also
+runs as the pour skill's own trial with seeds 0..N-1 (does the learned pour spill in its
+own simulation too?); ``--no-execute``: only that.
 
     OMP_NUM_THREADS=1 nice -n 5 .venv/bin/python bench/push_exec_diag.py --seed 1 \\
         --out docs/results/exec3d/push_to_reach_seed1_auto.json
@@ -31,7 +33,38 @@ PROBLEM = ROOT / "problems" / "kitchen3d" / "push_to_reach.yaml"
 GAPS = {"closed": 0.0, "open": 0.08}
 
 
-def run(seed: int, fingers: str, max_time: float, every: int) -> dict[str, Any]:
+def pour_trials(problem: Any, result: Any, seeds: int) -> list[dict[str, Any]]:
+    """The plan's pour control run as the pour skill's own PyBullet trial (the simulation the
+    model learned from: the scene's cup and bowl) with trial seeds ``0 .. seeds - 1``."""
+    from ltamp_cli.backends.pybullet.backend import Kitchen3DBackend
+    from ltamp_cli.backends.pybullet.tamp.scene import scene_from_world
+    from ltamp_cli.backends.pybullet.tamp.skill_paths import pour_context
+
+    spec = scene_from_world(problem.world)
+    backend = Kitchen3DBackend()
+    out = []
+    try:
+        for step in result.plan or ():
+            if step.name != "pour":
+                continue
+            cup, bowl = (str(a).lower() for a in (step.args[0], step.args[2]))
+            context = pour_context(spec.objects[cup], spec.objects[bowl])
+            control = np.asarray(step.values[6], dtype=float)
+            for trial_seed in range(seeds):
+                c0 = time.process_time()
+                trial = backend.run_trial("pour", context, control, trial_seed)
+                out.append({"context": context.tolist(), "control": control.tolist(),
+                            "seed": trial_seed, "score": float(trial.score),
+                            "valid": bool(trial.valid), "cpu_s": time.process_time() - c0,
+                            "info": {k: v for k, v in trial.info.items()
+                                     if isinstance(v, (int, float, str))}})
+    finally:
+        backend.close()
+    return out
+
+
+def run(seed: int, fingers: str, max_time: float, every: int, pour_seeds: int = 0,
+        execute: bool = True) -> dict[str, Any]:
     """Plan and execute; the push's record (see the module docstring)."""
     from ltamp_cli.backends.pybullet import executor as ex
     from ltamp_cli.planner.algorithms.common import PlannerConfig
@@ -46,6 +79,10 @@ def run(seed: int, fingers: str, max_time: float, every: int) -> dict[str, Any]:
                               "plan_cpu_s": time.process_time() - c0,
                               "actions": [s.name for s in result.plan or ()], "steps": []}
     if not result.solved:
+        return record
+    if pour_seeds:
+        record["pour_trials"] = pour_trials(problem, result, pour_seeds)
+    if not execute:
         return record
 
     class Run(ex.Kitchen3DRun):
@@ -149,12 +186,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--fingers", choices=("auto", "closed", "open"), default="auto")
     parser.add_argument("--max-time", type=float, default=600.0)
     parser.add_argument("--every", type=int, default=100, help="trajectory stride (steps)")
+    parser.add_argument("--pour-trials", type=int, default=0,
+                        help="also run the plan's pour control as its skill trial, N seeds")
+    parser.add_argument("--no-execute", action="store_true", help="plan (and pour trials) only")
     parser.add_argument("--out", type=Path, required=True)
     args = parser.parse_args(argv)
     if args.max_time <= 0 or args.every <= 0 or args.seed < 0:
         print("error: --max-time and --every must be positive, --seed >= 0", file=sys.stderr)
         return 2
-    record = run(args.seed, args.fingers, args.max_time, args.every)
+    record = run(args.seed, args.fingers, args.max_time, args.every, args.pour_trials,
+                 not args.no_execute)
     print(json.dumps({k: v for k, v in record.items()
                       if k not in ("trajectory", "planned_hand", "log")}, indent=1))
     args.out.parent.mkdir(parents=True, exist_ok=True)
