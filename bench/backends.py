@@ -128,15 +128,16 @@ def stepping_rate(name: str, beads: int, steps: int) -> float:
 
 def _execution_row(report: object, cpu_s: float, wall_s: float) -> dict:
     """What one execution's report says: the times, verdicts, the step that failed (if any)
-    and why, every goal fact with its measurements, and the bead counts each pour, scoop,
-    dump and stir left behind."""
+    and why, every goal fact with its measurements, the bead counts each pour, scoop,
+    dump and stir left behind, and where each push left its object (and its finger gap)."""
     details = report.details  # type: ignore[attr-defined]
     goal = details.get("goal") or []
     failed = [step for step in details.get("steps", []) if not step["ok"]]
     beads = [{k: v for k, v in entry.items() if k in (
-        "action", "counts", "spoonful", "left_in_spoon", "stirred", "counts_after")}
+        "action", "counts", "spoonful", "left_in_spoon", "stirred", "counts_after",
+        "start_xy", "rest_xy", "error_m", "finger_gap_m")}
         for entry in details.get("log", [])
-        if entry.get("action") in ("pour", "scoop", "dump", "stir")]
+        if entry.get("action") in ("pour", "scoop", "dump", "stir", "push")]
     return {
         "wall_s": wall_s,
         "cpu_s": cpu_s,

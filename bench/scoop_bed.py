@@ -33,6 +33,7 @@ import math
 import platform
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -55,6 +56,15 @@ OLD_BED = ScoopSettings(min_bed_depth_m=0.0, max_fill_fraction=1.0)
 NEW_BED = ScoopSettings()
 #: Bowls with a base at least this wide (m) are reported separately ("wide").
 WIDE_BASE_M = 0.15
+
+
+@dataclass(frozen=True)
+class TrialCopy:
+    """A logged trial's outcome, standing for a re-run of the same seed."""
+
+    valid: bool
+    score: float
+    info: dict[str, Any]
 
 
 def wilson(successes: int, n: int, z: float = 1.96) -> list[float]:
@@ -190,31 +200,109 @@ def run_compare(args: argparse.Namespace) -> dict[str, Any]:
             "label_changes": sum(p["old"] != p["new"] for p in both), "paired": len(both)}
 
 
+def theta_star_cases(paths: list[Path]) -> list[tuple[np.ndarray, np.ndarray, int, dict]]:
+    """θ*'s (context, control, trial seed, evaluated row) per context of ``ltamp evaluate``
+    JSONL logs (``bench/kitchen3d_models.py --log`` / ``bench/evaluate_shard.py``, seed 0):
+    rows come in (θ*, random) pairs per context; a row names its context by ``index`` (the
+    shards) or, lacking it, by ``seed`` (``kitchen3d_models.py``); the trial seed of
+    ``ltamp evaluate --seed 0`` is the context's index. A context logged twice keeps its
+    first row."""
+    cases: dict[int, tuple[np.ndarray, np.ndarray, int, dict]] = {}
+    for path in paths:
+        seen: set[int] = set()
+        for row in read_log(path):
+            index = int(row["index"] if "index" in row else row["seed"])
+            kind = row.get("kind") or ("random" if index in seen else "theta_star")
+            seen.add(index)
+            if kind == "theta_star" and index not in cases:
+                cases[index] = (np.asarray(row["context"]), np.asarray(row["control"]), index,
+                                row)
+    return [cases[i] for i in sorted(cases)]
+
+
+def _flip_summary(by_control: dict[int, list[dict[str, Any]]], seeds: int) -> dict[str, Any]:
+    """Per control its labels over ``seeds`` trial seeds: how many controls have both labels
+    (Wilson 95 %), the chance two seeds of one control disagree (bootstrap over controls),
+    and the mean per-control success rate (what one live trial per context measures on
+    average; bootstrap over controls)."""
+    full = {i: rows for i, rows in by_control.items() if len(rows) >= seeds}
+    labels = {i: [r["success"] for r in rows[:seeds]] for i, rows in full.items()}
+    mixed = sum(0 < sum(s) < len(s) for s in labels.values())
+    rates = np.array([np.mean(s) for s in labels.values()]) if labels else np.zeros(0)
+    # P(two different seeds of one control disagree) = 2 p (1 - p) n / (n - 1) per control.
+    flips = np.array([2 * r * (1 - r) * seeds / (seeds - 1) for r in rates]) if seeds > 1 \
+        else np.zeros(0)
+    rng = np.random.default_rng(0)
+
+    def boot(values: np.ndarray) -> list[float] | None:
+        if values.size == 0:
+            return None
+        means = [float(np.mean(rng.choice(values, values.size))) for _ in range(4000)]
+        return [float(np.percentile(means, 2.5)), float(np.percentile(means, 97.5))]
+
+    first = [s[0] for s in labels.values()]
+    return {
+        "controls": len(full), "seeds": seeds,
+        "successes_per_control": {str(i): int(sum(s)) for i, s in sorted(labels.items())},
+        "scores_per_control": {str(i): [round(r["score"], 3) for r in full[i][:seeds]]
+                               for i in sorted(full)},
+        "mixed_controls": mixed, "mixed_wilson95": wilson(mixed, len(full)),
+        "pair_flip_rate": float(np.mean(flips)) if flips.size else None,
+        "pair_flip_bootstrap95": boot(flips),
+        "first_seed_successes": int(sum(first)),
+        "first_seed_wilson95": wilson(int(sum(first)), len(first)),
+        "mean_success_rate": float(np.mean(rates)) if rates.size else None,
+        "mean_success_rate_bootstrap95": boot(rates),
+        "trials": int(sum(len(s) for s in labels.values())),
+        "trial_successes": int(sum(sum(s) for s in labels.values())),
+        "trial_wilson95": wilson(int(sum(sum(s) for s in labels.values())),
+                                 int(sum(len(s) for s in labels.values()))),
+        "cpu_s_median": float(np.median([r["cpu_s"] for rows in full.values()
+                                         for r in rows[:seeds] if not r.get("copied")]))
+        if full else None,
+    }
+
+
 def run_noise(args: argparse.Namespace) -> dict[str, Any]:
+    """Each control with ``--seeds`` trial seeds (``base + 7919 k``, k = 0 the evaluation's
+    own seed). ``--theta-star``: the controls are θ* of ``ltamp evaluate``'s logs, whose
+    k = 0 trial is copied from the log (same seed, same beads: the same simulation) instead
+    of re-run; otherwise ``ltamp evaluate``'s random valid baseline controls."""
     backend = Kitchen3DBackend(scoop_settings=NEW_BED)
-    done = {(r["index"], r["seed"]) for r in read_log(args.log) if r["kind"] == "noise"}
-    cases = [c for c in sample_cases(args.contexts, args.seed, backend) if c[1] is not None]
+    kind = "noise_theta_star" if args.theta_star else "noise"
+    done = {(r["index"], r["seed"]) for r in read_log(args.log) if r["kind"] == kind}
+    if args.theta_star:
+        cases = theta_star_cases(args.theta_star)
+    else:
+        cases = [(c, u, s, None) for c, u, s in sample_cases(args.contexts, args.seed, backend)
+                 if u is not None]
     with args.log.open("a") as log:
-        for index, (context, control, base_seed) in enumerate(cases[: args.controls]):
+        for position, (context, control, base_seed, logged) in enumerate(cases[: args.controls]):
+            index = base_seed if args.theta_star else position
             for k in range(args.seeds):
                 seed = base_seed + 7919 * k
                 if (index, seed) in done:
                     continue
-                result, cpu = timed_trial(backend, context, control, seed)
-                row = record("noise", index, "new", context, control, seed, result, cpu,
-                             NEW_BED)
+                if k == 0 and logged is not None:
+                    result = TrialCopy(bool(logged["valid"]), float(logged["score"]), {})
+                    cpu = float(logged.get("cpu_s", 0.0))
+                else:
+                    result, cpu = timed_trial(backend, context, control, seed)
+                row = record(kind, index, "new", context, control, seed, result, cpu, NEW_BED)
+                if k == 0 and logged is not None:
+                    row["copied"] = True
                 log.write(json.dumps(row) + "\n")
                 log.flush()
-                print(f"noise {index:3d} seed {k} score {row['score']:+.2f}", flush=True)
-    rows = [r for r in read_log(args.log) if r["kind"] == "noise"]
-    by_control: dict[int, list[bool]] = {}
-    for r in rows:
-        by_control.setdefault(r["index"], []).append(r["success"])
-    full = {i: s for i, s in by_control.items() if len(s) == args.seeds}
-    mixed = sum(0 < sum(s) < len(s) for s in full.values())
-    return {"mode": "noise", "controls": len(full), "seeds": args.seeds,
-            "successes_per_control": {str(i): sum(s) for i, s in sorted(full.items())},
-            "mixed_controls": mixed, "mixed_wilson95": wilson(mixed, len(full))}
+                print(f"{kind} {index:3d} seed {k} score {row['score']:+.2f} cpu {cpu:.1f}s",
+                      flush=True)
+    rows = [r for r in read_log(args.log) if r["kind"] == kind]
+    by_control: dict[int, list[dict[str, Any]]] = {}
+    for r in sorted(rows, key=lambda r: (r["index"], (r["seed"] - r["index"]) // 7919
+                                         if args.theta_star else r["seed"])):
+        by_control.setdefault(r["index"], []).append(r)
+    return {"mode": "noise", "controls_from": "theta_star" if args.theta_star else "random",
+            "sources": [str(p) for p in args.theta_star or []],
+            **_flip_summary(by_control, args.seeds)}
 
 
 def run_relabel(args: argparse.Namespace) -> dict[str, Any]:
@@ -290,6 +378,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--verify", type=int, default=3)
     parser.add_argument("--reverse", action="store_true",
                         help="relabel from the pool's end (a second process; merge by index)")
+    parser.add_argument("--theta-star", type=Path, nargs="+", default=None,
+                        help="noise: θ* controls from these ltamp evaluate JSONL logs")
     parser.add_argument("--log", type=Path)
     parser.add_argument("--out", type=Path)
     args = parser.parse_args(argv)

@@ -84,7 +84,11 @@ from ltamp_cli.backends.pybullet.skills.stir import TipTracker
 from ltamp_cli.backends.pybullet.tamp.grasping import object_grasps
 from ltamp_cli.backends.pybullet.tamp.planning import pose_of
 from ltamp_cli.backends.pybullet.tamp.scene import SceneSpec, scene_from_world
-from ltamp_cli.backends.pybullet.tamp.skill_paths import STIR_SPEED_M_S
+from ltamp_cli.backends.pybullet.tamp.skill_paths import (
+    STIR_SPEED_M_S,
+    fingers_across,
+    push_finger_gap,
+)
 from ltamp_cli.backends.pybullet.tamp.values import ArmPath
 from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig
 from ltamp_cli.backends.skills3d.pour import POUR_SPEED_M_S, PourSettings
@@ -661,12 +665,27 @@ class Kitchen3DRun:
         self.stirs.setdefault(cup, []).append(record)
         self.log.append(record)
 
+    def push_finger_gap(self, arm_index: int, name: str, goal: tuple[float, float]) -> float:
+        """The finger gap (m) the push path of arm ``arm_index`` was planned for
+        (:func:`~.tamp.skill_paths.push_finger_gap`): the fingers, opened, lie across the
+        line from ``name`` to ``goal`` or along it (measured at the arm's configuration)."""
+        arm = self.scene.arms[arm_index]
+        arm.open_gripper()
+        tips = [np.asarray(p.getLinkState(arm.body_id, link, computeForwardKinematics=True,
+                                          physicsClientId=arm.client_id)[4])
+                for link in PANDA_FINGER_JOINTS]
+        direction = np.subtract(goal, self.object_xy(name))
+        return push_finger_gap(self.spec.objects[name], fingers_across(tips[1] - tips[0],
+                                                                       direction))
+
     def push(self, name: str, goal: tuple[float, float], path: ArmPath) -> None:
-        """Close the empty hand and follow the push path (forward only); ``name`` must come
-        to rest within :data:`PUSH_TOLERANCE_M` of ``goal``."""
+        """Set the empty hand's fingers (open across the line for a round object, else
+        closed: :meth:`push_finger_gap`) and follow the push path (forward only); ``name``
+        must come to rest within :data:`PUSH_TOLERANCE_M` of ``goal``."""
         if path.arm in self.held:
             raise ActionFailed(f"push {name}: arm {path.arm} is holding something")
-        self.scene.arms[path.arm].set_finger_opening(0.0)
+        gap = self.push_finger_gap(path.arm, name, goal)
+        self.scene.arms[path.arm].set_finger_opening(gap)
         start = self.object_xy(name)
         with self.world.contact_breaking(PUSH_CONTACT_BREAKING_M):
             self.follow(path.arm, path.configurations, self.settings.push_speed, drive=True)
@@ -674,7 +693,7 @@ class Kitchen3DRun:
         rest = self.object_xy(name)
         error = float(np.hypot(rest[0] - goal[0], rest[1] - goal[1]))
         self.log.append({"action": "push", "object": name, "start_xy": start, "rest_xy": rest,
-                         "error_m": error})
+                         "error_m": error, "finger_gap_m": gap})
         if error > PUSH_TOLERANCE_M:
             raise ActionFailed(f"push {name}: came to rest {error:.3f} m from its target")
 

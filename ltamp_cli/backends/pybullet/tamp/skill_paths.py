@@ -50,6 +50,17 @@ PUSH_GAP_M = 0.03
 PUSH_LIFT_M = 0.1
 #: Half the closed fingers' thickness along the push direction (m).
 FINGER_HALF_M = 0.012
+#: Gap (m) between the fingers pushing a round object (cup, bowl) with the fingers across
+#: the push line: the Panda's full opening, so the two fingers touch the wall ~4 cm either
+#: side of the line. Closed, they touch it at one point, and a round object pushed at one
+#: point is unstable: the smallest offset turns and slides it off the line, and the error
+#: grows with the stroke (push_to_reach seed 1: the bowl came to rest 0.187 m from its
+#: target after a 0.66 m push, 0.12 m off the line, the closed fingers past its centre).
+#: Two contacts either side of the line push it back onto the line (the same push with the
+#: fingers open: 1 mm off the line, 0.013 m from the target).
+PUSH_FINGER_GAP_M = 0.08
+#: Pushed kinds that are round (revolved about their vertical axis).
+ROUND_KINDS = ("cup", "bowl")
 
 
 def pour_context(cup: ObjectSpec, bowl: ObjectSpec) -> np.ndarray:
@@ -130,16 +141,48 @@ def push_hand_height(obj: ObjectSpec) -> float:
     return max(PUSH_HEIGHT_M, obj.height - PUSH_BELOW_TOP_M + FINGERTIP_BELOW_M)
 
 
+def fingers_across(finger_axis: np.ndarray, direction: np.ndarray) -> bool:
+    """Is the line through the two fingers (``finger_axis``, world, (2,) or (3,)) closer to
+    across the push ``direction`` (world xy, (2,)) than along it (over 45°)?"""
+    axis = np.asarray(finger_axis, dtype=float)[:2]
+    d = np.asarray(direction, dtype=float)[:2]
+    norm = float(np.linalg.norm(axis) * np.linalg.norm(d))
+    return norm > 0.0 and abs(float(axis @ d)) / norm < math.sqrt(0.5)
+
+
+def push_finger_gap(obj: ObjectSpec, across: bool) -> float:
+    """Gap (m) between the fingers pushing ``obj``: :data:`PUSH_FINGER_GAP_M` for a round
+    object pushed with the fingers across the line, closed (0) otherwise (a flat face is
+    stable under one contact; fingers along the line would put the front one ahead)."""
+    return PUSH_FINGER_GAP_M if across and obj.kind in ROUND_KINDS else 0.0
+
+
+def push_contact_distance(obj: ObjectSpec, gap: float) -> float:
+    """Distance (m) along the push line from the hand (grasp target) to ``obj``'s centre
+    while the fingers, ``gap`` apart across the line, touch it: ``r + FINGER_HALF_M`` for
+    closed fingers (``r`` the footprint's half extent), ``sqrt(r² - (gap/2)²) +
+    FINGER_HALF_M`` for a round object touched by both open fingers' inner edges."""
+    r = float(obj.footprint()[0])
+    half = min(gap / 2.0, r) if obj.kind in ROUND_KINDS else 0.0
+    return math.sqrt(r * r - half * half) + FINGER_HALF_M
+
+
 def push_hand_poses(obj: ObjectSpec, start: XY, goal: XY, table_z: float, hand_yaw: float
                     ) -> list[Pose]:
-    """World poses of the gripper (palm down, closed fingers) pushing ``obj`` in a straight
-    line from ``start`` to ``goal``: above the point behind it, down, along the line until the
+    """World poses of the gripper (palm down) pushing ``obj`` in a straight line from
+    ``start`` to ``goal``: above the point behind it, down, along the line until the
     object's centre reaches ``goal``, back off by ``PUSH_GAP_M`` and up (away from the
     object, so the hand does not hover over it). ``hand_yaw`` turns the hand about the
-    vertical."""
+    vertical: at the line's heading the fingers (along the hand's ``y``) lie across the
+    line, and a round object is pushed with them :func:`push_finger_gap` apart (the
+    executor opens them the same way); otherwise they are closed."""
     s, g = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
     direction = (g - s) / max(float(np.linalg.norm(g - s)), 1e-9)
-    behind = float(obj.footprint()[0]) + FINGER_HALF_M
+    across = fingers_across(np.array([-math.sin(hand_yaw), math.cos(hand_yaw)]), direction)
+    behind = push_contact_distance(obj, push_finger_gap(obj, across))
+    # The approach starts clear of the whole footprint (as for closed fingers) whatever the
+    # gap: open fingers then meet the wall a little later, which nothing depends on.
+    clear = push_contact_distance(obj, 0.0)
     down = Pose.from_euler(np.zeros(3), roll=math.pi, yaw=0.0)
     turn = Pose.from_euler(np.zeros(3), yaw=hand_yaw)
     z = table_z + push_hand_height(obj)
@@ -147,7 +190,7 @@ def push_hand_poses(obj: ObjectSpec, start: XY, goal: XY, table_z: float, hand_y
     def at(xy: np.ndarray, height: float) -> Pose:
         return Pose(np.array([xy[0], xy[1], height])) @ turn @ down
 
-    first = s - direction * (behind + PUSH_GAP_M)
+    first = s - direction * (clear + PUSH_GAP_M)
     last = g - direction * behind
     back = last - direction * PUSH_GAP_M
     return [at(first, z + PUSH_LIFT_M), at(first, z), at(last, z), at(back, z),
