@@ -45,6 +45,7 @@ from typing import Any
 
 import numpy as np
 
+from bench.lse2 import _seeds, _wilson
 from bench.paper.al2d import SIZES as AL2D_SIZES
 from bench.paper.common import live_score
 from ltamp_cli.backends import load_backend
@@ -197,22 +198,6 @@ def _read_log(path: Path) -> dict[tuple[str, int], dict[str, Any]]:
                 job = json.loads(line)
                 jobs[(job.get("skill", SKILL) + "/" + job["variant"], int(job["seed"]))] = job
     return jobs
-
-
-def _seeds(text: str) -> list[int]:
-    if "-" in text:
-        low, high = text.split("-", 1)
-        return list(range(int(low), int(high) + 1))
-    return [int(v) for v in text.split(",")]
-
-
-def _wilson(k: int, n: int) -> list[float]:
-    from scipy.stats import binomtest
-
-    if n == 0:
-        return [0.0, 1.0]
-    ci = binomtest(k, n).proportion_ci(confidence_level=0.95, method="wilson")
-    return [round(float(ci.low), 3), round(float(ci.high), 3)]
 
 
 def report(log: Path, out: Path) -> dict[str, Any]:
