@@ -364,8 +364,11 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                     capped_task = grounding_signature(discrete.grounding)
                 elif not discrete.capped:
                     capped_task = None
-                action_costs = action_costs or any(
-                    action.cost or action.cost_terms for action in discrete.grounding.actions)
+                # Both asked once per task: costs with a nonzero value (partial guesses)
+                # and costs of any kind, even a function valued 0 (the sampling share).
+                task_costs = any(action.cost for action in discrete.grounding.actions)
+                action_costs = action_costs or task_costs or any(
+                    action.cost_terms for action in discrete.grounding.actions)
                 if not discrete.skipped and (discrete.outcome is None
                                              or not discrete.outcome.guessed):
                     # A followed guess did no search work: keep the previous sampling share.
@@ -399,8 +402,7 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                                    if key in evaluation.outputs},
                             tuple(str(a) for a in discrete.actions or []), contexts,
                             steps=tuple((a.name, a.args) for a in discrete.actions or []),
-                            action_costs=any(action.cost for action
-                                             in discrete.grounding.actions))))
+                            action_costs=task_costs)))
                     elif stalled:
                         # Nothing new to try at this bound: allow more retries and
                         # more complex optimistic values.
