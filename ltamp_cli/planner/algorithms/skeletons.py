@@ -38,8 +38,8 @@ from ltamp_cli.planner.algorithms.optimistic import (
     Placeholders,
     bind_context,
     bindable_stream_plan,
+    contextual_stream_plan,
     evaluate_eager,
-    fluent_contexts,
     optimistic_evaluation,
     repairable,
     report_unusable,
@@ -132,6 +132,24 @@ class Skeleton:
     producers: dict[str, InstanceKey] = field(default_factory=dict, compare=False)
     # Whether actions of the task it was found in have costs (see partial_guess's use).
     action_costs: bool = field(default=False, compare=False)
+    # Per stream plan position, when given (a :fluents instance used in several states has
+    # an entry per state, see ContextualStreamPlan): the placeholders its output binds and
+    # the context it is called in; else looked up by instance in ``placeholders`` and
+    # ``contexts``.
+    entry_outputs: tuple[tuple[str, ...], ...] = ()
+    entry_contexts: tuple[tuple[Fact, ...], ...] = ()
+
+    def outputs_at(self, position: int) -> tuple[str, ...]:
+        """The placeholders bound by the output of stream plan entry ``position``."""
+        if self.entry_outputs:
+            return self.entry_outputs[position]
+        return self.placeholders.get(self.stream_plan[position], ())
+
+    def context_at(self, position: int) -> tuple[Fact, ...]:
+        """The state facts (with placeholders) entry ``position`` is called under."""
+        if self.entry_contexts:
+            return self.entry_contexts[position]
+        return self.contexts.get(self.stream_plan[position], ())
 
     def learn_nogood(self, step: int, mapping: dict[str, str]) -> None:
         """Record that the test at ``step`` failed with the placeholders bound by
@@ -146,6 +164,8 @@ class Skeleton:
         if not producer:
             producer.update((placeholder, key) for key, outputs in self.placeholders.items()
                             for placeholder in outputs)
+            producer.update((placeholder, key) for position, key in enumerate(self.stream_plan)
+                            for placeholder in self.outputs_at(position))
         relevant: set[str] = set()
         pending = [x for x in self.stream_plan[step][1] if x in producer]
         while pending:
@@ -221,7 +241,7 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
     real_inputs = tuple(binding.mapping.get(x, x) for x in inputs)
     if any(x.startswith("#") for x in real_inputs):
         return []
-    context = bind_context(binding.skeleton.contexts.get((name, inputs), ()), binding.mapping)
+    context = bind_context(binding.skeleton.context_at(binding.step), binding.mapping)
     if context is None:
         return []
     instance = state.instance(name, real_inputs, context)
@@ -244,7 +264,7 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
     if binding.output_index < len(instance.results):
         binding.skeleton.tried.add(key)
         output = instance.results[binding.output_index]
-        placeholders = binding.skeleton.placeholders.get((name, inputs), ())
+        placeholders = binding.skeleton.outputs_at(binding.step)
         mapping = {**binding.mapping, **dict(zip(placeholders, output, strict=True))}
         made_by = {**binding.made_by, **{o: (instance, output) for o in output}}
         child = Binding(binding.skeleton, binding.step + 1, mapping, made_by, 0,
@@ -393,16 +413,16 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                     if not plan:
                         return state.result(SOLVED, discrete, facts | terms)
                     state.remember_skeleton([str(a) for a in discrete.actions or []])
-                    contexts = fluent_contexts(state, evaluation, discrete)
-                    signature = (plan, tuple(sorted(contexts.items())))
+                    entries = contextual_stream_plan(state, evaluation, plan, discrete)
+                    signature = (entries.entries, entries.outputs, entries.contexts)
                     if signature not in seen_skeletons:
                         seen_skeletons.add(signature)
                         queue.push(Binding(Skeleton(
-                            plan, {key: evaluation.outputs[key] for key in plan
-                                   if key in evaluation.outputs},
-                            tuple(str(a) for a in discrete.actions or []), contexts,
-                            steps=tuple((a.name, a.args) for a in discrete.actions or []),
-                            action_costs=task_costs)))
+                            entries.entries, {},
+                            tuple(str(a) for a in discrete.actions or []),
+                            steps=entries.steps, action_costs=task_costs,
+                            entry_outputs=entries.outputs,
+                            entry_contexts=entries.contexts)))
                     elif stalled:
                         # Nothing new to try at this bound: allow more retries and
                         # more complex optimistic values.
@@ -452,8 +472,9 @@ def partial_guess(state: PlannerState, binding: Binding, evaluation: OptimisticE
     output feeds the later instances."""
     skeleton = binding.skeleton
     mapping = dict(binding.mapping)
-    for name, inputs in skeleton.stream_plan[binding.step:]:
-        old = skeleton.placeholders.get((name, inputs), ())
+    for position in range(binding.step, len(skeleton.stream_plan)):
+        name, inputs = skeleton.stream_plan[position]
+        old = skeleton.outputs_at(position)
         if not old or all(x in mapping for x in old):
             continue
         key = (name, tuple(mapping.get(x, x) for x in inputs))
