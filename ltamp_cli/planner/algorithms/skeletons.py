@@ -17,7 +17,8 @@ cheap generator of the later one for its next value at once (local repair, see
   then searches again if sampling taught it new facts and a binding step failed. Such a
   speculative search is bounded and changes no bound; a full search that finds nothing new
   raises the retry and complexity bounds. Bindings whose next stream is cheap may be retried
-  more often (plain samplers need several samples where a search costs far more). When a
+  more often (plain samplers need several samples where a search costs far more), unless
+  their skeleton's last failure was a ``:fluents`` stream's (:class:`RetryPolicy`). When a
   full search's share is its floor of one step and searches have found two skeletons or
   more, the bindings within the retry bound are processed first, as ``binding`` does,
   while the streams' CPU time stays below the searches' (see :data:`SEARCH_SAMPLE_RATIO`).
