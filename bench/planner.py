@@ -46,8 +46,9 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
+from ltamp_cli.errors import InputError
 from ltamp_cli.planner.algorithms.common import ALGORITHMS, PlannerConfig
-from ltamp_cli.planner.api import solve
+from ltamp_cli.planner.api import refuse_unsupported, solve
 from ltamp_cli.planner.problem import load_problem
 from ltamp_cli.planner.validate import validate_plan
 from ltamp_cli.threads import use_one_thread
@@ -334,6 +335,9 @@ def main(argv: list[str] | None = None) -> int:
     reference_before = machine_reference_s()
     runs: list[dict[str, Any]] = []
     summary: list[dict[str, Any]] = []
+    # (example, algorithm, reason): pairs the planner refuses in one line (incremental and
+    # a :fluents stream, e.g. kitchen_fluent in the uniform suite), reported, not run.
+    refused: list[dict[str, str]] = []
     progress = tqdm(total=len(names) * len(algorithms) * len(histories) * args.seeds,
                     file=sys.stderr, desc="planner", disable=not sys.stderr.isatty())
     for name in names:
@@ -347,6 +351,14 @@ def main(argv: list[str] | None = None) -> int:
                     run_one(problem, "adaptive", WARM_UP_SEED, args.max_time, statistics_dir,
                             overrides=overrides)
                 for algorithm in algorithms:
+                    try:
+                        refuse_unsupported(problem, algorithm)
+                    except InputError as error:
+                        if history == histories[0]:
+                            refused.append({"example": name, "algorithm": algorithm,
+                                            "reason": str(error)})
+                        progress.update(args.seeds)
+                        continue
                     rows = []
                     for seed in range(args.seeds):
                         progress.set_postfix_str(f"{name} {algorithm} {history} seed {seed}")
@@ -377,6 +389,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"INVALID PLAN: {row['example']} / {row['algorithm']} / seed {row['seed']}: "
               f"{'; '.join(row['errors'])}")
 
+    for entry in refused:
+        print(f"REFUSED: {entry['example']} / {entry['algorithm']}: {entry['reason']}")
     late = overruns(runs, args.max_time)
     for row in late:
         print(f"OVERRUN: {row['example']} / {row['algorithm']} / seed {row['seed']}: "
@@ -391,7 +405,7 @@ def main(argv: list[str] | None = None) -> int:
         "benchmark": "planner", "seeds": args.seeds, "repeats": args.repeats,
         "max_time_s": args.max_time, "suite": args.suite, "overruns": len(late),
         "planner_overrides": overrides, "machine_reference": reference, "summary": summary,
-        "targets": checks, "runs": runs,
+        "targets": checks, "refused": refused, "runs": runs,
     }, indent=2) + "\n")
     print(f"\nwrote {args.out}")
     return 0

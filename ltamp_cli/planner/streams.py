@@ -278,9 +278,14 @@ class StreamInstance:
     def is_test(self) -> bool:
         return not isinstance(self.external, Stream) or self.external.is_test
 
-    def call(self, objects: ObjectTable, stats: StreamStats) -> list[tuple[str, ...]]:
-        """Call once more; returns the *new* output tuples (object names)."""
+    def call(self, objects: ObjectTable, stats: StreamStats,
+             cpu_clock: Callable[[], float] | None = None) -> list[tuple[str, ...]]:
+        """Call once more; returns the *new* output tuples (object names). ``cpu_clock``
+        (seconds) times the call's CPU for ``stats.cpu_s`` (default: this thread's CPU
+        clock, ``time.thread_time``)."""
         import time
+
+        clock = time.thread_time if cpu_clock is None else cpu_clock
 
         if self.exhausted:
             return []
@@ -290,7 +295,7 @@ class StreamInstance:
         timed = (stats.cpu_timed_calls < CPU_TIMED_FIRST_CALLS
                  or stats.calls % CPU_TIMING_STRIDE == 0)
         start = time.perf_counter()
-        cpu_start = time.thread_time() if timed else 0.0
+        cpu_start = clock() if timed else 0.0
         self.num_calls += 1
         stats.calls += 1
         try:
@@ -298,7 +303,7 @@ class StreamInstance:
         finally:
             stats.time_s += time.perf_counter() - start
             if timed:
-                stats.cpu_s += time.thread_time() - cpu_start
+                stats.cpu_s += clock() - cpu_start
                 stats.cpu_timed_calls += 1
             else:  # counted at the mean of the calls so far
                 stats.cpu_s += stats.cpu_s / (stats.calls - 1)

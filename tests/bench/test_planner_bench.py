@@ -66,3 +66,21 @@ def test_uniform_suite_reports_targets_overruns_and_a_scaling_plot(tmp_path: Pat
     # The full suite: 2 layouts x 4 sizes and the fluent kitchen, each a shipped problem.
     names = planner.uniform_examples()
     assert len(names) == 9 and all((planner.EXAMPLES / f"{n}.yaml").exists() for n in names)
+
+
+def test_a_refused_algorithm_is_reported_not_run(tmp_path: Path,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    """kitchen_fluent has a :fluents stream, which incremental refuses: the suite goes on
+    (it used to stop with the refusal's traceback, losing every other run)."""
+    out = tmp_path / "planner.json"
+    planner.main(["--examples", "kitchen_fluent,blocksworld", "--seeds", "1",
+                  "--algorithms", "incremental", "--histories", "cold,warm", "--repeats", "1",
+                  "--out", str(out)])
+    report = json.loads(out.read_text())
+    assert [(r["example"], r["algorithm"]) for r in report["refused"]] == [
+        ("kitchen_fluent", "incremental")]
+    assert ":fluents" in report["refused"][0]["reason"]
+    # refused once, not once per history; blocksworld ran cold and warm
+    assert [(r["example"], r["history"]) for r in report["runs"]] == [
+        ("blocksworld", "cold"), ("blocksworld", "warm")]
+    assert "REFUSED: kitchen_fluent / incremental" in capsys.readouterr().out

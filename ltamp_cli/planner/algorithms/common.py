@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import functools
 import time
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -82,6 +82,11 @@ class PlannerConfig:
     so is every other stream observed to be cheap; worth it
     for cheap finite samplers (discrete slots), not for continuous samplers that feed
     quadratic eager streams such as motions between all configurations.
+    ``stream_cpu_clock``: the clock (CPU seconds) that times stream calls for the decision
+    whether a stream is cheap enough to be eager (``None``: the solving thread's CPU clock).
+    A call's measured CPU time varies with the machine (a garbage collection or cache
+    misses under load can push a 20 us call past the threshold and change the searches), so
+    tests that depend on the decision inject a deterministic clock.
     ``incremental_grounding``: ground the solve's successive search tasks with one
     :class:`.GroundingCache` (same tasks, plans and searches; the joins are not redone).
     It pays when the searches reuse most of what they ground: kitchen_fluent's 8-15
@@ -103,6 +108,7 @@ class PlannerConfig:
     eager_cheap_streams: bool = False
     threads: int | None = 1  # thread-pool limit while solving (ltamp_cli.threads)
     incremental_grounding: bool = False
+    stream_cpu_clock: Callable[[], float] | None = None
 
 
 def external_domain(external: External) -> tuple[Atom, ...]:
@@ -385,7 +391,7 @@ class PlannerState:
         stats = self.stream_stats.setdefault(instance.name, StreamStats())
         self.tracker.running = RunningCall(instance.name, instance.inputs, start)
         try:
-            outputs = instance.call(self.objects, stats)
+            outputs = instance.call(self.objects, stats, self.config.stream_cpu_clock)
         except (InputError, KeyboardInterrupt):
             raise
         except BaseException as error:  # user code, even SystemExit: reported on one line

@@ -12,13 +12,12 @@ from __future__ import annotations
 from ltamp_cli.planner.algorithms.common import PlannerState, bound_plan
 from ltamp_cli.planner.algorithms.optimistic import (
     MAX_LOCAL_REPAIRS,
-    InstanceKey,
-    OptimisticEvaluation,
+    ContextualStreamPlan,
     Placeholders,
     bind_context,
     bindable_stream_plan,
+    contextual_stream_plan,
     evaluate_eager,
-    fluent_contexts,
     optimistic_evaluation,
     repairable,
     report_unusable,
@@ -28,7 +27,6 @@ from ltamp_cli.planner.algorithms.optimistic import (
 from ltamp_cli.planner.algorithms.preimage import plan_preimage
 from ltamp_cli.planner.pddl.syntax import StreamFunction
 from ltamp_cli.planner.result import INFEASIBLE, SOLVED, TIMEOUT, PlanResult
-from ltamp_cli.planner.search.ground import Fact
 from ltamp_cli.planner.search.solve import grounding_signature
 from ltamp_cli.planner.streams import StreamInstance
 
@@ -37,12 +35,11 @@ from ltamp_cli.planner.streams import StreamInstance
 REAL_SEARCH_EXPANSIONS = 500
 
 
-def process_stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
-                        plan: list[InstanceKey],
-                        contexts: dict[InstanceKey, tuple[Fact, ...]] | None = None,
+def process_stream_plan(state: PlannerState, entries: ContextualStreamPlan,
                         binding: dict[str, str] | None = None) -> bool:
-    """Call the stream plan in order; True when every instance succeeded. ``binding``
-    (filled in when given) maps placeholders to the values bound to them.
+    """Call the stream plan's entries in order (an entry per instance and state context);
+    True when every one succeeded. ``binding`` (filled in when given) maps placeholders to
+    the values bound to them.
 
     When an instance fails, every output this stream plan produced that the failed
     instance consumed is reported unusable to its stream (``Binding.on_unusable``).
@@ -55,6 +52,7 @@ def process_stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
                              dict[str, tuple[StreamInstance, tuple[str, ...]]]]] = {}
     repairs = 0
     position = 0
+    plan = entries.entries
     while position < len(plan):
         name, inputs = plan[position]
         if state.timed_out():
@@ -62,7 +60,7 @@ def process_stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
         real_inputs = tuple(binding.get(x, x) for x in inputs)
         if any(x.startswith("#") for x in real_inputs):
             return False
-        context = bind_context((contexts or {}).get((name, inputs), ()), binding)
+        context = bind_context(entries.contexts[position], binding)
         if context is None:
             return False
         instance = state.instance(name, real_inputs, context)
@@ -105,7 +103,7 @@ def process_stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
                 report_unusable(state, real_inputs, made_by)
                 return False
             output = outputs[0]
-        placeholders = evaluation.outputs.get((name, inputs), ())
+        placeholders = entries.outputs[position]
         binding.update(zip(placeholders, output, strict=True))
         for value in output:
             made_by[value] = (instance, output)
@@ -178,14 +176,13 @@ def solve_focused(state: PlannerState) -> PlanResult:
                 continue  # shared placeholders refined: search again
             if not plan:
                 return state.result(SOLVED, discrete, facts | terms)
-            contexts = fluent_contexts(state, evaluation, discrete)
+            entries = contextual_stream_plan(state, evaluation, plan, discrete)
             mapping: dict[str, str] = {}
-            if process_stream_plan(state, evaluation, plan, contexts, mapping):
+            if process_stream_plan(state, entries, mapping):
                 # The stream plan made the optimistic plan's facts real, so the bound
                 # optimistic plan is checked first and a plan over real facts is usually
                 # easy; bound the search so a miss does not get exhaustive.
-                guess = bound_plan([(a.name, a.args) for a in discrete.actions or []],
-                                   mapping)
+                guess = bound_plan(entries.steps, mapping)
                 real = state.search(state.facts.members, state.object_types,
                                     state.function_values, REAL_SEARCH_EXPANSIONS,
                                     guess=guess)

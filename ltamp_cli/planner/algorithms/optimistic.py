@@ -603,24 +603,98 @@ def _below_level(state: PlannerState, external: External, complexity: int
 
 
 
-def fluent_contexts(state: PlannerState, evaluation: OptimisticEvaluation,
-                    discrete: DiscreteResult) -> dict[InstanceKey, tuple[Fact, ...]]:
-    """For each optimistic instance of a ``:fluents`` stream the plan relies on, the state
-    facts (of its fluent predicates) just before the first action that uses its output."""
-    contexts: dict[InstanceKey, tuple[Fact, ...]] = {}
+@dataclass(frozen=True)
+class ContextualStreamPlan:
+    """A stream plan with one entry per (instance, state context) it is called in.
+
+    ``entries[i]``: the instance (stream name, inputs) called at position ``i``;
+    ``outputs[i]``: the placeholders its output binds (empty for tests); ``contexts[i]``:
+    the state facts (of its stream's ``:fluents`` predicates; may hold placeholders) it is
+    called under (empty without ``:fluents``); ``steps``: the optimistic plan (action name,
+    arguments), each step over the outputs of the entries called in its own state.
+
+    A ``:fluents`` instance that the plan uses at steps in different states gets one entry
+    per state (after the first, a copy with placeholders ``#x~n``, and copies of the
+    instances that consume its outputs), and the steps in that state take the copy's
+    outputs: one call per (instance, context), so each step's output is valid in its own
+    state. (With one call in the first state's context, a motion driven twice between the
+    same configurations, the world changed in between, made the bound plan fail and a
+    search over real facts run in vain.)"""
+
+    entries: tuple[InstanceKey, ...]
+    outputs: tuple[tuple[str, ...], ...]
+    contexts: tuple[tuple[Fact, ...], ...]
+    steps: tuple[tuple[str, tuple[str, ...]], ...]
+
+
+def fluent_uses(state: PlannerState, evaluation: OptimisticEvaluation,
+                discrete: DiscreteResult, plan: Iterable[InstanceKey]
+                ) -> dict[InstanceKey, dict[tuple[Fact, ...], list[int]]]:
+    """For each optimistic instance of a ``:fluents`` stream in ``plan`` that a step of the
+    optimistic plan relies on: each state context it is used in (the facts of its fluent
+    predicates just before the step, in order of first use) -> the steps (plan positions)."""
+    uses: dict[InstanceKey, dict[tuple[Fact, ...], list[int]]] = {}
     if discrete.actions is None or discrete.task is None or discrete.outcome is None:
-        return contexts
+        return uses
+    keys = set(plan)
     task = discrete.task
     for step, action in enumerate(discrete.actions):
         for fact in action.static_pre:
             key = evaluation.fact_producer.get(fact)
-            if key is None or key in contexts:
+            if key is None or key not in keys:
                 continue
             external = state.externals[key[0]]
             if isinstance(external, Stream) and external.fluents:
                 facts = (task.facts[i] for i in discrete.outcome.states[step])
-                contexts[key] = state.fluent_context(key[0], facts)
-    return contexts
+                steps = uses.setdefault(key, {}).setdefault(
+                    state.fluent_context(key[0], facts), [])
+                if not steps or steps[-1] != step:
+                    steps.append(step)
+    return uses
+
+
+def contextual_stream_plan(state: PlannerState, evaluation: OptimisticEvaluation,
+                           plan: Iterable[InstanceKey], discrete: DiscreteResult
+                           ) -> ContextualStreamPlan:
+    """``plan`` (from :func:`bindable_stream_plan`) with an entry per (instance, context)
+    (see :class:`ContextualStreamPlan`). A copy is placed after its original and after the
+    entries that produce its inputs and the placeholders of its context; a copy of an
+    instance that consumes a copied output gets fresh outputs too (e.g. a test of the
+    second trajectory)."""
+    plan = list(plan)
+    steps = [(a.name, tuple(a.args)) for a in discrete.actions or []]
+    uses = fluent_uses(state, evaluation, discrete, plan)
+    # Entries as [key, outputs, context]; the originals keep their identity for positions.
+    entries: list[list] = [[key, evaluation.outputs.get(key, ()),
+                            next(iter(uses[key]), ()) if key in uses else ()]
+                           for key in plan]
+    originals = list(entries)
+    copies = 0
+    for position, key in enumerate(plan):
+        for context, used_at in list(uses.get(key, {}).items())[1:]:
+            copies += 1
+            rename: dict[str, str] = {}
+            for later in originals[position:]:
+                later_key, later_outputs, later_context = later
+                if later is not originals[position] and not any(
+                        x in rename for x in later_key[1]):
+                    continue
+                new_outputs = tuple(f"{x}~{copies}" for x in later_outputs)
+                rename.update(zip(later_outputs, new_outputs, strict=True))
+                copy = [(later_key[0], tuple(rename.get(x, x) for x in later_key[1])),
+                        new_outputs,
+                        context if later is originals[position] else tuple(
+                            (f[0], *(rename.get(a, a) for a in f[1:]))
+                            for f in later_context)]
+                needs = set(copy[0][1]) | {a for f in copy[2] for a in f[1:]}
+                after = max([i for i, entry in enumerate(entries)
+                             if entry is later or not needs.isdisjoint(entry[1])])
+                entries.insert(after + 1, copy)
+            for step in used_at:
+                name, args = steps[step]
+                steps[step] = (name, tuple(rename.get(x, x) for x in args))
+    return ContextualStreamPlan(tuple(e[0] for e in entries), tuple(e[1] for e in entries),
+                                tuple(e[2] for e in entries), tuple(steps))
 
 
 def bind_context(context: tuple[Fact, ...], binding: dict[str, str]) -> tuple[Fact, ...] | None:

@@ -17,7 +17,8 @@ cheap generator of the later one for its next value at once (local repair, see
   then searches again if sampling taught it new facts and a binding step failed. Such a
   speculative search is bounded and changes no bound; a full search that finds nothing new
   raises the retry and complexity bounds. Bindings whose next stream is cheap may be retried
-  more often (plain samplers need several samples where a search costs far more). When a
+  more often (plain samplers need several samples where a search costs far more), unless
+  their skeleton's last failure was a ``:fluents`` stream's (:class:`RetryPolicy`). When a
   full search's share is its floor of one step and searches have found two skeletons or
   more, the bindings within the retry bound are processed first, as ``binding`` does,
   while the streams' CPU time stays below the searches' (see :data:`SEARCH_SAMPLE_RATIO`).
@@ -38,8 +39,8 @@ from ltamp_cli.planner.algorithms.optimistic import (
     Placeholders,
     bind_context,
     bindable_stream_plan,
+    contextual_stream_plan,
     evaluate_eager,
-    fluent_contexts,
     optimistic_evaluation,
     repairable,
     report_unusable,
@@ -114,6 +115,23 @@ SPECULATIVE_MIN_EXPANSIONS = 100
 MAX_SPECULATIVE_IN_A_ROW = 2
 
 
+@dataclass
+class RetryPolicy:
+    """Whether a skeleton's bindings may retry cheap generators more often (adaptive's
+    :data:`CHEAP_RETRY_FACTOR`): unless its last failure was that of a ``:fluents`` stream
+    (:func:`state_dependent`). The red-team rover (tests/planner/test_cheap_retries.py):
+    a route home from every sampled rock configuration fails while debris lies across the
+    way; each cheap retry drew one more configuration, i.e. one more optimistic plan
+    driving there directly, one more skeleton failing at once, and a search: 31 samples,
+    52 searches, ~4 s CPU, where binding (no bonus) takes 3 samples and 8 searches. A
+    rule on the failure's inputs instead (no bonus when it rejected fewer than two sampled
+    values, local repair's rule) made kitchen_fluent's plans longer (placements rejected
+    against the kettle's slot, which other slots fix): seeds 0-9, 104 -> 107 searches,
+    36 instead of 32 actions on 4 seeds (docs/results/planner/issue19.md)."""
+
+    cheap: bool = True
+
+
 @dataclass(frozen=True)
 class Skeleton:
     stream_plan: tuple[InstanceKey, ...]
@@ -132,6 +150,25 @@ class Skeleton:
     producers: dict[str, InstanceKey] = field(default_factory=dict, compare=False)
     # Whether actions of the task it was found in have costs (see partial_guess's use).
     action_costs: bool = field(default=False, compare=False)
+    # Per stream plan position, when given (a :fluents instance used in several states has
+    # an entry per state, see ContextualStreamPlan): the placeholders its output binds and
+    # the context it is called in; else looked up by instance in ``placeholders`` and
+    # ``contexts``.
+    entry_outputs: tuple[tuple[str, ...], ...] = ()
+    entry_contexts: tuple[tuple[Fact, ...], ...] = ()
+    retries: RetryPolicy = field(default_factory=RetryPolicy, compare=False)
+
+    def outputs_at(self, position: int) -> tuple[str, ...]:
+        """The placeholders bound by the output of stream plan entry ``position``."""
+        if self.entry_outputs:
+            return self.entry_outputs[position]
+        return self.placeholders.get(self.stream_plan[position], ())
+
+    def context_at(self, position: int) -> tuple[Fact, ...]:
+        """The state facts (with placeholders) entry ``position`` is called under."""
+        if self.entry_contexts:
+            return self.entry_contexts[position]
+        return self.contexts.get(self.stream_plan[position], ())
 
     def learn_nogood(self, step: int, mapping: dict[str, str]) -> None:
         """Record that the test at ``step`` failed with the placeholders bound by
@@ -146,6 +183,8 @@ class Skeleton:
         if not producer:
             producer.update((placeholder, key) for key, outputs in self.placeholders.items()
                             for placeholder in outputs)
+            producer.update((placeholder, key) for position, key in enumerate(self.stream_plan)
+                            for placeholder in self.outputs_at(position))
         relevant: set[str] = set()
         pending = [x for x in self.stream_plan[step][1] if x in producer]
         while pending:
@@ -221,7 +260,7 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
     real_inputs = tuple(binding.mapping.get(x, x) for x in inputs)
     if any(x.startswith("#") for x in real_inputs):
         return []
-    context = bind_context(binding.skeleton.contexts.get((name, inputs), ()), binding.mapping)
+    context = bind_context(binding.skeleton.context_at(binding.step), binding.mapping)
     if context is None:
         return []
     instance = state.instance(name, real_inputs, context)
@@ -233,6 +272,7 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
                             binding.made_by, 0, binding.attempts, binding, binding.repairs)]
         state.record_failure(instance)
         report_unusable(state, real_inputs, binding.made_by)
+        binding.skeleton.retries.cheap = not state_dependent(instance)
         if not context:
             binding.skeleton.learn_nogood(binding.step, binding.mapping)
         return _local_repair(state, binding, real_inputs)
@@ -244,7 +284,7 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
     if binding.output_index < len(instance.results):
         binding.skeleton.tried.add(key)
         output = instance.results[binding.output_index]
-        placeholders = binding.skeleton.placeholders.get((name, inputs), ())
+        placeholders = binding.skeleton.outputs_at(binding.step)
         mapping = {**binding.mapping, **dict(zip(placeholders, output, strict=True))}
         made_by = {**binding.made_by, **{o: (instance, output) for o in output}}
         child = Binding(binding.skeleton, binding.step + 1, mapping, made_by, 0,
@@ -256,9 +296,19 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
     if instance.exhausted:
         state.record_failure(instance)
         report_unusable(state, real_inputs, binding.made_by)
+        binding.skeleton.retries.cheap = not state_dependent(instance)
         return []
     binding.attempts += 1  # nothing this call: retry later
     return [binding]
+
+
+def state_dependent(instance: StreamInstance) -> bool:
+    """Whether ``instance``'s stream declares ``:fluents``: its failure is one in the state
+    it was called in (a route blocked by debris, a motion blocked by the objects standing
+    where they stand), which new samples upstream rarely fix and another plan (clear the
+    debris first, move the object) does."""
+    external = instance.external
+    return isinstance(external, Stream) and bool(external.fluents)
 
 
 def _local_repair(state: PlannerState, failed: Binding, consumed: tuple[str, ...]
@@ -393,16 +443,16 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                     if not plan:
                         return state.result(SOLVED, discrete, facts | terms)
                     state.remember_skeleton([str(a) for a in discrete.actions or []])
-                    contexts = fluent_contexts(state, evaluation, discrete)
-                    signature = (plan, tuple(sorted(contexts.items())))
+                    entries = contextual_stream_plan(state, evaluation, plan, discrete)
+                    signature = (entries.entries, entries.outputs, entries.contexts)
                     if signature not in seen_skeletons:
                         seen_skeletons.add(signature)
                         queue.push(Binding(Skeleton(
-                            plan, {key: evaluation.outputs[key] for key in plan
-                                   if key in evaluation.outputs},
-                            tuple(str(a) for a in discrete.actions or []), contexts,
-                            steps=tuple((a.name, a.args) for a in discrete.actions or []),
-                            action_costs=task_costs)))
+                            entries.entries, {},
+                            tuple(str(a) for a in discrete.actions or []),
+                            steps=entries.steps, action_costs=task_costs,
+                            entry_outputs=entries.outputs,
+                            entry_contexts=entries.contexts)))
                     elif stalled:
                         # Nothing new to try at this bound: allow more retries and
                         # more complex optimistic values.
@@ -452,8 +502,9 @@ def partial_guess(state: PlannerState, binding: Binding, evaluation: OptimisticE
     output feeds the later instances."""
     skeleton = binding.skeleton
     mapping = dict(binding.mapping)
-    for name, inputs in skeleton.stream_plan[binding.step:]:
-        old = skeleton.placeholders.get((name, inputs), ())
+    for position in range(binding.step, len(skeleton.stream_plan)):
+        name, inputs = skeleton.stream_plan[position]
+        old = skeleton.outputs_at(position)
         if not old or all(x in mapping for x in old):
             continue
         key = (name, tuple(mapping.get(x, x) for x in inputs))
@@ -496,7 +547,7 @@ def retry_limit(state: PlannerState, binding: Binding, retry_threshold: int,
     """The most retries (alternative outputs, empty calls) ``binding`` may have made and
     still be processed before the next search: ``retry_threshold``, or with adaptive
     :data:`CHEAP_RETRY_FACTOR` times as many when its next call is cheap."""
-    if adaptive and cheap_step(state, binding):
+    if adaptive and binding.skeleton.retries.cheap and cheap_step(state, binding):
         return (retry_threshold + 1) * CHEAP_RETRY_FACTOR
     return retry_threshold
 
