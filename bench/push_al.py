@@ -46,6 +46,7 @@ from typing import Any
 import numpy as np
 
 from bench.lse2 import _seeds, _wilson
+from bench.paper.al2d import ARGMAX_LEARNERS, learn_nn_argmax
 from bench.paper.al2d import SIZES as AL2D_SIZES
 from bench.paper.common import live_score
 from ltamp_cli.backends import load_backend
@@ -65,30 +66,50 @@ SIZES: dict[str, int] = {"budget": STANDARD["budget"], "init": STANDARD["init"],
 
 #: Variant name -> LearningConfig settings (besides budget, init, seed).
 VARIANTS: dict[str, dict[str, Any]] = {
-    "random": {"strategy": "random"},
-    "lse": {"strategy": "lse"},
-    "lse2": {"strategy": "lse2"},
+    "random": {"strategy": "random", "hindsight": False},
+    "lse": {"strategy": "lse", "hindsight": False},
+    "lse2": {"strategy": "lse2", "hindsight": False},
     # The reference learner's GP (zi-w/Kitchen2D): zero prior mean, maximum likelihood, every
     # lengthscale bounded to a few percent of its range (push: 0.5 raw units = 0.1-0.16 of
     # the normalised box's half width; one cap for all inputs here).
     "lse-ref": {"strategy": "lse", "mean": "zero", "lengthscale_prior_sd": None,
-                "lengthscale_max": 0.16},
+                "lengthscale_max": 0.16, "hindsight": False},
     # The paper's Algorithm 1 per training context: a drawn goal kept for 15 trials.
-    "lse-hold": {"strategy": "lse", "context_repeats": 15},
+    "lse-hold": {"strategy": "lse", "context_repeats": 15, "hindsight": False},
     "lse-hold-ref": {"strategy": "lse", "context_repeats": 15, "mean": "zero",
-                     "lengthscale_prior_sd": None, "lengthscale_max": 0.16},
+                     "lengthscale_prior_sd": None, "lengthscale_max": 0.16, "hindsight": False},
     "lse-hold30-ref": {"strategy": "lse", "context_repeats": 30, "mean": "zero",
-                       "lengthscale_prior_sd": None, "lengthscale_max": 0.16},
+                       "lengthscale_prior_sd": None, "lengthscale_max": 0.16,
+                       "hindsight": False},
     # A looser cap (half the normalised box) with the default fit: no "irrelevant" input.
-    "lse-hold-cap1": {"strategy": "lse", "context_repeats": 15, "lengthscale_max": 1.0},
-    "lse-cap": {"strategy": "lse", "lengthscale_prior_sd": None, "lengthscale_max": 0.16},
-    "lse-zero": {"strategy": "lse", "mean": "zero"},
+    "lse-hold-cap1": {"strategy": "lse", "context_repeats": 15, "lengthscale_max": 1.0,
+                      "hindsight": False},
+    "lse-cap": {"strategy": "lse", "lengthscale_prior_sd": None, "lengthscale_max": 0.16,
+                "hindsight": False},
+    "lse-zero": {"strategy": "lse", "mean": "zero", "hindsight": False},
+    # Issue #21, outcomes: the push reports the object's end position; every trial adds its
+    # achieved goal and ``hindsight_goals`` uniform goals with exact scores to the training
+    # data (``ltamp_cli.learning.outcomes``; cap ``hindsight_cap`` relabelled points).
+    "lse-hs": {"strategy": "lse", "hindsight": True},
+    "lse-hs-k0": {"strategy": "lse", "hindsight": True, "hindsight_goals": 0},
+    # GP (same relabelling) on uniformly random trials: what the straddle's choice adds.
+    "gp-hs": {"strategy": "gp", "hindsight": True},
+    # The paper's NN_r / NN_c loop (bench.paper.al2d.learn_nn_argmax), with and without the
+    # same relabelled points.
+    "nn-r": {"strategy": "nn-r", "hindsight": False},
+    "nn-c": {"strategy": "nn-c", "hindsight": False},
+    "nn-r-hs": {"strategy": "nn-r", "hindsight": True},
+    "nn-c-hs": {"strategy": "nn-c", "hindsight": True},
 }
 #: The report's paired comparisons (a, b): "a scores higher than b".
 COMPARISONS = (("lse-ref", "lse"), ("lse-ref", "random"), ("lse", "random"),
                ("lse-hold", "lse"), ("lse-hold-ref", "lse"), ("lse-hold30-ref", "lse"),
                ("lse-hold-ref", "lse-ref"), ("lse-hold-cap1", "lse"),
-               ("lse-cap", "lse"), ("lse-zero", "lse"), ("lse2", "lse"))
+               ("lse-cap", "lse"), ("lse-zero", "lse"), ("lse2", "lse"),
+               ("lse-hs", "lse"), ("lse-hs", "random"), ("lse-hs-k0", "lse"),
+               ("lse-hs", "lse-hs-k0"), ("lse-hs", "gp-hs"), ("gp-hs", "random"),
+               ("nn-r-hs", "nn-r"), ("nn-c-hs", "nn-c"), ("lse-hs", "nn-r-hs"),
+               ("lse-hs", "nn-c-hs"))
 
 
 def _contexts(backend: Any) -> np.ndarray:
@@ -116,8 +137,12 @@ def run_job(variant: str, seed: int, budget: int | None = None) -> dict[str, Any
         config = LearningConfig(budget=sizes["budget"], init=sizes["init"], seed=seed,
                                 **VARIANTS[variant])
         cpu0 = time.process_time()
-        result = learn_online(backend, SKILL, config, evaluator=evaluator,
-                              eval_every=sizes["eval_every"])
+        if config.strategy in ARGMAX_LEARNERS:
+            result = learn_nn_argmax(backend, SKILL, config, evaluator, sizes["eval_every"],
+                                     sizes["candidates"])
+        else:
+            result = learn_online(backend, SKILL, config, evaluator=evaluator,
+                                  eval_every=sizes["eval_every"])
         cpu = time.process_time() - cpu0
         records = result.records
         # The last checkpoint's θ* trials: did θ* move the object at all? (An unmoved object
@@ -128,8 +153,9 @@ def run_job(variant: str, seed: int, budget: int | None = None) -> dict[str, Any
         goals = np.array([r.context for r in records])
         controls = np.array([r.control for r in records])
         scores = np.array([r.score for r in records])
-        finals = np.array([[float(r.info.get("final_x", 0.0)), float(r.info.get("final_y", 0.0))]
-                           for r in records])
+        finals = np.array([r.outcome if r.outcome is not None
+                           else (float(r.info.get("final_x", 0.0)),
+                                 float(r.info.get("final_y", 0.0))) for r in records])
         moved = np.linalg.norm(finals, axis=1)
         norms = np.linalg.norm(goals, axis=1)
         success = scores > 0

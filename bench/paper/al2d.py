@@ -188,7 +188,9 @@ def learn_nn_argmax(backend: SkillBackend, skill: str, config: LearningConfig,
     networks start from the same random trials. Every later trial: a fresh context ``α`` and
     ``θ* = argmax NN(α, θ)`` over ``n_candidates`` uniform controls (first valid one by the
     backend's pre-check; classifiers rank by ``p(success)``, regressors by the predicted
-    score). The network is refitted on all trials after each one. Returns the last network,
+    score). The network is refitted on all trials after each one (plus their relabelled
+    points when the skill declares an outcome and ``config.hindsight``, the same data
+    :func:`learn_online` gives GP-LSE). Returns the last network,
     the trials and the learning curve (``evaluator`` every ``eval_every`` trials and at the
     budget).
     """
@@ -203,6 +205,8 @@ def learn_nn_argmax(backend: SkillBackend, skill: str, config: LearningConfig,
     records: list[TrialRecord] = []
     model: SkillModel | None = None
     curve: list[Evaluation] = []
+    # A skill with a declared outcome: the networks see the relabelled points too, as GP-LSE.
+    relabeller = config.relabeller(spec)
 
     def is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
         return backend.is_valid(skill, context, controls)
@@ -221,11 +225,17 @@ def learn_nn_argmax(backend: SkillBackend, skill: str, config: LearningConfig,
         records.append(TrialRecord(
             skill=skill, context=tuple(map(float, context)), control=tuple(map(float, control)),
             score=score, valid=bool(result.valid), seed=seed, backend=backend.name,
-            index=index, info={"strategy": config.strategy}))
+            index=index, info={"strategy": config.strategy},
+            outcome=None if result.outcome is None else tuple(result.outcome)))
         x.append(template.to_unit(context, control)[0])
         y.append(score)
+        train_x, train_y = np.array(x), np.array(y)
+        if relabeller is not None and result.outcome is not None:
+            relabeller.add(context, control, np.asarray(result.outcome))
+            extra_x, extra_y = relabeller.arrays()
+            train_x, train_y = np.vstack([train_x, extra_x]), np.concatenate([train_y, extra_y])
         # Retrained after every trial, as in the paper (the next argmax needs the new network).
-        model = fit_model(spec, config, np.array(x), np.array(y))
+        model = fit_model(spec, config, train_x, train_y)
         n = index + 1
         if evaluator is not None and (
                 n == config.budget or (eval_every > 0 and n >= config.init
