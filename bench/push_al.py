@@ -90,10 +90,30 @@ VARIANTS: dict[str, dict[str, Any]] = {
     # Issue #21, outcomes: the push reports the object's end position; every trial adds its
     # achieved goal and ``hindsight_goals`` uniform goals with exact scores to the training
     # data (``ltamp_cli.learning.outcomes``; cap ``hindsight_cap`` relabelled points).
-    "lse-hs": {"strategy": "lse", "hindsight": True},
-    "lse-hs-k0": {"strategy": "lse", "hindsight": True, "hindsight_goals": 0},
+    # (-hs variants without "-data": θ* from uniform candidates only, as before issue #21;
+    # "-data": θ* also tries the training controls, LevelSetModel.data_candidates)
+    "lse-hs": {"strategy": "lse", "hindsight": True, "hindsight_theta_data": False,
+               "hindsight_lengthscale_max": None},
+    "lse-hs-data": {"strategy": "lse", "hindsight": True, "hindsight_lengthscale_max": None},
+    "lse-hs-k0": {"strategy": "lse", "hindsight": True, "hindsight_goals": 0,
+                  "hindsight_theta_data": False, "hindsight_lengthscale_max": None},
+    # the plain straddle over (control, goal) on the relabelled data (not goal-averaged)
+    "lse-hs-joint": {"strategy": "lse", "hindsight": True, "hindsight_acquisition": "joint",
+                     "hindsight_theta_data": False, "hindsight_lengthscale_max": None},
+    # goal-averaged straddle with every lengthscale capped at 1.0 (half the normalised box):
+    # the fit cannot call the controls irrelevant when few pushes moved the object.
+    "lse-hs-cap1": {"strategy": "lse", "hindsight": True, "lengthscale_max": 1.0,
+                    "hindsight_theta_data": False},
+    # = LearningConfig's defaults for a skill with an outcome (hindsight_lengthscale_max 1.0)
+    "lse-hs-cap1-data": {"strategy": "lse", "hindsight": True, "lengthscale_max": 1.0},
+    # the same cap without outcomes: what the cap alone does
+    "lse-cap1": {"strategy": "lse", "hindsight": False, "lengthscale_max": 1.0},
     # GP (same relabelling) on uniformly random trials: what the straddle's choice adds.
-    "gp-hs": {"strategy": "gp", "hindsight": True},
+    "gp-hs": {"strategy": "gp", "hindsight": True, "hindsight_theta_data": False,
+              "hindsight_lengthscale_max": None},
+    "gp-hs-data": {"strategy": "gp", "hindsight": True, "hindsight_lengthscale_max": None},
+    # = LearningConfig's defaults for ``gp`` on a skill with an outcome
+    "gp-hs-cap1-data": {"strategy": "gp", "hindsight": True, "lengthscale_max": 1.0},
     # The paper's NN_r / NN_c loop (bench.paper.al2d.learn_nn_argmax), with and without the
     # same relabelled points.
     "nn-r": {"strategy": "nn-r", "hindsight": False},
@@ -109,7 +129,17 @@ COMPARISONS = (("lse-ref", "lse"), ("lse-ref", "random"), ("lse", "random"),
                ("lse-hs", "lse"), ("lse-hs", "random"), ("lse-hs-k0", "lse"),
                ("lse-hs", "lse-hs-k0"), ("lse-hs", "gp-hs"), ("gp-hs", "random"),
                ("nn-r-hs", "nn-r"), ("nn-c-hs", "nn-c"), ("lse-hs", "nn-r-hs"),
-               ("lse-hs", "nn-c-hs"))
+               ("lse-hs", "nn-c-hs"), ("lse-hs-cap1", "lse"), ("lse-hs-cap1", "lse-cap1"),
+               ("lse-hs-cap1", "lse-hs"), ("lse-hs-cap1", "gp-hs"), ("lse-cap1", "lse"),
+               ("lse-hs-cap1", "nn-r-hs"), ("lse-hs-cap1", "nn-c-hs"),
+               ("lse-hs-cap1", "random"), ("lse-hs-cap1-data", "lse-hs-cap1"),
+               ("gp-hs-data", "gp-hs"), ("lse-hs-data", "lse-hs"),
+               ("lse-hs-cap1-data", "gp-hs-data"), ("lse-hs-cap1-data", "lse"),
+               ("lse-hs-cap1-data", "random"), ("lse-hs-data", "lse"),
+               ("gp-hs-data", "random"), ("lse-hs-cap1-data", "gp-hs-cap1-data"),
+               ("gp-hs-cap1-data", "gp-hs-data"), ("gp-hs-cap1-data", "random"),
+               ("lse-hs-cap1-data", "nn-r-hs"), ("lse-hs-cap1-data", "nn-c-hs"),
+               ("lse-hs-cap1-data", "nn-r"), ("lse-hs-cap1-data", "nn-c"))
 
 
 def _contexts(backend: Any) -> np.ndarray:
@@ -244,10 +274,14 @@ def report(log: Path, out: Path) -> dict[str, Any]:
         k = sum(sum(v) for v in finals[variant].values())
         n = sum(len(v) for v in finals[variant].values())
 
-        def pooled(key: str, mine: dict[int, dict[str, Any]] = mine) -> dict[str, Any]:
-            hits = sum(sum(job[key]) for job in mine.values())
-            total = sum(len(job[key]) for job in mine.values())
-            return {"rate": round(hits / total, 3), "wilson95": _wilson(hits, total)}
+        def pooled(key: str, mine: dict[int, dict[str, Any]] = mine) -> dict[str, Any] | None:
+            # jobs imported from another log (``source``) may lack the diagnostics
+            have = [job[key] for job in mine.values() if key in job]
+            if not have:
+                return None
+            hits, total = sum(sum(v) for v in have), sum(len(v) for v in have)
+            return {"rate": round(hits / total, 3), "wilson95": _wilson(hits, total),
+                    "seeds": len(have)}
 
         rows[variant] = {
             "config": VARIANTS[variant], "seeds": sorted(mine),
@@ -255,9 +289,12 @@ def report(log: Path, out: Path) -> dict[str, Any]:
                                for s, job in mine.items()},
             "final_pooled": round(k / n, 3), "final_wilson95": _wilson(k, n),
             "nn_success": pooled("nn_success"), "replay_bound": pooled("replay_bound"),
-            **{key: {str(s): job[key] for s, job in mine.items()}
+            **{key: {str(s): job[key] for s, job in mine.items() if key in job}
                for key in ("training_successes", "far_successes", "moved", "moved_far",
                            "circle_still", "cpu_s")},
+            "theta_star_moved": {str(s): sum(job["theta_star_moved"])
+                                 for s, job in mine.items() if "theta_star_moved" in job},
+            "sources": sorted({job["source"] for job in mine.values() if "source" in job}),
             "gp": {str(s): job.get("gp") for s, job in mine.items()}}
     comparisons = []
     for a, b in COMPARISONS:
@@ -281,12 +318,13 @@ def report(log: Path, out: Path) -> dict[str, Any]:
     for variant, row in rows.items():
         per_seed = " ".join(f"{v:.2f}" for v in row["final_per_seed"].values())
         low, high = row["final_wilson95"]
-        sums = "/".join(str(sum(row[key].values())) for key in
+        sums = "/".join(str(sum(row[key].values())) if row[key] else "-" for key in
                         ("training_successes", "far_successes", "moved", "moved_far",
                          "circle_still"))
-        print(f"{variant:9} {per_seed:30} {row['final_pooled']:.3f} [{low:.3f}, {high:.3f}]  "
-              f"{sums:18} nn {row['nn_success']['rate']:.3f} "
-              f"replay {row['replay_bound']['rate']:.3f}")
+        nn = f"{row['nn_success']['rate']:.3f}" if row["nn_success"] else "-"
+        replay = f"{row['replay_bound']['rate']:.3f}" if row["replay_bound"] else "-"
+        print(f"{variant:12} {per_seed:30} {row['final_pooled']:.3f} [{low:.3f}, {high:.3f}]  "
+              f"{sums:18} nn {nn} replay {replay}")
     for comparison in comparisons:
         print(f"  {comparison['text']}: {comparison['verdict']}")
     for skill, entry in checks.items():

@@ -69,7 +69,12 @@ from ltamp_cli.learning.held_context import HeldContext
 from ltamp_cli.learning.kernels import KERNEL_NAMES
 from ltamp_cli.learning.metrics import Evaluation, SkillEvaluator
 from ltamp_cli.learning.model import LevelSetModel, PhysicalValidity, SkillModel
-from ltamp_cli.learning.outcomes import DEFAULT_CAP, DEFAULT_GOALS_PER_TRIAL, Relabeller
+from ltamp_cli.learning.outcomes import (
+    DEFAULT_CAP,
+    DEFAULT_GOALS_PER_TRIAL,
+    Relabeller,
+    propose_for_all_goals,
+)
 from ltamp_cli.threads import limits_threads
 from ltamp_cli.trials.record import TrialDataset, TrialRecord, check_against_spec
 
@@ -134,6 +139,20 @@ class LearningConfig:
     hindsight: bool = True
     hindsight_goals: int = DEFAULT_GOALS_PER_TRIAL
     hindsight_cap: int = DEFAULT_CAP
+    #: ``lse`` with relabelled trials: ``"goal-mean"`` — the control whose ψ averaged over
+    #: drawn goals is largest (:func:`~ltamp_cli.learning.outcomes.propose_for_all_goals`);
+    #: ``"joint"`` — the plain straddle over control and context.
+    hindsight_acquisition: str = "goal-mean"
+    #: GP strategies with relabelled trials: θ* also considers the training controls
+    #: (:attr:`~ltamp_cli.learning.model.LevelSetModel.data_candidates`).
+    hindsight_theta_data: bool = True
+    #: GP strategies with relabelled trials and no ``lengthscale_max``: this upper bound on
+    #: every lengthscale (normalised units; ``None``: none). On the 2D push the relabelled
+    #: data of a few pushes that moved the object let the marginal likelihood call the
+    #: controls irrelevant (lengthscales at 20) and the goal-averaged straddle then chose
+    #: pushes that never touched it; capped at 1.0 (half the box) the fit keeps the controls
+    #: (``docs/results/learning/README.md``, "Outcomes").
+    hindsight_lengthscale_max: float | None = 1.0
     threads: int | None = 1  # thread-pool limit while learning (ltamp_cli.threads)
 
     def __post_init__(self) -> None:
@@ -153,13 +172,17 @@ class LearningConfig:
             raise ValueError(f"lse2_candidates must be >= 1, got {self.lse2_candidates}")
         if self.context_repeats < 0:
             raise ValueError(f"context_repeats must be >= 0, got {self.context_repeats}")
+        if self.hindsight_acquisition not in ("goal-mean", "joint"):
+            raise ValueError(f"hindsight_acquisition must be 'goal-mean' or 'joint', got "
+                             f"{self.hindsight_acquisition!r}")
         if self.hindsight_goals < 0 or self.hindsight_cap < 0:
             raise ValueError(f"hindsight_goals and hindsight_cap must be >= 0, got "
                              f"{self.hindsight_goals} and {self.hindsight_cap}")
         low, high = HyperBounds().lengthscale
-        if self.lengthscale_max is not None and not low < self.lengthscale_max <= high:
-            raise ValueError(f"lengthscale_max must be in ({low}, {high}], "
-                             f"got {self.lengthscale_max}")
+        for name in ("lengthscale_max", "hindsight_lengthscale_max"):
+            value = getattr(self, name)
+            if value is not None and not low < value <= high:
+                raise ValueError(f"{name} must be in ({low}, {high}], got {value}")
         if self.lengthscale_prior_sd is not None and not self.lengthscale_prior_sd > 0:
             raise ValueError(
                 f"lengthscale_prior_sd must be > 0 or None, got {self.lengthscale_prior_sd}"
@@ -218,14 +241,19 @@ def fit_model(
     if config.strategy in GP_STRATEGIES:
         warm = previous.gp if isinstance(previous, LevelSetModel) else None
         n = len(y) if n_trials is None else n_trials
+        relabelled = config.relabeller(spec) is not None
+        data = config.hindsight_theta_data and relabelled
+        cap = config.lengthscale_max
+        if cap is None and relabelled:
+            cap = config.hindsight_lengthscale_max
         if warm is not None and not final and n > config.dense_refit and n % config.refit_every:
-            return LevelSetModel(spec, warm.with_data(x, y))
+            return LevelSetModel(spec, warm.with_data(x, y), data)
         restarts = config.gp_restarts if final or warm is None else 0
         gp = fit_gp(
             x, y, config.kernel, mean=config.mean, restarts=restarts, rng=rng, warm_start=warm,
-            bounds=gp_bounds(spec, config.lengthscale_max), prior=config.lengthscale_prior(),
+            bounds=gp_bounds(spec, cap), prior=config.lengthscale_prior(),
         )
-        return LevelSetModel(spec, gp)
+        return LevelSetModel(spec, gp, data)
     if config.strategy == "random":
         return RandomModel.fit(spec, x, y)
     return SklearnModel.fit(spec, config.strategy, x, y, seed=config.seed)
@@ -424,6 +452,11 @@ def _propose(
         )
         return context, spec.control.sample_uniform(rng, 1)[0]
     test = model.validity_test(is_valid)
+    if (config.strategy == "lse" and config.hindsight_acquisition == "goal-mean"
+            and config.relabeller(spec) is not None):
+        chosen = propose_for_all_goals(model, rng, config.n_candidates, test)
+        if chosen is not None:
+            return chosen
     if config.strategy == "lse":
         best = maximize(
             model.gp,

@@ -46,6 +46,8 @@ from __future__ import annotations
 import numpy as np
 
 from ltamp_cli.backends.protocol import OutcomeSpec, SkillSpec
+from ltamp_cli.learning.acquisition import ValidityTest, evaluate, first_valid, straddle
+from ltamp_cli.learning.model import LevelSetModel
 from ltamp_cli.learning.normalize import BoxNormalizer, join_inputs, joint_space
 
 #: Default number of goals drawn from the goal box per trial (besides the achieved goal).
@@ -136,3 +138,47 @@ class Relabeller:
             keep = np.sort(np.argsort(keys, kind="stable")[: self.cap])
             x, y = x[keep], y[keep]
         return x, y
+
+
+#: Goals per control candidate over which :func:`propose_for_all_goals` averages ψ.
+ACQUISITION_GOALS = 8
+
+
+def propose_for_all_goals(
+    model: LevelSetModel,
+    rng: np.random.Generator,
+    n_candidates: int,
+    is_valid: ValidityTest | None,
+    n_goals: int = ACQUISITION_GOALS,
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The next ``(context (dα,), control (dθ,))`` (physical units) for a skill whose trials
+    are relabelled: the control (with the non-goal context dimensions) whose straddle ψ,
+    *averaged over* ``n_goals`` goals drawn uniformly from the goal box, is largest; the
+    trial's own goal is the one of those with the largest ψ for it. ``None`` if no candidate
+    passes ``is_valid``.
+
+    Why averaged: the outcome does not depend on the goal, and every trial is relabelled for
+    many goals, so a trial informs the level set of *every* goal; the joint straddle over
+    (control, goal) instead picks single points of the boundary, and on the 2D push those
+    are the circle ‖goal‖ = 2 where a push that never touches the object decides success
+    (``docs/results/learning/README.md``, "Outcomes"). ``n_candidates // n_goals`` uniform
+    candidates are scored (about ``n_candidates`` GP predictions), no gradient refinement.
+    """
+    spec = model.spec
+    assert spec.outcome is not None
+    d_control = spec.control.dim
+    goal_columns = d_control + np.asarray(spec.outcome.goals, dtype=int)
+    n_controls = max(1, n_candidates // n_goals)
+    candidates = rng.uniform(-1.0, 1.0, size=(n_controls, model.dim))
+    goals = rng.uniform(-1.0, 1.0, size=(n_goals, len(goal_columns)))
+    points = np.repeat(candidates, n_goals, axis=0)
+    points[:, goal_columns] = np.tile(goals, (n_controls, 1))
+    psi = evaluate(model.gp, straddle, points).reshape(n_controls, n_goals)
+    best_goal = np.argmax(psi, axis=1)
+    candidates[:, goal_columns] = goals[best_goal]
+    order = np.argsort(-psi.mean(axis=1), kind="stable")
+    chosen = first_valid(order, candidates, 1, is_valid)
+    if len(chosen) == 0:
+        return None
+    contexts, controls = model.from_unit(candidates[int(chosen[0])][None, :])
+    return contexts[0], controls[0]
