@@ -30,7 +30,14 @@ Besides the θ* curve every job records where its training trials went (the diag
 ``bench.lse2`` (its protocol and held-out contexts; θ* at the budget only) to check that a
 change does not hurt elsewhere; ``report`` compares every variant there with ``lse``.
 
-Variants (:data:`VARIANTS`) are :class:`~ltamp_cli.learning.active.LearningConfig` settings.
+Variants (:data:`VARIANTS`) are :class:`~ltamp_cli.learning.active.LearningConfig` settings;
+``nn-*`` variants run the paper's NN loop (:func:`bench.paper.al2d.learn_nn_argmax`). The
+``*-hs*`` variants learn from the push's outcome (issue #21, :mod:`ltamp_cli.learning.outcomes`);
+their jobs go to ``--log docs/results/learning/pushoutcome-runs.jsonl`` and
+``report --out docs/results/learning/pushoutcome.json``, beside copies of the score-only
+baselines (``source`` says where each copy comes from). Since outcomes exist the score-only
+variants set ``hindsight=False`` explicitly (their runs are unchanged: the golden test of
+``tests/learning/test_outcomes.py``).
 Times are CPU seconds of this process (the machine is shared).
 """
 

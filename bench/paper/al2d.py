@@ -11,6 +11,14 @@ same ``init`` random trials as GP-LSE, each next trial draws a context α from t
 context distribution and executes ``θ* = argmax_θ NN(α, θ)`` (the most confident valid control
 among ``candidates`` uniform ones); the network is retrained after every trial
 (:func:`learn_nn_argmax`). *Random* never trains and draws uniform controls.
+
+Outcomes (issue #21): the push declares an outcome (the object's end position), so with
+``LearningConfig``'s defaults (``hindsight=True``) GP-LSE and both networks also learn from
+every trial relabelled for other goals (:mod:`ltamp_cli.learning.outcomes`), GP-LSE chooses
+its trials by the goal-averaged straddle and its GP's lengthscales are capped at 1.0;
+Random is unchanged (it trains nothing). :data:`HINDSIGHT` ``= False`` restores the
+score-only learners of the earlier standard runs (pour and scoop declare no outcome: their
+jobs are the same either way). Measured in ``docs/results/learning/README.md``, "Outcomes".
 """
 
 from __future__ import annotations
@@ -42,6 +50,8 @@ from ltamp_cli.trials.record import TrialRecord
 NAME = "al2d"
 LEARNERS = ["random", "nn-r", "nn-c", "lse"]
 LABELS = {"random": "Random", "nn-r": "NN_r", "nn-c": "NN_c", "lse": "GP-LSE"}
+#: Learn from the push's outcomes (module doc); ``False``: scores only, as before issue #21.
+HINDSIGHT = True
 #: Learners that choose their next trial by their own argmax (the paper's NN_c / NN_r).
 ARGMAX_LEARNERS = ("nn-r", "nn-c")
 SIZES: dict[str, dict[str, Any]] = {
@@ -113,7 +123,7 @@ def _skill_rows(ctx: Context, skill: str, backend: SkillBackend | None) -> list[
                                    contexts, is_valid, seed=seed,
                                    n_candidates=own["candidates"])
         config = LearningConfig(strategy=learner, budget=own["budget"], init=own["init"],
-                                seed=seed)
+                                seed=seed, hindsight=HINDSIGHT)
         t0 = time.perf_counter()
         if learner in ARGMAX_LEARNERS:
             curve = learn_nn_argmax(backend, skill, config, evaluator, own["eval_every"],

@@ -191,3 +191,36 @@ def test_skills_without_outcome_learn_bit_identically_to_before() -> None:
             assert [float(v) for v in result.model.gp.lengthscales] == expected["lengthscales"]
     finally:
         backend.close()
+
+
+def test_relabelled_fit_is_capped_and_offers_training_controls() -> None:
+    """With relabelling the GP's lengthscales are capped (``hindsight_lengthscale_max``) and
+    θ* also tries the training controls; without, neither."""
+    pool = [TrialRecord("toss", (1.0,), (float(v),), 0.5 - abs(v - 1.0), True, i, "toss-test",
+                        index=i, outcome=(float(v),))
+            for i, v in enumerate(np.linspace(0.0, 10.0, 8))]
+    on = learn_from_pool(TOSS, pool, LearningConfig(strategy="gp", budget=8, init=8)).model
+    off = learn_from_pool(TOSS, pool, LearningConfig(strategy="gp", budget=8, init=8,
+                                                     hindsight=False)).model
+    assert on.data_candidates and not off.data_candidates  # type: ignore[attr-defined]
+    assert max(on.gp.lengthscales) <= 1.0 + 1e-9  # type: ignore[attr-defined]
+    assert on.gp.x_np.shape[0] > off.gp.x_np.shape[0] == 8  # type: ignore[attr-defined]
+
+
+def test_goal_averaged_proposal_picks_a_valid_control_and_a_drawn_goal() -> None:
+    from ltamp_cli.learning.outcomes import propose_for_all_goals
+
+    pool = [TrialRecord("toss", (1.0,), (float(v),), 0.5 - abs(v - 1.0), True, i, "toss-test",
+                        index=i, outcome=(float(v),))
+            for i, v in enumerate([0.5, 1.0, 2.0, 8.0])]
+    model = learn_from_pool(TOSS, pool, LearningConfig(strategy="gp", budget=4, init=4)).model
+    rng = np.random.default_rng(3)
+
+    def slow_only(x: np.ndarray) -> np.ndarray:  # normalised speed < 0 ⇔ speed < 5 m/s
+        return np.asarray(x)[:, 0] < 0.0
+
+    chosen = propose_for_all_goals(model, rng, 400, slow_only)  # type: ignore[arg-type]
+    assert chosen is not None
+    context, control = chosen
+    assert 0.0 <= context[0] <= 10.0 and 0.0 <= control[0] < 5.0
+    assert propose_for_all_goals(model, rng, 400, lambda x: np.zeros(len(x), bool)) is None  # type: ignore[arg-type]
