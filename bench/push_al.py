@@ -330,7 +330,7 @@ def report(log: Path, out: Path) -> dict[str, Any]:
                          "circle_still"))
         nn = f"{row['nn_success']['rate']:.3f}" if row["nn_success"] else "-"
         replay = f"{row['replay_bound']['rate']:.3f}" if row["replay_bound"] else "-"
-        print(f"{variant:12} {per_seed:30} {row['final_pooled']:.3f} [{low:.3f}, {high:.3f}]  "
+        print(f"{variant:16} {per_seed:30} {row['final_pooled']:.3f} [{low:.3f}, {high:.3f}]  "
               f"{sums:18} nn {nn} replay {replay}")
     for comparison in comparisons:
         print(f"  {comparison['text']}: {comparison['verdict']}")
