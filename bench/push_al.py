@@ -30,7 +30,14 @@ Besides the θ* curve every job records where its training trials went (the diag
 ``bench.lse2`` (its protocol and held-out contexts; θ* at the budget only) to check that a
 change does not hurt elsewhere; ``report`` compares every variant there with ``lse``.
 
-Variants (:data:`VARIANTS`) are :class:`~ltamp_cli.learning.active.LearningConfig` settings.
+Variants (:data:`VARIANTS`) are :class:`~ltamp_cli.learning.active.LearningConfig` settings;
+``nn-*`` variants run the paper's NN loop (:func:`bench.paper.al2d.learn_nn_argmax`). The
+``*-hs*`` variants learn from the push's outcome (issue #21, :mod:`ltamp_cli.learning.outcomes`);
+their jobs go to ``--log docs/results/learning/pushoutcome-runs.jsonl`` and
+``report --out docs/results/learning/pushoutcome.json``, beside copies of the score-only
+baselines (``source`` says where each copy comes from). Since outcomes exist the score-only
+variants set ``hindsight=False`` explicitly (their runs are unchanged: the golden test of
+``tests/learning/test_outcomes.py``).
 Times are CPU seconds of this process (the machine is shared).
 """
 
@@ -46,6 +53,7 @@ from typing import Any
 import numpy as np
 
 from bench.lse2 import _seeds, _wilson
+from bench.paper.al2d import ARGMAX_LEARNERS, learn_nn_argmax
 from bench.paper.al2d import SIZES as AL2D_SIZES
 from bench.paper.common import live_score
 from ltamp_cli.backends import load_backend
@@ -65,30 +73,80 @@ SIZES: dict[str, int] = {"budget": STANDARD["budget"], "init": STANDARD["init"],
 
 #: Variant name -> LearningConfig settings (besides budget, init, seed).
 VARIANTS: dict[str, dict[str, Any]] = {
-    "random": {"strategy": "random"},
-    "lse": {"strategy": "lse"},
-    "lse2": {"strategy": "lse2"},
+    "random": {"strategy": "random", "hindsight": False},
+    "lse": {"strategy": "lse", "hindsight": False},
+    "lse2": {"strategy": "lse2", "hindsight": False},
     # The reference learner's GP (zi-w/Kitchen2D): zero prior mean, maximum likelihood, every
     # lengthscale bounded to a few percent of its range (push: 0.5 raw units = 0.1-0.16 of
     # the normalised box's half width; one cap for all inputs here).
     "lse-ref": {"strategy": "lse", "mean": "zero", "lengthscale_prior_sd": None,
-                "lengthscale_max": 0.16},
+                "lengthscale_max": 0.16, "hindsight": False},
     # The paper's Algorithm 1 per training context: a drawn goal kept for 15 trials.
-    "lse-hold": {"strategy": "lse", "context_repeats": 15},
+    "lse-hold": {"strategy": "lse", "context_repeats": 15, "hindsight": False},
     "lse-hold-ref": {"strategy": "lse", "context_repeats": 15, "mean": "zero",
-                     "lengthscale_prior_sd": None, "lengthscale_max": 0.16},
+                     "lengthscale_prior_sd": None, "lengthscale_max": 0.16, "hindsight": False},
     "lse-hold30-ref": {"strategy": "lse", "context_repeats": 30, "mean": "zero",
-                       "lengthscale_prior_sd": None, "lengthscale_max": 0.16},
+                       "lengthscale_prior_sd": None, "lengthscale_max": 0.16,
+                       "hindsight": False},
     # A looser cap (half the normalised box) with the default fit: no "irrelevant" input.
-    "lse-hold-cap1": {"strategy": "lse", "context_repeats": 15, "lengthscale_max": 1.0},
-    "lse-cap": {"strategy": "lse", "lengthscale_prior_sd": None, "lengthscale_max": 0.16},
-    "lse-zero": {"strategy": "lse", "mean": "zero"},
+    "lse-hold-cap1": {"strategy": "lse", "context_repeats": 15, "lengthscale_max": 1.0,
+                      "hindsight": False},
+    "lse-cap": {"strategy": "lse", "lengthscale_prior_sd": None, "lengthscale_max": 0.16,
+                "hindsight": False},
+    "lse-zero": {"strategy": "lse", "mean": "zero", "hindsight": False},
+    # Issue #21, outcomes: the push reports the object's end position; every trial adds its
+    # achieved goal and ``hindsight_goals`` uniform goals with exact scores to the training
+    # data (``ltamp_cli.learning.outcomes``; cap ``hindsight_cap`` relabelled points).
+    # (-hs variants without "-data": θ* from uniform candidates only, as before issue #21;
+    # "-data": θ* also tries the training controls, LevelSetModel.data_candidates)
+    "lse-hs": {"strategy": "lse", "hindsight": True, "hindsight_theta_data": False,
+               "hindsight_lengthscale_max": None},
+    "lse-hs-data": {"strategy": "lse", "hindsight": True, "hindsight_lengthscale_max": None},
+    "lse-hs-k0": {"strategy": "lse", "hindsight": True, "hindsight_goals": 0,
+                  "hindsight_theta_data": False, "hindsight_lengthscale_max": None},
+    # the plain straddle over (control, goal) on the relabelled data (not goal-averaged)
+    "lse-hs-joint": {"strategy": "lse", "hindsight": True, "hindsight_acquisition": "joint",
+                     "hindsight_theta_data": False, "hindsight_lengthscale_max": None},
+    # goal-averaged straddle with every lengthscale capped at 1.0 (half the normalised box):
+    # the fit cannot call the controls irrelevant when few pushes moved the object.
+    "lse-hs-cap1": {"strategy": "lse", "hindsight": True, "lengthscale_max": 1.0,
+                    "hindsight_theta_data": False},
+    # = LearningConfig's defaults for a skill with an outcome (hindsight_lengthscale_max 1.0)
+    "lse-hs-cap1-data": {"strategy": "lse", "hindsight": True, "lengthscale_max": 1.0},
+    # the same cap without outcomes: what the cap alone does
+    "lse-cap1": {"strategy": "lse", "hindsight": False, "lengthscale_max": 1.0},
+    # GP (same relabelling) on uniformly random trials: what the straddle's choice adds.
+    "gp-hs": {"strategy": "gp", "hindsight": True, "hindsight_theta_data": False,
+              "hindsight_lengthscale_max": None},
+    "gp-hs-data": {"strategy": "gp", "hindsight": True, "hindsight_lengthscale_max": None},
+    # = LearningConfig's defaults for ``gp`` on a skill with an outcome
+    "gp-hs-cap1-data": {"strategy": "gp", "hindsight": True, "lengthscale_max": 1.0},
+    # The paper's NN_r / NN_c loop (bench.paper.al2d.learn_nn_argmax), with and without the
+    # same relabelled points.
+    "nn-r": {"strategy": "nn-r", "hindsight": False},
+    "nn-c": {"strategy": "nn-c", "hindsight": False},
+    "nn-r-hs": {"strategy": "nn-r", "hindsight": True},
+    "nn-c-hs": {"strategy": "nn-c", "hindsight": True},
 }
 #: The report's paired comparisons (a, b): "a scores higher than b".
 COMPARISONS = (("lse-ref", "lse"), ("lse-ref", "random"), ("lse", "random"),
                ("lse-hold", "lse"), ("lse-hold-ref", "lse"), ("lse-hold30-ref", "lse"),
                ("lse-hold-ref", "lse-ref"), ("lse-hold-cap1", "lse"),
-               ("lse-cap", "lse"), ("lse-zero", "lse"), ("lse2", "lse"))
+               ("lse-cap", "lse"), ("lse-zero", "lse"), ("lse2", "lse"),
+               ("lse-hs", "lse"), ("lse-hs", "random"), ("lse-hs-k0", "lse"),
+               ("lse-hs", "lse-hs-k0"), ("lse-hs", "gp-hs"), ("gp-hs", "random"),
+               ("nn-r-hs", "nn-r"), ("nn-c-hs", "nn-c"), ("lse-hs", "nn-r-hs"),
+               ("lse-hs", "nn-c-hs"), ("lse-hs-cap1", "lse"), ("lse-hs-cap1", "lse-cap1"),
+               ("lse-hs-cap1", "lse-hs"), ("lse-hs-cap1", "gp-hs"), ("lse-cap1", "lse"),
+               ("lse-hs-cap1", "nn-r-hs"), ("lse-hs-cap1", "nn-c-hs"),
+               ("lse-hs-cap1", "random"), ("lse-hs-cap1-data", "lse-hs-cap1"),
+               ("gp-hs-data", "gp-hs"), ("lse-hs-data", "lse-hs"),
+               ("lse-hs-cap1-data", "gp-hs-data"), ("lse-hs-cap1-data", "lse"),
+               ("lse-hs-cap1-data", "random"), ("lse-hs-data", "lse"),
+               ("gp-hs-data", "random"), ("lse-hs-cap1-data", "gp-hs-cap1-data"),
+               ("gp-hs-cap1-data", "gp-hs-data"), ("gp-hs-cap1-data", "random"),
+               ("lse-hs-cap1-data", "nn-r-hs"), ("lse-hs-cap1-data", "nn-c-hs"),
+               ("lse-hs-cap1-data", "nn-r"), ("lse-hs-cap1-data", "nn-c"))
 
 
 def _contexts(backend: Any) -> np.ndarray:
@@ -116,8 +174,12 @@ def run_job(variant: str, seed: int, budget: int | None = None) -> dict[str, Any
         config = LearningConfig(budget=sizes["budget"], init=sizes["init"], seed=seed,
                                 **VARIANTS[variant])
         cpu0 = time.process_time()
-        result = learn_online(backend, SKILL, config, evaluator=evaluator,
-                              eval_every=sizes["eval_every"])
+        if config.strategy in ARGMAX_LEARNERS:
+            result = learn_nn_argmax(backend, SKILL, config, evaluator, sizes["eval_every"],
+                                     sizes["candidates"])
+        else:
+            result = learn_online(backend, SKILL, config, evaluator=evaluator,
+                                  eval_every=sizes["eval_every"])
         cpu = time.process_time() - cpu0
         records = result.records
         # The last checkpoint's θ* trials: did θ* move the object at all? (An unmoved object
@@ -128,8 +190,9 @@ def run_job(variant: str, seed: int, budget: int | None = None) -> dict[str, Any
         goals = np.array([r.context for r in records])
         controls = np.array([r.control for r in records])
         scores = np.array([r.score for r in records])
-        finals = np.array([[float(r.info.get("final_x", 0.0)), float(r.info.get("final_y", 0.0))]
-                           for r in records])
+        finals = np.array([r.outcome if r.outcome is not None
+                           else (float(r.info.get("final_x", 0.0)),
+                                 float(r.info.get("final_y", 0.0))) for r in records])
         moved = np.linalg.norm(finals, axis=1)
         norms = np.linalg.norm(goals, axis=1)
         success = scores > 0
@@ -218,10 +281,14 @@ def report(log: Path, out: Path) -> dict[str, Any]:
         k = sum(sum(v) for v in finals[variant].values())
         n = sum(len(v) for v in finals[variant].values())
 
-        def pooled(key: str, mine: dict[int, dict[str, Any]] = mine) -> dict[str, Any]:
-            hits = sum(sum(job[key]) for job in mine.values())
-            total = sum(len(job[key]) for job in mine.values())
-            return {"rate": round(hits / total, 3), "wilson95": _wilson(hits, total)}
+        def pooled(key: str, mine: dict[int, dict[str, Any]] = mine) -> dict[str, Any] | None:
+            # jobs imported from another log (``source``) may lack the diagnostics
+            have = [job[key] for job in mine.values() if key in job]
+            if not have:
+                return None
+            hits, total = sum(sum(v) for v in have), sum(len(v) for v in have)
+            return {"rate": round(hits / total, 3), "wilson95": _wilson(hits, total),
+                    "seeds": len(have)}
 
         rows[variant] = {
             "config": VARIANTS[variant], "seeds": sorted(mine),
@@ -229,9 +296,12 @@ def report(log: Path, out: Path) -> dict[str, Any]:
                                for s, job in mine.items()},
             "final_pooled": round(k / n, 3), "final_wilson95": _wilson(k, n),
             "nn_success": pooled("nn_success"), "replay_bound": pooled("replay_bound"),
-            **{key: {str(s): job[key] for s, job in mine.items()}
+            **{key: {str(s): job[key] for s, job in mine.items() if key in job}
                for key in ("training_successes", "far_successes", "moved", "moved_far",
                            "circle_still", "cpu_s")},
+            "theta_star_moved": {str(s): sum(job["theta_star_moved"])
+                                 for s, job in mine.items() if "theta_star_moved" in job},
+            "sources": sorted({job["source"] for job in mine.values() if "source" in job}),
             "gp": {str(s): job.get("gp") for s, job in mine.items()}}
     comparisons = []
     for a, b in COMPARISONS:
@@ -255,12 +325,13 @@ def report(log: Path, out: Path) -> dict[str, Any]:
     for variant, row in rows.items():
         per_seed = " ".join(f"{v:.2f}" for v in row["final_per_seed"].values())
         low, high = row["final_wilson95"]
-        sums = "/".join(str(sum(row[key].values())) for key in
+        sums = "/".join(str(sum(row[key].values())) if row[key] else "-" for key in
                         ("training_successes", "far_successes", "moved", "moved_far",
                          "circle_still"))
-        print(f"{variant:9} {per_seed:30} {row['final_pooled']:.3f} [{low:.3f}, {high:.3f}]  "
-              f"{sums:18} nn {row['nn_success']['rate']:.3f} "
-              f"replay {row['replay_bound']['rate']:.3f}")
+        nn = f"{row['nn_success']['rate']:.3f}" if row["nn_success"] else "-"
+        replay = f"{row['replay_bound']['rate']:.3f}" if row["replay_bound"] else "-"
+        print(f"{variant:16} {per_seed:30} {row['final_pooled']:.3f} [{low:.3f}, {high:.3f}]  "
+              f"{sums:18} nn {nn} replay {replay}")
     for comparison in comparisons:
         print(f"  {comparison['text']}: {comparison['verdict']}")
     for skill, entry in checks.items():

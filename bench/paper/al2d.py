@@ -11,6 +11,14 @@ same ``init`` random trials as GP-LSE, each next trial draws a context α from t
 context distribution and executes ``θ* = argmax_θ NN(α, θ)`` (the most confident valid control
 among ``candidates`` uniform ones); the network is retrained after every trial
 (:func:`learn_nn_argmax`). *Random* never trains and draws uniform controls.
+
+Outcomes (issue #21): the push declares an outcome (the object's end position), so with
+``LearningConfig``'s defaults (``hindsight=True``) GP-LSE and both networks also learn from
+every trial relabelled for other goals (:mod:`ltamp_cli.learning.outcomes`), GP-LSE chooses
+its trials by the goal-averaged straddle and its GP's lengthscales are capped at 1.0;
+Random is unchanged (it trains nothing). :data:`HINDSIGHT` ``= False`` restores the
+score-only learners of the earlier standard runs (pour and scoop declare no outcome: their
+jobs are the same either way). Measured in ``docs/results/learning/README.md``, "Outcomes".
 """
 
 from __future__ import annotations
@@ -42,6 +50,8 @@ from ltamp_cli.trials.record import TrialRecord
 NAME = "al2d"
 LEARNERS = ["random", "nn-r", "nn-c", "lse"]
 LABELS = {"random": "Random", "nn-r": "NN_r", "nn-c": "NN_c", "lse": "GP-LSE"}
+#: Learn from the push's outcomes (module doc); ``False``: scores only, as before issue #21.
+HINDSIGHT = True
 #: Learners that choose their next trial by their own argmax (the paper's NN_c / NN_r).
 ARGMAX_LEARNERS = ("nn-r", "nn-c")
 SIZES: dict[str, dict[str, Any]] = {
@@ -113,7 +123,7 @@ def _skill_rows(ctx: Context, skill: str, backend: SkillBackend | None) -> list[
                                    contexts, is_valid, seed=seed,
                                    n_candidates=own["candidates"])
         config = LearningConfig(strategy=learner, budget=own["budget"], init=own["init"],
-                                seed=seed)
+                                seed=seed, hindsight=HINDSIGHT)
         t0 = time.perf_counter()
         if learner in ARGMAX_LEARNERS:
             curve = learn_nn_argmax(backend, skill, config, evaluator, own["eval_every"],
@@ -188,7 +198,9 @@ def learn_nn_argmax(backend: SkillBackend, skill: str, config: LearningConfig,
     networks start from the same random trials. Every later trial: a fresh context ``α`` and
     ``θ* = argmax NN(α, θ)`` over ``n_candidates`` uniform controls (first valid one by the
     backend's pre-check; classifiers rank by ``p(success)``, regressors by the predicted
-    score). The network is refitted on all trials after each one. Returns the last network,
+    score). The network is refitted on all trials after each one (plus their relabelled
+    points when the skill declares an outcome and ``config.hindsight``, the same data
+    :func:`learn_online` gives GP-LSE). Returns the last network,
     the trials and the learning curve (``evaluator`` every ``eval_every`` trials and at the
     budget).
     """
@@ -203,6 +215,8 @@ def learn_nn_argmax(backend: SkillBackend, skill: str, config: LearningConfig,
     records: list[TrialRecord] = []
     model: SkillModel | None = None
     curve: list[Evaluation] = []
+    # A skill with a declared outcome: the networks see the relabelled points too, as GP-LSE.
+    relabeller = config.relabeller(spec)
 
     def is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
         return backend.is_valid(skill, context, controls)
@@ -221,11 +235,17 @@ def learn_nn_argmax(backend: SkillBackend, skill: str, config: LearningConfig,
         records.append(TrialRecord(
             skill=skill, context=tuple(map(float, context)), control=tuple(map(float, control)),
             score=score, valid=bool(result.valid), seed=seed, backend=backend.name,
-            index=index, info={"strategy": config.strategy}))
+            index=index, info={"strategy": config.strategy},
+            outcome=None if result.outcome is None else tuple(result.outcome)))
         x.append(template.to_unit(context, control)[0])
         y.append(score)
+        train_x, train_y = np.array(x), np.array(y)
+        if relabeller is not None and result.outcome is not None:
+            relabeller.add(context, control, np.asarray(result.outcome))
+            extra_x, extra_y = relabeller.arrays()
+            train_x, train_y = np.vstack([train_x, extra_x]), np.concatenate([train_y, extra_y])
         # Retrained after every trial, as in the paper (the next argmax needs the new network).
-        model = fit_model(spec, config, np.array(x), np.array(y))
+        model = fit_model(spec, config, train_x, train_y)
         n = index + 1
         if evaluator is not None and (
                 n == config.budget or (eval_every > 0 and n >= config.init

@@ -14,11 +14,25 @@ Conventions
 * ``score > 0`` means the skill succeeded (the super-level set ``g > 0`` is what is learned).
 * An *invalid* control (e.g. a colliding start) is not simulated: it gets ``valid=False``
   and the skill's invalid score (usually ``-1``).
+
+Outcomes (optional, issue #21)
+------------------------------
+A skill may declare an :class:`OutcomeSpec` (``SkillSpec.outcome``): a named vector in
+physical units that each valid trial reports beside its score (``TrialResult.outcome``, shape
+``(d_outcome,)``; e.g. the pushed object's end position), the vectorised function giving the
+score from ``(context, control, outcome)``, and which context dimensions are *goals*: the
+physics does not depend on them, only the score does. Then one trial's outcome scores the
+same control for *every* goal exactly, and learners use that
+(:mod:`ltamp_cli.learning.outcomes`: hindsight relabelling). A skill that declares none
+(``outcome=None``, the default) is learned from its scores alone, exactly as before. A valid
+trial of a skill with an outcome must report one of the declared length with finite values,
+and the declared score function must reproduce the trial's score from it; otherwise the trial
+is recorded invalid with the reason (:func:`ltamp_cli.backends.sanity.run_trial_safely`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
 
@@ -67,6 +81,75 @@ class ParamSpace:
         return rng.uniform(self.low_array(), self.high_array(), size=(n, self.dim))
 
 
+#: ``(contexts (n, d_context), controls (n, d_control), outcomes (n, d_outcome)) -> scores
+#: (n,)``, all in physical units: a skill's score as a function of what its trial observed.
+OutcomeScore = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+#: ``outcomes (n, d_outcome) -> goals (n, len(goals))``: the goal values each outcome
+#: satisfies best (e.g. the object's end position for a push to a goal position).
+AchievedGoal = Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class OutcomeSpec:
+    """What a skill's trials observe besides the score (module doc, "Outcomes").
+
+    ``space`` names the outcome's values and their units; its bounds are the plausible range
+    (a reported value more than one box width beyond a bound makes the trial invalid, as for
+    records). ``score`` computes the score from ``(context, control, outcome)`` batches;
+    ``goals`` lists the context dimensions (indices into the skill's context) that are goals:
+    the trial's physics, hence its outcome, must not depend on them. ``achieved_goal``
+    (optional) maps an outcome to the goal it satisfies best; learners then add that goal
+    to their relabelled data (:mod:`ltamp_cli.learning.outcomes`).
+    """
+
+    space: ParamSpace
+    score: OutcomeScore
+    goals: tuple[int, ...]
+    achieved_goal: AchievedGoal | None = None
+
+    def __post_init__(self) -> None:
+        if self.space.dim < 1:
+            raise ValueError("an outcome needs at least one value")
+        if not self.goals or len(set(self.goals)) != len(self.goals):
+            raise ValueError(f"outcome goals must be distinct context indices, got {self.goals}")
+        if any(not isinstance(g, int) or g < 0 for g in self.goals):
+            raise ValueError(f"outcome goals must be context indices >= 0, got {self.goals}")
+
+    def scores(self, contexts: np.ndarray, controls: np.ndarray,
+               outcomes: np.ndarray) -> np.ndarray:
+        """The declared score for a batch, shape ``(n,)``; ``ValueError`` if the skill's
+        function returns another shape or non-finite values."""
+        contexts, controls = np.atleast_2d(contexts), np.atleast_2d(controls)
+        outcomes = np.asarray(outcomes, dtype=float).reshape(len(contexts), self.space.dim)
+        values = np.asarray(self.score(contexts, controls, outcomes), dtype=float)
+        if values.shape != (len(contexts),):
+            raise ValueError(f"the outcome score function returned shape {values.shape}, "
+                             f"expected ({len(contexts)},)")
+        if not np.isfinite(values).all():
+            raise ValueError("the outcome score function returned non-finite scores")
+        return values
+
+    def check(self, outcome: object) -> tuple[float, ...]:
+        """One reported outcome as a tuple of ``space.dim`` finite floats within one box width
+        of the bounds, or ``ValueError`` saying what is wrong (one line)."""
+        try:
+            values = np.asarray(outcome, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"outcome {outcome!r:.60} is not a list of numbers") from None
+        if values.shape != (self.space.dim,):
+            raise ValueError(f"outcome has shape {values.shape}, the skill declares "
+                             f"{self.space.dim} value(s) ({', '.join(self.space.names)})")
+        if not np.isfinite(values).all():
+            raise ValueError(f"outcome {values.tolist()} has non-finite values")
+        for name, value, low, high in zip(self.space.names, values, self.space.lows,
+                                          self.space.highs, strict=True):
+            width = max(high - low, 1e-9)
+            if not low - width <= value <= high + width:
+                raise ValueError(f"outcome {name}={value:g} lies far outside its declared "
+                                 f"range [{low:g}, {high:g}]")
+        return tuple(float(v) for v in values)
+
+
 @dataclass(frozen=True)
 class SkillSpec:
     """What a skill is: its context and control parameters and how it is scored."""
@@ -81,15 +164,27 @@ class SkillSpec:
     #: (:data:`ltamp_cli.learning.active.DETERMINISTIC_NOISE`), so its marginal likelihood
     #: cannot explain a narrow success set away as noise.
     deterministic: bool = False
+    #: What a trial observes besides its score, and how the score follows from it (module
+    #: doc, "Outcomes"); ``None``: the skill reports scores only.
+    outcome: OutcomeSpec | None = None
+
+    def __post_init__(self) -> None:
+        if self.outcome is not None and max(self.outcome.goals) >= self.context.dim:
+            raise ValueError(f"skill {self.name!r}: outcome goal index "
+                             f"{max(self.outcome.goals)} is not a context dimension "
+                             f"(the context has {self.context.dim})")
 
 
 @dataclass(frozen=True)
 class TrialResult:
-    """Outcome of one trial. ``info`` holds skill-specific measurements (JSON-able)."""
+    """What one trial gave. ``info`` holds skill-specific measurements (JSON-able);
+    ``outcome`` the declared outcome ``(d_outcome,)`` in physical units when the skill
+    declares one (``SkillSpec.outcome``) and the trial was simulated, else ``None``."""
 
     score: float
     valid: bool
     info: Mapping[str, Any] = field(default_factory=dict)
+    outcome: Sequence[float] | None = None
 
 
 @runtime_checkable

@@ -17,12 +17,12 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Generic, TypeVar
 
 import numpy as np
 
-from ltamp_cli.backends.protocol import SkillBackend, TrialResult, skill_spec
+from ltamp_cli.backends.protocol import SkillBackend, SkillSpec, TrialResult, skill_spec
 from ltamp_cli.trials.record import MAX_SCORE_MAGNITUDE
 
 # Longest error message kept in a failed trial's record (one line).
@@ -186,9 +186,15 @@ def run_trial_safely(
     A trial that raises (``crashed``: the backend's world may be left mid-trial), returns
     something other than a :class:`TrialResult`, scores a non-finite value or one beyond
     ``±MAX_SCORE_MAGNITUDE`` or reports measurements that are not strict JSON (NaN, inf) is
-    an invalid trial with the skill's invalid score and the reason in ``info["reason"]``.
+    an invalid trial with the skill's invalid score and the reason in ``info["reason"]``. So
+    is a valid trial of a skill that declares an outcome (``SkillSpec.outcome``) whose
+    reported outcome is missing, malformed, far out of its range, or does not reproduce the
+    trial's score through the declared score function (:func:`checked_outcome`). The
+    returned result's ``outcome`` is a tuple of floats for such a skill's valid trials and
+    ``None`` otherwise (an undeclared outcome is dropped).
     """
-    invalid_score = skill_spec(backend, skill).invalid_score
+    spec = skill_spec(backend, skill)
+    invalid_score = spec.invalid_score
     try:
         result = backend.run_trial(skill, context, control, seed)
     except Exception as error:  # one trial's physics must not end a collection or training
@@ -209,4 +215,37 @@ def run_trial_safely(
         json.dumps(dict(result.info), allow_nan=False)
     except (TypeError, ValueError) as error:
         return failed_result(invalid_score, f"unrecordable trial info: {error}"), False
-    return result, False
+    if spec.outcome is None or not result.valid:
+        return (result if result.outcome is None else replace(result, outcome=None)), False
+    try:
+        outcome = checked_outcome(spec, context, control, score, result.outcome)
+    except ValueError as error:
+        return failed_result(invalid_score, f"bad outcome: {error}"), False
+    return replace(result, outcome=outcome), False
+
+
+#: Largest difference between a trial's score and the one its declared outcome score function
+#: gives (absolute, plus the same relative to the score's magnitude).
+OUTCOME_SCORE_TOLERANCE = 1e-6
+
+
+def checked_outcome(spec: SkillSpec, context: np.ndarray, control: np.ndarray, score: float,
+                    outcome: object) -> tuple[float, ...]:
+    """``outcome`` as a tuple of floats if it fits ``spec.outcome`` (which must be declared):
+    the declared length, finite, within one box width of its range, and reproducing
+    ``score`` through the declared score function; else ``ValueError`` (one line)."""
+    assert spec.outcome is not None
+    if outcome is None:
+        raise ValueError("the skill declares an outcome but the trial reported none")
+    values = spec.outcome.check(outcome)
+    try:
+        again = float(spec.outcome.scores(np.asarray(context, dtype=float)[None, :],
+                                          np.asarray(control, dtype=float)[None, :],
+                                          np.asarray(values)[None, :])[0])
+    except Exception as error:  # a plugin's score function: any failure is one line
+        raise ValueError(f"the declared score function failed: "
+                         f"{type(error).__name__}: {error}") from None
+    if abs(again - score) > OUTCOME_SCORE_TOLERANCE * (1.0 + abs(score)):
+        raise ValueError(f"the declared score function gives {again:g} from the outcome, "
+                         f"the trial scored {score:g}")
+    return values

@@ -70,6 +70,15 @@ def train_command(
             "(score > 0); without a success the straddle only chases uncertainty.",
         ),
     ] = True,
+    hindsight: Annotated[
+        bool,
+        typer.Option(
+            "--hindsight/--no-hindsight",
+            help="Skills that declare an outcome (e.g. the 2D push's end position): also "
+            "learn from each trial relabelled for other goals (achieved goal + 4 drawn, at "
+            "most 300 relabelled points). No effect on other skills.",
+        ),
+    ] = True,
     kernel: Annotated[str, typer.Option("--kernel", help="rbf, matern52 or mlp.")] = "matern52",
     seed: Annotated[int, typer.Option("--seed", help="Seed of every random choice.")] = 0,
     data: Annotated[
@@ -144,7 +153,7 @@ def train_command(
     try:
         config = LearningConfig(
             strategy=strategy, kernel=kernel, budget=budget, init=init, seed=seed,
-            explore_until_success=explore_until_success,
+            explore_until_success=explore_until_success, hindsight=hindsight,
         )
     except ValueError as error:
         raise InputError(str(error)) from None

@@ -81,17 +81,23 @@ def maximize(
     n_restarts: int = 3,
     is_valid: ValidityTest | None = None,
     max_iter: int = 25,
+    extra: np.ndarray | None = None,
 ) -> Maximum | None:
     """Maximise ``objective(μ, σ)`` over the free coordinates of ``[-1, 1]^d``.
 
     ``fixed (d,)`` gives the values of the coordinates not in ``free`` (a bool mask ``(d,)``;
-    default: all free). Returns ``None`` when no candidate passes ``is_valid``.
+    default: all free). ``extra (k, n_free)`` adds candidates (their free coordinates) to
+    the uniform ones. Returns ``None`` when no candidate passes ``is_valid``.
     """
     d = gp.dim
     free = np.ones(d, dtype=bool) if free is None else np.asarray(free, dtype=bool)
     base = np.zeros(d) if fixed is None else np.asarray(fixed, dtype=float).reshape(d)
     candidates = np.repeat(base[None, :], n_candidates, axis=0)
     candidates[:, free] = rng.uniform(-1.0, 1.0, size=(n_candidates, int(free.sum())))
+    if extra is not None and len(extra):
+        more = np.repeat(base[None, :], len(extra), axis=0)
+        more[:, free] = np.asarray(extra, dtype=float).reshape(len(extra), int(free.sum()))
+        candidates = np.vstack([candidates, more])
     values = evaluate(gp, objective, candidates)
     order = np.argsort(-values, kind="stable")
     starts = first_valid(order, candidates, n_restarts, is_valid)

@@ -69,6 +69,12 @@ from ltamp_cli.learning.held_context import HeldContext
 from ltamp_cli.learning.kernels import KERNEL_NAMES
 from ltamp_cli.learning.metrics import Evaluation, SkillEvaluator
 from ltamp_cli.learning.model import LevelSetModel, PhysicalValidity, SkillModel
+from ltamp_cli.learning.outcomes import (
+    DEFAULT_CAP,
+    DEFAULT_GOALS_PER_TRIAL,
+    Relabeller,
+    propose_for_all_goals,
+)
 from ltamp_cli.threads import limits_threads
 from ltamp_cli.trials.record import TrialDataset, TrialRecord, check_against_spec
 
@@ -126,6 +132,27 @@ class LearningConfig:
     #: control (:mod:`~ltamp_cli.learning.held_context`, issue #21). Online learning only
     #: (pool mode picks pool trials).
     context_repeats: int = 0
+    #: Skills that declare an outcome (``SkillSpec.outcome``): add each trial's relabelled
+    #: points (its achieved goal and ``hindsight_goals`` drawn goals, exact scores) to the
+    #: training data, at most ``hindsight_cap`` of them (:mod:`~ltamp_cli.learning.outcomes`).
+    #: ``False``, or a skill without an outcome: scores only, as before issue #21.
+    hindsight: bool = True
+    hindsight_goals: int = DEFAULT_GOALS_PER_TRIAL
+    hindsight_cap: int = DEFAULT_CAP
+    #: ``lse`` with relabelled trials: ``"goal-mean"`` — the control whose ψ averaged over
+    #: drawn goals is largest (:func:`~ltamp_cli.learning.outcomes.propose_for_all_goals`);
+    #: ``"joint"`` — the plain straddle over control and context.
+    hindsight_acquisition: str = "goal-mean"
+    #: GP strategies with relabelled trials: θ* also considers the training controls
+    #: (:attr:`~ltamp_cli.learning.model.LevelSetModel.data_candidates`).
+    hindsight_theta_data: bool = True
+    #: GP strategies with relabelled trials and no ``lengthscale_max``: this upper bound on
+    #: every lengthscale (normalised units; ``None``: none). On the 2D push the relabelled
+    #: data of a few pushes that moved the object let the marginal likelihood call the
+    #: controls irrelevant (lengthscales at 20) and the goal-averaged straddle then chose
+    #: pushes that never touched it; capped at 1.0 (half the box) the fit keeps the controls
+    #: (``docs/results/learning/README.md``, "Outcomes").
+    hindsight_lengthscale_max: float | None = 1.0
     threads: int | None = 1  # thread-pool limit while learning (ltamp_cli.threads)
 
     def __post_init__(self) -> None:
@@ -145,14 +172,27 @@ class LearningConfig:
             raise ValueError(f"lse2_candidates must be >= 1, got {self.lse2_candidates}")
         if self.context_repeats < 0:
             raise ValueError(f"context_repeats must be >= 0, got {self.context_repeats}")
+        if self.hindsight_acquisition not in ("goal-mean", "joint"):
+            raise ValueError(f"hindsight_acquisition must be 'goal-mean' or 'joint', got "
+                             f"{self.hindsight_acquisition!r}")
+        if self.hindsight_goals < 0 or self.hindsight_cap < 0:
+            raise ValueError(f"hindsight_goals and hindsight_cap must be >= 0, got "
+                             f"{self.hindsight_goals} and {self.hindsight_cap}")
         low, high = HyperBounds().lengthscale
-        if self.lengthscale_max is not None and not low < self.lengthscale_max <= high:
-            raise ValueError(f"lengthscale_max must be in ({low}, {high}], "
-                             f"got {self.lengthscale_max}")
+        for name in ("lengthscale_max", "hindsight_lengthscale_max"):
+            value = getattr(self, name)
+            if value is not None and not low < value <= high:
+                raise ValueError(f"{name} must be in ({low}, {high}], got {value}")
         if self.lengthscale_prior_sd is not None and not self.lengthscale_prior_sd > 0:
             raise ValueError(
                 f"lengthscale_prior_sd must be > 0 or None, got {self.lengthscale_prior_sd}"
             )
+
+    def relabeller(self, spec: SkillSpec) -> Relabeller | None:
+        """The hindsight relabeller for ``spec`` (``None``: scores only)."""
+        if not self.hindsight or spec.outcome is None:
+            return None
+        return Relabeller(spec, self.hindsight_goals, self.hindsight_cap, self.seed)
 
     def lengthscale_prior(self) -> LengthscalePrior | None:
         """The GP fit's lengthscale prior (``None``: maximum marginal likelihood)."""
@@ -189,24 +229,31 @@ def fit_model(
     previous: SkillModel | None = None,
     final: bool = False,
     rng: np.random.Generator | None = None,
+    n_trials: int | None = None,
 ) -> SkillModel:
     """The strategy's model on normalised ``x (n, d)`` and scores ``y (n,)``.
 
     For GP strategies ``previous`` (the last model) gives the warm start; hyperparameters are
-    re-optimised only when the refit schedule says so (always when ``final``).
+    re-optimised only when the refit schedule says so (always when ``final``). The schedule
+    counts ``n_trials`` (default ``n``; less when ``x`` holds relabelled points too).
     """
     rng = rng if rng is not None else np.random.default_rng(config.seed)
     if config.strategy in GP_STRATEGIES:
         warm = previous.gp if isinstance(previous, LevelSetModel) else None
-        n = len(y)
+        n = len(y) if n_trials is None else n_trials
+        relabelled = config.relabeller(spec) is not None
+        data = config.hindsight_theta_data and relabelled
+        cap = config.lengthscale_max
+        if cap is None and relabelled:
+            cap = config.hindsight_lengthscale_max
         if warm is not None and not final and n > config.dense_refit and n % config.refit_every:
-            return LevelSetModel(spec, warm.with_data(x, y))
+            return LevelSetModel(spec, warm.with_data(x, y), data)
         restarts = config.gp_restarts if final or warm is None else 0
         gp = fit_gp(
             x, y, config.kernel, mean=config.mean, restarts=restarts, rng=rng, warm_start=warm,
-            bounds=gp_bounds(spec, config.lengthscale_max), prior=config.lengthscale_prior(),
+            bounds=gp_bounds(spec, cap), prior=config.lengthscale_prior(),
         )
-        return LevelSetModel(spec, gp)
+        return LevelSetModel(spec, gp, data)
     if config.strategy == "random":
         return RandomModel.fit(spec, x, y)
     return SklearnModel.fit(spec, config.strategy, x, y, seed=config.seed)
@@ -243,22 +290,42 @@ class _Learner:
         self.y: list[float] = []
         self.model: SkillModel | None = None
         self._fitted_on = -1
+        self.relabeller = config.relabeller(spec)
 
-    def add(self, x: np.ndarray, score: float) -> None:
+    def add(self, x: np.ndarray, score: float, record: TrialRecord | None = None) -> None:
+        """One trial: normalised ``x (d,)`` and its score; ``record`` (its physical values
+        and outcome) feeds the relabeller when the skill declares an outcome."""
         self.x.append(np.asarray(x, dtype=float))
         self.y.append(_training_score(self.spec, score))
+        if self.relabeller is not None and record is not None and record.outcome is not None:
+            self.relabeller.add(np.asarray(record.context), np.asarray(record.control),
+                                np.asarray(record.outcome))
+
+    def training_set(self) -> tuple[np.ndarray, np.ndarray]:
+        """The model's data: the trials ``(n, d)``, ``(n,)`` plus kept relabelled points."""
+        x, y = np.array(self.x), np.array(self.y)
+        if self.relabeller is None:
+            return x, y
+        extra_x, extra_y = self.relabeller.arrays()
+        x = x.reshape(len(y), extra_x.shape[1])
+        return np.concatenate([x, extra_x]), np.concatenate([y, extra_y])
+
+    def scores(self) -> Sequence[float]:
+        """Every training score, relabelled ones included (what ``goes_active`` looks at)."""
+        return self.y if self.relabeller is None else self.training_set()[1].tolist()
 
     def current(self) -> SkillModel:
         if self.model is None or self._fitted_on != len(self.y):
-            self.model = fit_model(
-                self.spec, self.config, np.array(self.x), np.array(self.y), self.model, rng=self.rng
-            )
+            x, y = self.training_set()
+            self.model = fit_model(self.spec, self.config, x, y, self.model, rng=self.rng,
+                                   n_trials=len(self.y))
             self._fitted_on = len(self.y)
         return self.model
 
     def final(self) -> SkillModel:
-        x, y = np.array(self.x), np.array(self.y)
-        return fit_model(self.spec, self.config, x, y, self.model, final=True, rng=self.rng)
+        x, y = self.training_set()
+        return fit_model(self.spec, self.config, x, y, self.model, final=True, rng=self.rng,
+                         n_trials=len(self.y))
 
 
 class _Curve:
@@ -316,8 +383,7 @@ def learn_online(
     learner = _Learner(spec, config, rng)
     template = RandomModel(spec, 0.0)  # coordinates and validity only
     for record in records:
-        learner.x.append(template.to_unit(record.context, record.control)[0])
-        learner.y.append(_training_score(spec, record.score))
+        learner.add(template.to_unit(record.context, record.control)[0], record.score, record)
     curve = _Curve(evaluator, eval_every, evaluate_success)
 
     def is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
@@ -336,7 +402,7 @@ def learn_online(
             if config.strategy == "lse" and config.context_repeats > 0 else None)
     with bar:
         while len(records) < config.budget:
-            model = learner.current() if goes_active(config, learner.y) else None
+            model = learner.current() if goes_active(config, learner.scores()) else None
             if held is not None and isinstance(model, LevelSetModel):
                 context, control = held.propose(model, rng, is_valid, config.n_candidates,
                                                 config.acquisition_restarts)
@@ -359,11 +425,12 @@ def learn_online(
                 wall_time_s=time.perf_counter() - start,
                 index=index,
                 info={"strategy": config.strategy, **dict(result.info)},
+                outcome=None if result.outcome is None else tuple(result.outcome),
             )
             if dataset is not None:
                 dataset.append(record)
             records.append(record)
-            learner.add(template.to_unit(context, control)[0], record.score)
+            learner.add(template.to_unit(context, control)[0], record.score, record)
             curve.maybe(learner)
             bar.update(1)
     return LearningResult(learner.final(), records, curve.points)
@@ -385,6 +452,11 @@ def _propose(
         )
         return context, spec.control.sample_uniform(rng, 1)[0]
     test = model.validity_test(is_valid)
+    if (config.strategy == "lse" and config.hindsight_acquisition == "goal-mean"
+            and config.relabeller(spec) is not None):
+        chosen = propose_for_all_goals(model, rng, config.n_candidates, test)
+        if chosen is not None:
+            return chosen
     if config.strategy == "lse":
         best = maximize(
             model.gp,
@@ -480,7 +552,7 @@ def learn_from_pool(
     )
     with bar:
         while len(chosen) < budget:
-            model = learner.current() if goes_active(config, learner.y) else None
+            model = learner.current() if goes_active(config, learner.scores()) else None
             if isinstance(model, LevelSetModel):
                 index = _pool_pick(model, config, spec, x_pool, available, rng)
             else:
@@ -489,7 +561,7 @@ def learn_from_pool(
                 index = int(order[cursor])
             available[index] = False
             chosen.append(index)
-            learner.add(x_pool[index], y_pool[index])
+            learner.add(x_pool[index], y_pool[index], pool[index])
             curve.maybe(learner)
             bar.update(1)
     return LearningResult(learner.final(), [pool[i] for i in chosen], curve.points)

@@ -135,11 +135,17 @@ class LevelSetModel(SkillModel):
 
     kind = "gp"
 
-    def __init__(self, spec: SkillSpec, gp: GaussianProcess) -> None:
+    def __init__(self, spec: SkillSpec, gp: GaussianProcess,
+                 data_candidates: bool = False) -> None:
         super().__init__(spec)
         if gp.dim != self.dim:
             raise ValueError(f"GP has {gp.dim} inputs but skill {spec.name!r} has {self.dim}")
         self.gp = gp
+        #: θ* also considers the controls of the GP's training points (besides uniform
+        #: candidates): set by learners for skills whose trials are relabelled
+        #: (:mod:`~ltamp_cli.learning.outcomes`), where a training control that reached a
+        #: goal is the likeliest θ* for goals near it, yet a needle among uniform draws.
+        self.data_candidates = data_candidates
 
     @staticmethod
     def fit(
@@ -195,8 +201,9 @@ class LevelSetModel(SkillModel):
     ) -> tuple[np.ndarray, float]:
         """``θ* = argmax μ/σ`` over valid controls for ``context``: ``(θ* (dθ,), μ/σ at θ*)``.
 
-        Random candidates, then L-BFGS-B from the best ``n_restarts`` valid ones. If no
-        candidate is valid, falls back to the unrestricted maximum.
+        Random candidates (plus the training controls when ``data_candidates``), then
+        L-BFGS-B from the best ``n_restarts`` valid ones. If no candidate is valid, falls back
+        to the unrestricted maximum.
         """
         rng = rng if rng is not None else np.random.default_rng(0)
         fixed = np.zeros(self.dim)
@@ -208,6 +215,8 @@ class LevelSetModel(SkillModel):
             "n_candidates": n_candidates,
             "n_restarts": n_restarts,
         }
+        if self.data_candidates:
+            kwargs["extra"] = np.unique(self.gp.x_np[:, : self.spec.control.dim], axis=0)
         best = maximize(
             self.gp, confidence_ratio, rng, is_valid=self.validity_test(is_valid), **kwargs
         )

@@ -143,6 +143,7 @@ def _run_guarded(backend: SkillBackend, job: CollectJob, index: int) -> tuple[Tr
         wall_time_s=time.perf_counter() - start,
         index=index,
         info=dict(result.info),
+        outcome=None if result.outcome is None else tuple(result.outcome),
     ), crashed
 
 

@@ -33,6 +33,9 @@ class TrialRecord:
     within the job that produced it (collection resumes by skipping done indices). ``info``
     holds the skill's measurements; an invalid trial says why in ``info["reason"]`` (e.g.
     ``"colliding start"``, ``"physics diverged: ..."``, ``"trial raised ..."``).
+    ``outcome`` is the trial's declared outcome (``SkillSpec.outcome``, physical units, in
+    the order of its names) or ``None``; the JSON line has an ``"outcome"`` field only when
+    it is not ``None``, so records of skills without one are written as before.
     """
 
     skill: str
@@ -45,6 +48,7 @@ class TrialRecord:
     wall_time_s: float = 0.0
     index: int = -1
     info: Mapping[str, Any] = field(default_factory=dict)
+    outcome: tuple[float, ...] | None = None
 
     def to_json(self) -> str:
         record = asdict(self)
@@ -52,6 +56,10 @@ class TrialRecord:
         record["control"] = [float(v) for v in self.control]
         record["score"] = _finite_or_none(self.score)
         record["info"] = dict(self.info)
+        if self.outcome is None:
+            del record["outcome"]
+        else:
+            record["outcome"] = [float(v) for v in self.outcome]
         return json.dumps(record, sort_keys=True, allow_nan=False)
 
     @staticmethod
@@ -59,7 +67,8 @@ class TrialRecord:
         """A record from its JSON object. Fields must have their own JSON types (``"valid":
         "false"`` is no boolean, ``"context": "5"`` no list): ``ValueError``/``TypeError``
         name the field. ``context`` and ``control`` must be finite; ``score`` is a finite
-        number or ``null``/``NaN`` (an invalid trial)."""
+        number or ``null``/``NaN`` (an invalid trial); ``outcome``, optional, a list of
+        finite numbers or ``null``."""
         if not isinstance(data, Mapping):
             raise TypeError(f"expected a JSON object, got {type(data).__name__}")
         score = data["score"]
@@ -74,6 +83,8 @@ class TrialRecord:
             wall_time_s=_number(data.get("wall_time_s", 0.0), "wall_time_s", nan_ok=True),
             index=_integer(data.get("index", -1), "index"),
             info=_mapping(data.get("info", {}), "info"),
+            outcome=(None if data.get("outcome") is None
+                     else _finite_values(data["outcome"], "outcome")),
         )
 
 
@@ -218,7 +229,8 @@ MAX_SCORE_MAGNITUDE = 1e100
 def check_against_spec(records: Sequence[TrialRecord], spec: SkillSpec) -> None:
     """Raise ``ValueError`` naming the first record of ``spec``'s skill whose context or
     control has the wrong length or lies far outside the skill's box (more than one box
-    width beyond a bound), or whose score's magnitude exceeds :data:`MAX_SCORE_MAGNITUDE`:
+    width beyond a bound), whose outcome has another length than the skill declares, or
+    whose score's magnitude exceeds :data:`MAX_SCORE_MAGNITUDE`:
     such values make the GP's arithmetic overflow (NaN everywhere). Records of other skills
     are not checked."""
     for record in records:
@@ -236,6 +248,10 @@ def check_against_spec(records: Sequence[TrialRecord], spec: SkillSpec) -> None:
                 if not low - width <= value <= high + width:
                     raise ValueError(f"{where}: {part} {name}={value:g} lies far outside the "
                                      f"skill's bounds [{low:g}, {high:g}]")
+        if (record.outcome is not None and spec.outcome is not None
+                and len(record.outcome) != spec.outcome.space.dim):
+            raise ValueError(f"{where}: outcome has {len(record.outcome)} value(s), skill "
+                             f"{spec.name!r} declares {spec.outcome.space.dim}")
         if math.isfinite(record.score) and abs(record.score) > MAX_SCORE_MAGNITUDE:
             raise ValueError(f"{where}: score {record.score:g} is beyond ±{MAX_SCORE_MAGNITUDE:g}")
 

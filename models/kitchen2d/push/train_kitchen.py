@@ -105,8 +105,10 @@ def main() -> None:
     from ltamp_cli.trials.record import TrialDataset
 
     torch.set_num_threads(1)
+    # hindsight=False: the shipped model's recipe, from scores only (its trials.jsonl predates
+    # outcomes, issue #21; relabelling would change what a resumed run fits).
     config = LearningConfig(strategy="lse2", kernel="matern52", budget=args.budget,
-                            init=args.init, seed=args.seed)
+                            init=args.init, seed=args.seed, hindsight=False)
     backend = AimedPushes(load_backend("box2d"))
     dataset = TrialDataset(args.out / "trials.jsonl")
     result = learn_online(backend, "push", config, dataset, progress=sys.stderr.isatty())

@@ -14,9 +14,13 @@ The skill as the reference Kitchen2D defines it (field facts):
 * Validity: a pusher start overlapping the object scores −1 without simulating.
 
 Score (seed paper): g = 2 − ‖x − x_goal‖ with x the object's position at the end. Nothing
-here is random. The object's density is not among the reference facts; 0.1 makes it light
-enough that the friction joint (deceleration 5 / mass ≈ 16 units/s²) stops a push at
-10 units/s within the coast (about 3 units), so goals over the whole box are reachable.
+here is random. The trial reports x as its *outcome* (``object_x, object_y``; the protocol's
+``OutcomeSpec``): the goal is a pure goal (the push's physics ignores it), so one push's end
+position scores that control for every goal (hindsight relabelling,
+:mod:`ltamp_cli.learning.outcomes`). The object's density is not among the reference
+facts; 0.1 makes it light enough that the friction joint (deceleration 5 / mass ≈ 16
+units/s²) stops a push at 10 units/s within the coast (about 3 units), so goals over the
+whole box are reachable.
 """
 
 from __future__ import annotations
@@ -29,7 +33,29 @@ from Box2D import b2
 
 from ltamp_cli.backends.box2d.skills.common import new_kitchen
 from ltamp_cli.backends.box2d.world import Observer, PhysicsConfig
-from ltamp_cli.backends.protocol import ParamSpace, SkillSpec, TrialResult
+from ltamp_cli.backends.protocol import OutcomeSpec, ParamSpace, SkillSpec, TrialResult
+
+
+def outcome_scores(contexts: np.ndarray, controls: np.ndarray,
+                   outcomes: np.ndarray) -> np.ndarray:
+    """g = 2 − ‖end position − goal‖ for batches: goals ``contexts (n, 2)``, end positions
+    ``outcomes (n, 2)`` (world units); ``controls`` are not needed. Returns ``(n,)``."""
+    del controls
+    return 2.0 - np.linalg.norm(np.asarray(outcomes, dtype=float)
+                                - np.asarray(contexts, dtype=float), axis=1)
+
+
+def achieved_goal(outcomes: np.ndarray) -> np.ndarray:
+    """The goal an end position satisfies best: the end position itself, ``(n, 2)``."""
+    return np.asarray(outcomes, dtype=float)
+
+
+OUTCOME = OutcomeSpec(
+    space=ParamSpace(("object_x", "object_y"), (-10.0, -10.0), (10.0, 10.0), ("units", "units")),
+    score=outcome_scores,
+    goals=(0, 1),
+    achieved_goal=achieved_goal,
+)
 
 SPEC = SkillSpec(
     name="push",
@@ -40,6 +66,7 @@ SPEC = SkillSpec(
     ),
     description="push a round object to a goal seen from above; g = 2 - |x - goal|",
     deterministic=True,
+    outcome=OUTCOME,
 )
 
 
@@ -134,4 +161,4 @@ def run(
         "final_speed": float(thing.linearVelocity.length),
         "sim_time_s": round(kitchen.time, 4),
     }
-    return TrialResult(score(distance), True, info)
+    return TrialResult(score(distance), True, info, outcome=(float(final[0]), float(final[1])))
