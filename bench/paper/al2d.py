@@ -95,13 +95,26 @@ def parts(ctx: Context) -> list[tuple[str, float]]:
     return estimates
 
 
+def _job_key_sizes(own: dict[str, Any], skill: str) -> dict[str, Any]:
+    """What identifies a job in the log: the sizes, plus ``hindsight`` for a skill that
+    declares an outcome and learns from it (its jobs differ from the score-only ones of
+    earlier runs, which must not be resumed as if they were the same; pour's and scoop's keys
+    are unchanged, so their logged jobs stay valid)."""
+    backend = load_backend("box2d")
+    try:
+        has_outcome = backend.skills()[skill].outcome is not None
+    finally:
+        backend.close()
+    return {**own, "hindsight": True} if HINDSIGHT and has_outcome else own
+
+
 def _skill_rows(ctx: Context, skill: str, backend: SkillBackend | None) -> list[dict[str, Any]]:
     """Every learner × seed job of ``skill``: run now (``backend`` given) or read back from
     the job log (``backend=None``: a missing job is an error). Each job is logged when it
     finishes, so an interrupted run continues with the next job."""
     sizes = ctx.sizes(SIZES)
     own = _skill_sizes(sizes, skill)
-    log = JobLog(ctx, f"{NAME}-{skill}", own)
+    log = JobLog(ctx, f"{NAME}-{skill}", _job_key_sizes(own, skill))
     jobs = [(learner, seed) for learner in LEARNERS for seed in range(own["seeds"])]
     if backend is None:
         missing = [f"{learner}/{seed}" for learner, seed in jobs

@@ -1,0 +1,17 @@
+"""al2d's job log tells a push job that learns from outcomes from the score-only ones of
+earlier runs, so a rerun does not resume the old jobs as if they were the new ones."""
+
+from __future__ import annotations
+
+import pytest
+
+from bench.paper import al2d
+
+
+def test_push_jobs_are_keyed_by_hindsight(monkeypatch: pytest.MonkeyPatch) -> None:
+    own = {"budget": 100, "seeds": 5}
+    assert al2d._job_key_sizes(own, "pour") == own  # no outcome: logged jobs stay valid
+    assert al2d._job_key_sizes(own, "scoop") == own
+    assert al2d._job_key_sizes(own, "push") == {**own, "hindsight": True}
+    monkeypatch.setattr(al2d, "HINDSIGHT", False)
+    assert al2d._job_key_sizes(own, "push") == own
