@@ -76,7 +76,11 @@ def sample_command(
     from ltamp_cli.cli.options import check_confidence_options
     from ltamp_cli.learning.model import LevelSetModel
     from ltamp_cli.learning.model_dir import load_model
-    from ltamp_cli.sampling.factory import SAMPLER_NAMES, make_sampler
+    from ltamp_cli.sampling.factory import (
+        SAMPLER_NAMES,
+        make_sampler,
+        outside_trained_range,
+    )
     from ltamp_cli.sampling.kernel_learning import load_kernel
     from ltamp_cli.threads import use_one_thread
 
@@ -101,12 +105,9 @@ def sample_command(
         raise InputError(f"--plot: only for 1 or 2 controls, {spec.name!r} has "
                          f"{spec.control.dim}")
     values = np.array(parse_context(list(context or []), spec.context.names))
-    lows, highs = spec.context.low_array(), spec.context.high_array()
-    outside = [f"{name}={v:g} not in [{lo:g}, {hi:g}]" for name, v, lo, hi
-               in zip(spec.context.names, values, lows, highs, strict=True)
-               if not lo <= v <= hi]
+    outside = outside_trained_range(spec, values)
     if outside:
-        raise InputError(f"--context: outside the trained range: {'; '.join(outside)}")
+        raise InputError(f"--context: outside the trained range: {outside}")
     kernel = load_kernel(kernel_file, spec) if kernel_file is not None else None
 
     start = time.perf_counter()
