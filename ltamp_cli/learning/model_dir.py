@@ -168,12 +168,9 @@ def _check_weights(directory: Path, metadata: dict[str, Any], path: Path) -> Non
                          "train again to rewrite the model", location_in(path))
 
 
-def load_model(directory: str | Path) -> LoadedModel:
-    """Read a model directory written by :func:`save_model`; bad input raises ``InputError``.
-
-    Data only: the weights are read with ``allow_pickle=False`` and validated (dtype, shape,
-    finite values) before any model is built from them.
-    """
+def load_metadata(directory: str | Path) -> dict[str, Any]:
+    """``model.json`` of a model directory, checked for its format and version only (not
+    its weights: :func:`load_model` checks those). Bad input raises ``InputError``."""
     directory = Path(directory)
     path = directory / METADATA_FILE
     if not path.is_file():
@@ -187,6 +184,18 @@ def load_model(directory: str | Path) -> LoadedModel:
         raise InputError(
             f"unsupported model version {metadata.get('version')!r}", location_in(path)
         )
+    return metadata
+
+
+def load_model(directory: str | Path) -> LoadedModel:
+    """Read a model directory written by :func:`save_model`; bad input raises ``InputError``.
+
+    Data only: the weights are read with ``allow_pickle=False`` and validated (dtype, shape,
+    finite values) before any model is built from them.
+    """
+    directory = Path(directory)
+    metadata = load_metadata(directory)
+    path = directory / METADATA_FILE
     if (directory / "weights.pkl").exists() and not (directory / "weights.npz").exists():
         raise InputError("weights.pkl is a pickle, which ltamp no longer loads (it can run "
                          "code): train the model again to write weights.npz", location_in(path))
