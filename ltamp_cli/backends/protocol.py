@@ -133,6 +133,33 @@ def skill_spec(backend: SkillBackend, skill: str) -> SkillSpec:
     return specs[skill]
 
 
+def drawn_context(backend: SkillBackend, skill: str, rng: np.random.Generator) -> np.ndarray:
+    """``backend.sample_context(skill, rng)`` as a ``(dα,)`` float array, checked: a context
+    that is not ``dα`` finite numbers inside the skill's context box is a bug of the backend
+    (a plugin's, usually), reported as one :class:`~ltamp_cli.errors.InputError` line naming
+    the backend, its module and what was expected, not a numpy error deep in learning."""
+    from ltamp_cli.errors import InputError
+
+    space = skill_spec(backend, skill).context
+    drawn = backend.sample_context(skill, rng)
+    where = (f"backend {getattr(backend, 'name', '?')!r} ({type(backend).__module__}): "
+             f"sample_context({skill!r}) returned {drawn!r:.80}")
+    expected = (f"expected {space.dim} finite number(s) ({', '.join(space.names) or 'none'}) "
+                f"inside the skill's context bounds")
+    try:
+        values = np.asarray(drawn, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise InputError(f"{where}: {expected}") from None
+    if values.size != space.dim or not np.all(np.isfinite(values)):
+        raise InputError(f"{where}: {expected}")
+    lows, highs = space.low_array(), space.high_array()
+    slack = 1e-12 * (highs - lows)
+    if np.any(values < lows - slack) or np.any(values > highs + slack):
+        box = ", ".join(f"{lo:g}..{hi:g}" for lo, hi in zip(lows, highs, strict=True))
+        raise InputError(f"{where}: {expected} [{box}]")
+    return values
+
+
 def as_batch(controls: Sequence[float] | np.ndarray, dim: int) -> np.ndarray:
     """View one control or a batch of controls as an array of shape ``(n, dim)``."""
     array = np.asarray(controls, dtype=float)

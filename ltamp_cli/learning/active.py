@@ -59,7 +59,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from tqdm import tqdm
 
-from ltamp_cli.backends.protocol import SkillBackend, SkillSpec
+from ltamp_cli.backends.protocol import SkillBackend, SkillSpec, drawn_context
 from ltamp_cli.backends.sanity import run_trial_safely
 from ltamp_cli.learning.acquisition import evaluate, maximize, straddle
 from ltamp_cli.learning.baselines import SKLEARN_KINDS, RandomModel, SklearnModel
@@ -332,7 +332,7 @@ def learn_online(
         unit="trial",
     )
     held = (HeldContext(spec, config.context_repeats,
-                        lambda r: np.asarray(backend.sample_context(skill, r), dtype=float))
+                        lambda r: drawn_context(backend, skill, r))
             if config.strategy == "lse" and config.context_repeats > 0 else None)
     with bar:
         while len(records) < config.budget:
@@ -380,9 +380,7 @@ def _propose(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Next ``(context (dα,), control (dθ,))`` in physical units; random without a GP."""
     if not isinstance(model, LevelSetModel):
-        context = np.asarray(backend.sample_context(skill, rng), dtype=float).reshape(
-            spec.context.dim
-        )
+        context = drawn_context(backend, skill, rng)
         return context, spec.control.sample_uniform(rng, 1)[0]
     test = model.validity_test(is_valid)
     if config.strategy == "lse":
@@ -397,13 +395,9 @@ def _propose(
         if best is not None:
             contexts, controls = model.from_unit(best.x)
             return contexts[0], controls[0]
-        context = np.asarray(backend.sample_context(skill, rng), dtype=float).reshape(
-            spec.context.dim
-        )
+        context = drawn_context(backend, skill, rng)
     else:
-        context = np.asarray(backend.sample_context(skill, rng), dtype=float).reshape(
-            spec.context.dim
-        )
+        context = drawn_context(backend, skill, rng)
         control = _lse2_control(model, spec, config, context, rng, is_valid)
         if control is not None:
             return context, control
