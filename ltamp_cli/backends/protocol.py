@@ -18,6 +18,7 @@ Conventions
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
@@ -81,6 +82,27 @@ class SkillSpec:
     #: (:data:`ltamp_cli.learning.active.DETERMINISTIC_NOISE`), so its marginal likelihood
     #: cannot explain a narrow success set away as noise.
     deterministic: bool = False
+
+    def __post_init__(self) -> None:
+        # What a saved model must hold (model_dir.checked_spec): a skill that breaks it would
+        # be trained for nothing, its model refused on load ("the name 'a' is used twice").
+        seen: set[str] = set()
+        for part, space in (("context", self.context), ("control", self.control)):
+            for name, low, high in zip(space.names, space.lows, space.highs, strict=True):
+                if not isinstance(name, str) or not name.strip():
+                    raise ValueError(f"skill {self.name!r}: {part} names must be non-empty "
+                                     f"strings, not {name!r:.40}")
+                if name in seen:  # --context name=value, model inputs: must be unambiguous
+                    raise ValueError(f"skill {self.name!r}: the name {name!r:.40} is used "
+                                     "twice (context and control names must be distinct)")
+                seen.add(name)
+                numbers = all(isinstance(v, int | float | np.number) and not isinstance(v, bool)
+                              for v in (low, high))
+                if not (numbers and math.isfinite(low) and math.isfinite(high)
+                        and math.isfinite(high - low)):
+                    raise ValueError(f"skill {self.name!r}: {part} {name!r:.40} has bounds "
+                                     f"[{low}, {high}]: expected finite numbers with a "
+                                     "finite width")
 
 
 @dataclass(frozen=True)

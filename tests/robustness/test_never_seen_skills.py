@@ -8,6 +8,7 @@ line, or reported as empty, never sampled as if it were there.
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -74,3 +75,72 @@ def test_any_real_score_type_learns_the_same_set(site: Path, tmp_path: Path,
         sampler = make_sampler("adaptive", model, np.array([a]), rng)
         inside += sum(abs(next(sampler)[0] - 0.5) < 0.3 for _ in range(10))
     assert inside >= 24, inside
+
+
+@pytest.mark.parametrize("context, control, expected", [
+    ([["a", 0, 1]], [["a", 0, 1], ["v", 0, 1]], "the name 'a' is used twice"),
+    ([["a", 0, 1]], [["u", 0, 1], ["u", 0, 1]], "the name 'u' is used twice"),
+    ([["a", 0, 1]], [["u", 0, "NaN"]], "expected finite numbers"),
+    ([["a", -1e308, 1e308]], [["u", 0, 1]], "with a finite width"),
+    ([["", 0, 1]], [["u", 0, 1]], "non-empty strings"),
+])
+def test_a_skill_no_model_could_hold_is_refused_before_any_trial(
+        site: Path, tmp_path: Path, context: list, control: list, expected: str) -> None:
+    """Sensibly: refused in one line naming the backend before a trial runs. Before the fix
+    duplicate names trained 20 trials into a model that `evaluate`/`sample` then refused
+    ("the name 'a' is used twice"); NaN bounds were accepted."""
+    config = {"context": context, "control": control, "score": "ball"}
+    config = json.loads(json.dumps(config).replace('"NaN"', "NaN"))
+    done = _ltamp(site, config, tmp_path, "train", "odd", "--backend", "odd", "--budget", "6",
+                  "--init", "3", "--out", "m")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1, done.stderr[-1500:]
+    assert lines[0].startswith("ltamp: error: backend 'odd' (ltamp_odd): skill 'odd'")
+    assert expected in lines[0], lines
+    assert not (tmp_path / "m" / "trials.jsonl").exists()
+
+
+def test_collect_and_skills_with_a_refused_skill(site: Path, tmp_path: Path) -> None:
+    config = {"context": [["a", 0, 1]], "control": [["a", 0, 1]], "score": "ball"}
+    done = _ltamp(site, config, tmp_path, "collect", "odd", "--backend", "odd", "-n", "3",
+                  "--out", "t.jsonl")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1 and "used twice" in lines[0], lines
+    assert not (tmp_path / "t.jsonl").exists()
+    listing = _ltamp(site, config, tmp_path, "skills", "--json")  # the others still listed
+    assert listing.returncode == 0, listing.stderr[-800:]
+    names = {b["name"] for b in json.loads(listing.stdout)["backends"]}
+    assert {"synthetic", "odd"} <= names
+
+
+@pytest.mark.parametrize("score", ["fail", "point"])
+def test_a_skill_never_seen_to_succeed_is_sampled_as_a_guess_with_a_warning(
+        site: Path, tmp_path: Path, score: str) -> None:
+    """Sensibly: the model of a skill whose 20 trials all failed (always failing, or
+    succeeding only at one exact control) has θ* with μ/σ <= 0; `sample` still returns the
+    least bad controls (finite β, around θ*) but warns in one line that nothing is
+    predicted to succeed, and `evaluate` reports a success rate of 0. Before the fix the
+    relaxed β of an all-fail model was -inf (Φ⁻¹ of an underflowed Φ(φ*)), so the "set" was
+    the whole box, without a word."""
+    config = {**BALL, "score": score}
+    trained = _ltamp(site, config, tmp_path, "train", "odd", "--backend", "odd", "--budget",
+                     "20", "--init", "6", "--out", "m")
+    assert trained.returncode == 0, trained.stderr[-1500:]
+    done = _ltamp(site, config, tmp_path, "sample", "m", "--context", "a=0.5", "-n", "5",
+                  "--json")
+    assert done.returncode == 0, done.stderr[-1500:]
+    result = json.loads(done.stdout)
+    assert np.isfinite(result["beta"]) and result["phi_star"] <= 0
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "predicts failure at every control" in lines[0], lines
+    evaluated = _ltamp(site, config, tmp_path, "evaluate", "m", "--trials", "5", "--json")
+    assert evaluated.returncode == 0 and json.loads(evaluated.stdout)["success_rate"] == 0.0
+
+
+def test_relaxed_beta_stays_finite_far_below_the_level() -> None:
+    from ltamp_cli.learning.confidence import relaxed_beta
+
+    for phi in (-10.0, -40.0, -1e3):
+        beta = relaxed_beta(phi, 0.95)
+        assert np.isfinite(beta) and phi - 0.01 < beta < phi  # just below φ*
+    assert abs(relaxed_beta(5.0, 0.95) - 1.6449) < 1e-3  # unchanged where Φ(φ*) ≈ 1
