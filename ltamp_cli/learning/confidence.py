@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 
-from scipy.stats import norm
+from scipy.special import log_ndtr, ndtri_exp
 
 LAMBDA_RANGE = (0.95, 0.999)
 
@@ -45,5 +45,7 @@ def relaxed_beta(phi_star: float, lam: float = 0.95) -> float:
     """``Φ⁻¹(λ Φ(φ*))`` where ``φ*`` is ``μ/σ`` at the most confident control."""
     if not LAMBDA_RANGE[0] <= lam <= LAMBDA_RANGE[1]:
         raise ValueError(f"lambda must be in [{LAMBDA_RANGE[0]}, {LAMBDA_RANGE[1]}], got {lam}")
-    # logcdf keeps precision when Φ(φ*) is within rounding of 1 (large φ*).
-    return float(norm.ppf(math.exp(math.log(lam) + float(norm.logcdf(phi_star)))))
+    # In log space at both ends: log Φ keeps precision when Φ(φ*) is within rounding of 1
+    # (large φ*), and Φ⁻¹ of a log keeps it when Φ(φ*) underflows (φ* < -38: a model that
+    # saw only failures), where Φ⁻¹(0) = -inf used to admit every control into the set.
+    return float(ndtri_exp(math.log(lam) + float(log_ndtr(phi_star))))
