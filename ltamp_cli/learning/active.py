@@ -71,6 +71,7 @@ from ltamp_cli.learning.metrics import Evaluation, SkillEvaluator
 from ltamp_cli.learning.model import LevelSetModel, PhysicalValidity, SkillModel
 from ltamp_cli.threads import limits_threads
 from ltamp_cli.trials.record import TrialDataset, TrialRecord, check_against_spec
+from ltamp_cli.writer_lock import exclusive_writer
 
 #: Upper bound of the GP's noise variance (in RMS-scaled score units) for a skill whose
 #: trials are deterministic (:attr:`SkillSpec.deterministic`); others keep
@@ -290,7 +291,30 @@ def learn_online(
     Trials already in ``dataset`` (same skill) count toward the budget: a rerun resumes.
     ``evaluator`` with ``eval_every > 0`` records a learning curve every ``eval_every`` trials.
     Thread pools are limited to ``config.threads`` meanwhile, as in ``ltamp train``.
+    ``dataset``'s writer lock is held throughout (:func:`~ltamp_cli.writer_lock.exclusive_writer`),
+    as ``ltamp train`` holds its model directory's: a second writer of the same file (another
+    thread or process) gets an :class:`~ltamp_cli.errors.InputError` instead of appending
+    the same trials again.
     """
+    if dataset is None:
+        return _learn_online(backend, skill, config, None, evaluator, eval_every, progress,
+                             evaluate_success)
+    with exclusive_writer(dataset.path, is_directory=False, option="dataset"):
+        return _learn_online(backend, skill, config, dataset, evaluator, eval_every,
+                             progress, evaluate_success)
+
+
+def _learn_online(
+    backend: SkillBackend,
+    skill: str,
+    config: LearningConfig,
+    dataset: TrialDataset | None,
+    evaluator: SkillEvaluator | None,
+    eval_every: int,
+    progress: bool,
+    evaluate_success: bool,
+) -> LearningResult:
+    """:func:`learn_online` holding the dataset's writer lock."""
     spec = backend.skills()[skill]
     records = dataset.read() if dataset is not None and dataset.exists() else []
     strangers = [r for r in records if r.skill != skill]
