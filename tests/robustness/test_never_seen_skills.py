@@ -144,3 +144,49 @@ def test_relaxed_beta_stays_finite_far_below_the_level() -> None:
         beta = relaxed_beta(phi, 0.95)
         assert np.isfinite(beta) and phi - 0.01 < beta < phi  # just below φ*
     assert abs(relaxed_beta(5.0, 0.95) - 1.6449) < 1e-3  # unchanged where Φ(φ*) ≈ 1
+
+
+SHAPES = {
+    "12-D control": {"context": [["a", 0.0, 1.0]],
+                     "control": [[f"u{i}", -1.0, 1.0] for i in range(12)]},
+    "no context": {"context": [], "control": [["u", 0, 1], ["v", 0, 1]]},
+    "context lo == hi": {"context": [["a", 0.5, 0.5], ["b", 0, 1]], "control": [["u", 0, 1]]},
+    "1e-9 wide": {"context": [["a", 0.0, 1e-9]], "control": [["u", 0.0, 1e-9], ["v", 0, 1e-9]]},
+    "1e9 wide": {"context": [["a", 0.0, 1e9]], "control": [["u", -1e9, 0.0], ["v", 0, 1e9]]},
+    "unicode names": {"context": [["α-β", 0, 1]], "control": [["θ 角", 0, 1], ["ü", 0, 1]]},
+}
+
+
+@pytest.mark.parametrize("shape", sorted(SHAPES))
+def test_unusual_skill_shapes_learn_save_load_and_sample(site: Path, tmp_path: Path,
+                                                         monkeypatch: pytest.MonkeyPatch,
+                                                         shape: str) -> None:
+    """Sensibly: 20 lse trials, saved and loaded back (names and bounds intact), give a θ*
+    that succeeds in the plugin's physics at three contexts of the box (its ends and middle)
+    and adaptive samples that lie in the control box; where the success interval is 60 % of
+    the first control's range (all shapes but 12-D), at least 70 % of 30 samples succeed."""
+    from ltamp_cli.learning.model_dir import load_model, save_model
+
+    config = {**SHAPES[shape], "score": "ball"}
+    backend = _backend(site, config, tmp_path, monkeypatch)
+    spec = backend.spec
+    result = learn_online(backend, "odd", LearningConfig(budget=20, init=6, seed=3))
+    save_model(result.model, tmp_path / "m")
+    model = load_model(tmp_path / "m").model
+    assert isinstance(model, LevelSetModel) and model.spec == spec
+    lows, highs = spec.control.low_array(), spec.control.high_array()
+    rng = np.random.default_rng(0)
+    successes = drawn = 0
+    for fraction in (0.0, 0.5, 1.0):
+        context = spec.context.low_array() + fraction * (spec.context.high_array()
+                                                         - spec.context.low_array())
+        star, _ = model.most_confident_control(context, rng)
+        assert backend.success(star) > 0, (fraction, star)
+        sampler = make_sampler("adaptive", model, context, rng)
+        for _ in range(10):
+            control = next(sampler)
+            assert np.all(control >= lows) and np.all(control <= highs)
+            successes += backend.success(control) > 0
+            drawn += 1
+    if shape != "12-D control":
+        assert successes >= 0.7 * drawn, (successes, drawn)
