@@ -59,7 +59,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from tqdm import tqdm
 
-from ltamp_cli.backends.protocol import SkillBackend, SkillSpec, drawn_context
+from ltamp_cli.backends.protocol import SkillBackend, SkillSpec, drawn_context, skill_spec
 from ltamp_cli.backends.sanity import run_trial_safely
 from ltamp_cli.learning.acquisition import evaluate, maximize, straddle
 from ltamp_cli.learning.baselines import SKLEARN_KINDS, RandomModel, SklearnModel
@@ -69,6 +69,7 @@ from ltamp_cli.learning.held_context import HeldContext
 from ltamp_cli.learning.kernels import KERNEL_NAMES
 from ltamp_cli.learning.metrics import Evaluation, SkillEvaluator
 from ltamp_cli.learning.model import LevelSetModel, PhysicalValidity, SkillModel
+from ltamp_cli.seeds import usable_seed
 from ltamp_cli.threads import limits_threads
 from ltamp_cli.trials.record import TrialDataset, TrialRecord, check_against_spec
 from ltamp_cli.writer_lock import exclusive_writer
@@ -140,6 +141,8 @@ class LearningConfig:
             )
         if self.budget < 1 or self.init < 1:
             raise ValueError(f"budget and init must be >= 1, got {self.budget} and {self.init}")
+        # any integer is a seed, as for `ltamp train --seed` (negative/huge ones are hashed)
+        object.__setattr__(self, "seed", usable_seed(self.seed))
         if self.refit_every < 1:
             raise ValueError(f"refit_every must be >= 1, got {self.refit_every}")
         if self.lse2_candidates < 1:
@@ -315,7 +318,7 @@ def _learn_online(
     evaluate_success: bool,
 ) -> LearningResult:
     """:func:`learn_online` holding the dataset's writer lock."""
-    spec = backend.skills()[skill]
+    spec = skill_spec(backend, skill)  # KeyError naming the backend's skills
     records = dataset.read() if dataset is not None and dataset.exists() else []
     strangers = [r for r in records if r.skill != skill]
     if strangers:

@@ -13,6 +13,7 @@ The most confident control ``θ* = argmax μ/σ`` itself is
 from __future__ import annotations
 
 import math
+import numbers
 
 from scipy.special import log_ndtr, ndtri_exp
 
@@ -39,6 +40,21 @@ def beta_star(delta: float, index: int | None = None, count: int | None = None) 
             raise ValueError(f"index is 1-based, got {index}")
         pi_i = math.pi**2 * index**2 / 6.0
     return math.sqrt(max(2.0 * math.log(pi_i / (2.0 * delta)), 0.0))
+
+
+def confidence_problem(lam: float, beta: float | None) -> tuple[str, str] | None:
+    """``(field, what is wrong)`` with a relaxed-β ``lam`` outside :data:`LAMBDA_RANGE` or a
+    non-finite ``beta``, else ``None``: the one check behind ``--lambda``/``--beta`` of the
+    CLI, ``world.learned_streams`` settings and :func:`~ltamp_cli.sampling.factory.make_sampler`."""
+    if not (_real(lam) and LAMBDA_RANGE[0] <= lam <= LAMBDA_RANGE[1]):
+        return "lambda", f"expected a value in [{LAMBDA_RANGE[0]}, {LAMBDA_RANGE[1]}], got {lam}"
+    if beta is not None and not (_real(beta) and math.isfinite(beta)):
+        return "beta", f"expected a finite number, got {beta}"
+    return None
+
+
+def _real(value: object) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
 
 
 def relaxed_beta(phi_star: float, lam: float = 0.95) -> float:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ltamp_cli.backends.protocol import SkillSpec
+from ltamp_cli.learning.confidence import confidence_problem
 from ltamp_cli.learning.model import SkillModel
 from ltamp_cli.sampling.adaptive import DEFAULT_BUFFER, AdaptiveSampler
 from ltamp_cli.sampling.base import SetSampler
@@ -50,6 +51,12 @@ def make_sampler(
     """
     if name not in SAMPLER_NAMES:
         raise ValueError(f"unknown sampler {name!r}: expected one of {', '.join(SAMPLER_NAMES)}")
+    problem = confidence_problem(lam, beta)  # the limits of `ltamp sample --lambda/--beta`
+    if problem is not None:
+        raise ValueError(f"{problem[0]}: {problem[1]}")
+    if n_proposals < 1 or buffer_size < 1:
+        raise ValueError(f"n_proposals and buffer_size must be >= 1, got {n_proposals} and "
+                         f"{buffer_size}")
     context = _checked_context(model, context)
     outside = outside_trained_range(model.spec, context)
     if outside and not extrapolate:

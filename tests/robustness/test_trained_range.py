@@ -94,3 +94,43 @@ def test_bad_extrapolate_setting_is_one_line(tmp_path: Path, setting: str,
     assert code == 2 and len(lines) == 1, lines
     assert "world.learned_streams.sample-good-control.extrapolate" in lines[0], lines
     assert expected in lines[0] and "problem.yaml:12:" in lines[0]  # file:line:column
+
+
+@pytest.mark.parametrize("kwargs, expected", [
+    ({"beta": float("nan")}, "beta: expected a finite number"),
+    ({"beta": float("inf")}, "beta: expected a finite number"),
+    ({"lam": 0.5}, "lambda: expected a value in [0.95, 0.999]"),
+    ({"lam": 0.5, "beta": 1.0}, "lambda: expected a value in [0.95, 0.999]"),
+    ({"n_proposals": 0}, "n_proposals and buffer_size must be >= 1"),
+])
+def test_api_sampler_options_have_the_cli_limits(kwargs: dict, expected: str) -> None:
+    """Before: beta=nan gave a sampler whose next() raised a bare StopIteration, beta=inf an
+    empty one, lam=0.5 with a beta passed, and n_proposals=0 a numpy concatenate error; the
+    CLI's --beta/--lambda refuse them (`ltamp sample`: one line)."""
+    model = load_model(MODEL).model
+    with pytest.raises(ValueError) as refused:
+        make_sampler("adaptive", model, np.array([0.3]), np.random.default_rng(0), **kwargs)
+    assert expected in str(refused.value)
+    if "n_proposals" not in kwargs:
+        option = ["--beta", str(kwargs["beta"])] if "lam" not in kwargs else \
+            ["--lambda", str(kwargs["lam"])]
+        code, _out, err = _cli("sample", str(MODEL), "--context", "phase=0.3", *option)
+        assert code == 2 and expected in err
+
+
+def test_api_training_takes_any_integer_seed_and_names_unknown_skills() -> None:
+    """Before: LearningConfig(seed=-1) failed in numpy ("expected non-negative integer")
+    while `ltamp train --seed -1` runs; an unknown skill was a bare KeyError('nope')."""
+    from ltamp_cli.backends import load_backend
+    from ltamp_cli.learning.active import LearningConfig, learn_online
+    from ltamp_cli.seeds import usable_seed
+
+    backend = load_backend("synthetic")
+    try:
+        assert LearningConfig(seed=-1).seed == usable_seed(-1) >= 0
+        result = learn_online(backend, "moving2d", LearningConfig(budget=4, init=2, seed=-1))
+        assert len(result.records) == 4
+        with pytest.raises(KeyError, match="has no skill 'nope' \\(known: "):
+            learn_online(backend, "nope", LearningConfig(budget=4, init=2))
+    finally:
+        backend.close()
