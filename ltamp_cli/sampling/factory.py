@@ -84,7 +84,10 @@ def outside_trained_range(spec: SkillSpec, context: np.ndarray) -> str:
                                    spec.context.highs, strict=True):
         slack = 1e-12 * (hi - lo)
         if not lo - slack <= value <= hi + slack:
-            parts.append(f"{name}={value:g} not in [{lo:g}, {hi:g}]")
+            shown = [f"{float(v):g}" for v in (value, lo, hi)]
+            if shown[0] in shown[1:]:  # 0.5000000001 is no 0.5: print every digit
+                shown = [repr(float(v)) for v in (value, lo, hi)]
+            parts.append(f"{name}={shown[0]} not in [{shown[1]}, {shown[2]}]")
     return "; ".join(parts)
 
 

@@ -134,3 +134,15 @@ def test_api_training_takes_any_integer_seed_and_names_unknown_skills() -> None:
             learn_online(backend, "nope", LearningConfig(budget=4, init=2))
     finally:
         backend.close()
+
+
+def test_a_value_just_outside_is_printed_with_every_digit() -> None:
+    """Before: a=0.5000000001 against [0.5, 0.5] read "a=0.5 not in [0.5, 0.5]"."""
+    from ltamp_cli.backends.protocol import ParamSpace, SkillSpec
+    from ltamp_cli.sampling.factory import outside_trained_range
+
+    spec = SkillSpec("s", ParamSpace(("a", "b"), (0.5, 0.0), (0.5, 1.0)),
+                     ParamSpace(("u",), (0.0,), (1.0,)))
+    assert outside_trained_range(spec, np.array([0.5, 1.0])) == ""
+    assert outside_trained_range(spec, np.array([0.5000000001, 1.5])) == (
+        "a=0.5000000001 not in [0.5, 0.5]; b=1.5 not in [0, 1]")
