@@ -5,13 +5,20 @@ lock on their output while they run. A second writer of the same output either f
 with one :class:`~ltamp_cli.errors.InputError` line (exit 2) or, with ``wait=True``
 (``--wait``), blocks until the first one is done. The lock is an OS file lock (``filelock``):
 it is released by the kernel when its holder dies, so a killed writer never blocks later runs.
-The lock belongs to the resolved path, so a symlink to an output shares the output's lock
-(hard links are not recognised).
+The lock belongs to the resolved path, so a symlink to an output shares the output's lock;
+a trial file's writer also holds an OS lock on the file itself (its device and inode), so a
+hard link to an output, whatever its name or folder, finds the output's writer too. (A model
+directory cannot be hard-linked; its lock file lives inside it.) A trial file that does not
+exist yet is created empty when its lock is taken, so that a hard link made to it while it is
+written is recognised; it is removed again if the writer leaves it empty.
 """
 
 from __future__ import annotations
 
+import errno
+import fcntl
 import functools
+import os
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -52,9 +59,52 @@ def exclusive_writer(output: str | Path, *, is_directory: bool, wait: bool = Fal
     except OSError as error:
         raise InputError(f"{option}: cannot write {output}: {error.strerror or error}") from None
     try:
-        yield
+        identity = None if is_directory else _lock_identity(output, wait, option)
+        try:
+            yield
+        finally:
+            if identity is not None:
+                _release_identity(output, *identity)
     finally:
         lock.release()
+
+
+def _lock_identity(output: Path, wait: bool, option: str) -> tuple[int, bool]:
+    """Lock the file ``output`` itself (``flock``: one lock per device and inode, whatever
+    the name it is opened by), creating it empty if it does not exist. Returns the open
+    descriptor that holds the lock and whether it was created."""
+    created = False
+    try:
+        try:
+            fd = os.open(output, os.O_RDONLY | os.O_NONBLOCK)
+        except FileNotFoundError:
+            fd = os.open(output, os.O_RDONLY | os.O_NONBLOCK | os.O_CREAT | os.O_EXCL, 0o644)
+            created = True
+    except OSError as error:
+        raise InputError(f"{option}: cannot write {output}: {error.strerror or error}") from None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | (0 if wait else fcntl.LOCK_NB))
+    except OSError as error:
+        os.close(fd)
+        if error.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+            raise InputError(f"{option}: {output} is being written by another ltamp process "
+                             "(collect/train/tell), under another name (a hard link); wait "
+                             "for it to finish or pass --wait") from None
+        raise InputError(f"{option}: cannot lock {output}: {error.strerror or error}") from None
+    return fd, created
+
+
+def _release_identity(output: Path, fd: int, created: bool) -> None:
+    """Undo :func:`_lock_identity`: remove the file if it was created and is still empty."""
+    try:
+        if created and os.fstat(fd).st_size == 0:
+            try:
+                if os.path.samestat(os.stat(output), os.fstat(fd)):
+                    os.unlink(output)
+            except OSError:
+                pass
+    finally:
+        os.close(fd)
 
 
 def holds_writer_lock(option: str, *, is_directory: bool

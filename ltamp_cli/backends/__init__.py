@@ -80,6 +80,8 @@ def load_backend(name: str, **options: Any) -> SkillBackend:
     except ImportError as error:  # backends import their physics engine only when created
         raise InputError(f"backend {name!r} is not available here: {error}"
                          f"{missing_module_hint(error)}") from None
+    except ValueError as error:  # e.g. a plugin's SkillSpec with a name used twice
+        raise InputError(f"backend {name!r} ({module.__name__}): {error}") from None
 
 
 __all__ = [

@@ -18,6 +18,8 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
+from ltamp_cli.atomic_file import replaced_atomically
+
 #: What :func:`write_animation` wrote (path, frames, duration_s, speed, width, height).
 AnimationInfo = dict[str, float | int | str]
 
@@ -203,7 +205,8 @@ def write_animation(
     path.parent.mkdir(parents=True, exist_ok=True)
     if path.suffix.lower() != ".gif":
         last = caption(as_image(frames[-1]), captions[-1])
-        last.save(path)
+        with replaced_atomically(path) as temporary:
+            last.save(temporary)
         return {"path": str(path), "frames": 1, "duration_s": 0.0, "speed": 0.0,
                 "width": last.size[0], "height": last.size[1]}
     started = time.perf_counter()
@@ -214,8 +217,9 @@ def write_animation(
         colors=colours, method=Image.Quantize.FASTOCTREE, dither=Image.Dither.NONE)
         for index, _ in chosen]
     durations = [ms for _, ms in chosen]
-    images[0].save(path, save_all=True, append_images=images[1:], duration=durations,
-                   loop=0, optimize=False)
+    with replaced_atomically(path) as temporary:  # never seen half-written
+        images[0].save(temporary, save_all=True, append_images=images[1:],
+                       duration=durations, loop=0, optimize=False)
     span = recording_span(times_s)
     return {"path": str(path), "frames": len(images), "duration_s": sum(durations) / 1000.0,
             "speed": round(timing.speed_for(span), 3), "width": images[0].size[0],

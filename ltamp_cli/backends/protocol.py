@@ -32,6 +32,7 @@ is recorded invalid with the reason (:func:`ltamp_cli.backends.sanity.run_trial_
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
@@ -169,6 +170,25 @@ class SkillSpec:
     outcome: OutcomeSpec | None = None
 
     def __post_init__(self) -> None:
+        # What a saved model must hold (model_dir.checked_spec): a skill that breaks it would
+        # be trained for nothing, its model refused on load ("the name 'a' is used twice").
+        seen: set[str] = set()
+        for part, space in (("context", self.context), ("control", self.control)):
+            for name, low, high in zip(space.names, space.lows, space.highs, strict=True):
+                if not isinstance(name, str) or not name.strip():
+                    raise ValueError(f"skill {self.name!r}: {part} names must be non-empty "
+                                     f"strings, not {name!r:.40}")
+                if name in seen:  # --context name=value, model inputs: must be unambiguous
+                    raise ValueError(f"skill {self.name!r}: the name {name!r:.40} is used "
+                                     "twice (context and control names must be distinct)")
+                seen.add(name)
+                numbers = all(isinstance(v, int | float | np.number) and not isinstance(v, bool)
+                              for v in (low, high))
+                if not (numbers and math.isfinite(low) and math.isfinite(high)
+                        and math.isfinite(high - low)):
+                    raise ValueError(f"skill {self.name!r}: {part} {name!r:.40} has bounds "
+                                     f"[{low}, {high}]: expected finite numbers with a "
+                                     "finite width")
         if self.outcome is not None and max(self.outcome.goals) >= self.context.dim:
             raise ValueError(f"skill {self.name!r}: outcome goal index "
                              f"{max(self.outcome.goals)} is not a context dimension "
@@ -226,6 +246,33 @@ def skill_spec(backend: SkillBackend, skill: str) -> SkillSpec:
         known = ", ".join(sorted(specs))
         raise KeyError(f"backend {backend.name!r} has no skill {skill!r} (known: {known})")
     return specs[skill]
+
+
+def drawn_context(backend: SkillBackend, skill: str, rng: np.random.Generator) -> np.ndarray:
+    """``backend.sample_context(skill, rng)`` as a ``(dα,)`` float array, checked: a context
+    that is not ``dα`` finite numbers inside the skill's context box is a bug of the backend
+    (a plugin's, usually), reported as one :class:`~ltamp_cli.errors.InputError` line naming
+    the backend, its module and what was expected, not a numpy error deep in learning."""
+    from ltamp_cli.errors import InputError
+
+    space = skill_spec(backend, skill).context
+    drawn = backend.sample_context(skill, rng)
+    where = (f"backend {getattr(backend, 'name', '?')!r} ({type(backend).__module__}): "
+             f"sample_context({skill!r}) returned {drawn!r:.80}")
+    expected = (f"expected {space.dim} finite number(s) ({', '.join(space.names) or 'none'}) "
+                f"inside the skill's context bounds")
+    try:
+        values = np.asarray(drawn, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise InputError(f"{where}: {expected}") from None
+    if values.size != space.dim or not np.all(np.isfinite(values)):
+        raise InputError(f"{where}: {expected}")
+    lows, highs = space.low_array(), space.high_array()
+    slack = 1e-12 * (highs - lows)
+    if np.any(values < lows - slack) or np.any(values > highs + slack):
+        box = ", ".join(f"{lo:g}..{hi:g}" for lo, hi in zip(lows, highs, strict=True))
+        raise InputError(f"{where}: {expected} [{box}]")
+    return values
 
 
 def as_batch(controls: Sequence[float] | np.ndarray, dim: int) -> np.ndarray:

@@ -192,6 +192,9 @@ def run_trial_safely(
     trial's score through the declared score function (:func:`checked_outcome`). The
     returned result's ``outcome`` is a tuple of floats for such a skill's valid trials and
     ``None`` otherwise (an undeclared outcome is dropped).
+    The score may be any real number type (``int``, numpy scalars, a 0-d array) and comes
+    back as a ``float``; a ``bool`` score is a success label, ``True`` -> ``+1.0`` and
+    ``False`` -> ``-1.0``. ``valid`` must be a bool (or 0/1; a string ``"false"`` is no answer).
     """
     spec = skill_spec(backend, skill)
     invalid_score = spec.invalid_score
@@ -202,10 +205,23 @@ def run_trial_safely(
     if not isinstance(result, TrialResult):  # a plugin's run_trial returned None, a float...
         return failed_result(invalid_score, f"run_trial returned {result!r:.60}, not a "
                                             "TrialResult"), False
+    raw = result.score
+    if isinstance(raw, np.ndarray) and raw.shape == ():
+        raw = raw[()]  # a 0-d array: its one value
+    if isinstance(raw, bool | np.bool_):
+        # a success label: a failure must lie below the level g = 0, not on it (as 0.0 it
+        # would, and the level set of failures scored 0 and successes 1 is undefined)
+        raw = 1.0 if raw else -1.0
     try:
-        score = float(result.score)
+        if isinstance(raw, str | bytes):
+            raise TypeError(raw)
+        score = float(raw)
     except (TypeError, ValueError):
         return failed_result(invalid_score, f"score {result.score!r:.40} is no number"), False
+    if not (isinstance(result.valid, bool | np.bool_)
+            or (isinstance(result.valid, int | np.integer) and result.valid in (0, 1))):
+        return failed_result(invalid_score, f"valid {result.valid!r:.40} is not True or "
+                                            "False"), False
     if not math.isfinite(score):
         return failed_result(invalid_score, f"non-finite score {result.score}"), False
     if abs(score) > MAX_SCORE_MAGNITUDE:  # a learner's arithmetic would overflow on it
@@ -215,6 +231,7 @@ def run_trial_safely(
         json.dumps(dict(result.info), allow_nan=False)
     except (TypeError, ValueError) as error:
         return failed_result(invalid_score, f"unrecordable trial info: {error}"), False
+    result = TrialResult(score, bool(result.valid), result.info, result.outcome)
     if spec.outcome is None or not result.valid:
         return (result if result.outcome is None else replace(result, outcome=None)), False
     try:

@@ -121,6 +121,8 @@ def _live_outcomes(
     import numpy as np  # lazy, like every command's heavy imports: keeps `ltamp --help` fast
     from tqdm import tqdm
 
+    from ltamp_cli.backends.protocol import drawn_context
+
     rng = np.random.default_rng(seed)
     baseline_rng = np.random.default_rng([seed, 1])
     space = physics.skills()[skill].control
@@ -134,7 +136,7 @@ def _live_outcomes(
         desc=f"θ* trials {skill}",
         unit="trial",
     ):
-        context = physics.sample_context(skill, rng)
+        context = drawn_context(physics, skill, rng)
         contexts.append([round(float(v), 6) for v in np.ravel(context)])
         control, _ = model.most_confident_control(
             context, rng, lambda c, u: physics.is_valid(skill, c, u)

@@ -78,7 +78,7 @@ def level_set_command(
     from ltamp_cli.cli.sample import parse_context
     from ltamp_cli.learning.model import LevelSetModel
     from ltamp_cli.learning.model_dir import load_model
-    from ltamp_cli.sampling.factory import make_sampler
+    from ltamp_cli.sampling.factory import make_sampler, outside_trained_range
     from ltamp_cli.sampling.level_set_plot import plot_level_set
     from ltamp_cli.sampling.superlevel import build_superlevel_set
     from ltamp_cli.threads import use_one_thread
@@ -101,11 +101,9 @@ def level_set_command(
                          "plot needs 2 (use `ltamp sample --plot` for 1)")
     chosen = parse_dims(dims, spec.control.names)
     values = np.array(parse_context(list(context or []), spec.context.names), dtype=float)
-    outside = [f"{name}={v:g} not in [{lo:g}, {hi:g}]" for name, v, lo, hi
-               in zip(spec.context.names, values, spec.context.lows, spec.context.highs,
-                      strict=True) if not lo <= v <= hi]
+    outside = outside_trained_range(spec, values)
     if outside:
-        raise InputError(f"--context: outside the trained range: {'; '.join(outside)}")
+        raise InputError(f"--context: outside the trained range: {outside}")
 
     seed = usable_seed(seed)
     superlevel = build_superlevel_set(model, values, np.random.default_rng(seed), beta=beta,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import logging
 import math
 import time
 from pathlib import Path
@@ -76,7 +77,11 @@ def sample_command(
     from ltamp_cli.cli.options import check_confidence_options
     from ltamp_cli.learning.model import LevelSetModel
     from ltamp_cli.learning.model_dir import load_model
-    from ltamp_cli.sampling.factory import SAMPLER_NAMES, make_sampler
+    from ltamp_cli.sampling.factory import (
+        SAMPLER_NAMES,
+        make_sampler,
+        outside_trained_range,
+    )
     from ltamp_cli.sampling.kernel_learning import load_kernel
     from ltamp_cli.threads import use_one_thread
 
@@ -101,12 +106,9 @@ def sample_command(
         raise InputError(f"--plot: only for 1 or 2 controls, {spec.name!r} has "
                          f"{spec.control.dim}")
     values = np.array(parse_context(list(context or []), spec.context.names))
-    lows, highs = spec.context.low_array(), spec.context.high_array()
-    outside = [f"{name}={v:g} not in [{lo:g}, {hi:g}]" for name, v, lo, hi
-               in zip(spec.context.names, values, lows, highs, strict=True)
-               if not lo <= v <= hi]
+    outside = outside_trained_range(spec, values)
     if outside:
-        raise InputError(f"--context: outside the trained range: {'; '.join(outside)}")
+        raise InputError(f"--context: outside the trained range: {outside}")
     kernel = load_kernel(kernel_file, spec) if kernel_file is not None else None
 
     start = time.perf_counter()
@@ -121,6 +123,8 @@ def sample_command(
         "sampler": sampler,
         "context": dict(zip(spec.context.names, values.tolist(), strict=True)),
         "beta": chosen.beta,
+        "phi_star": (chosen.superlevel.phi_star
+                     if math.isfinite(chosen.superlevel.phi_star) else None),
         "time_s": round(elapsed, 6),
         "samples": [dict(zip(spec.control.names, map(float, s), strict=True)) for s in samples],
     }
@@ -130,6 +134,13 @@ def sample_command(
         plot_samples(chosen.superlevel, np.array(samples), plot,
                      title=f"{spec.name}: {len(samples)} {sampler} samples")
         result["plot"] = str(plot)
+    if not chosen.superlevel.phi_star > 0 and \
+            logging.getLogger("ltamp").isEnabledFor(logging.WARNING):
+        # μ ≤ 0 even at the most confident control: the relaxed β still makes a set (around
+        # θ*), but nothing in it is predicted to succeed
+        typer.echo(f"ltamp: warning: the model predicts failure at every control for this "
+                   f"context (μ/σ at θ* = {chosen.superlevel.phi_star:.3g} <= 0): the samples "
+                   "are its least bad guesses, not a learned set", err=True)
     if as_json:
         typer.echo(json.dumps(result))
     else:
@@ -137,7 +148,7 @@ def sample_command(
                    f"{elapsed:.3f} s")
         typer.echo("  ".join(f"{name:>10}" for name in spec.control.names))
         for s in samples:
-            typer.echo("  ".join(f"{v:>10.4f}" for v in s))
+            typer.echo("  ".join(f"{v:>10.6g}" for v in s))
     if len(samples) < n:
         typer.echo(f"ltamp: only {len(samples)} of {n} samples: the set looks (almost) empty",
                    err=True)

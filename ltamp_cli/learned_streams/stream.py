@@ -8,6 +8,12 @@ A problem YAML configures each learned stream under ``world.learned_streams.<str
         sampler: diverse-lk     # rejection | adaptive | diverse | diverse-lk
         lambda: 0.95            # relaxed-β λ (optional), or beta: 1.5 (optional)
         kernel_file: null       # diverse-lk only; default: the user cache (see kernel_path)
+        extrapolate: false      # true: also sample contexts outside the model's trained range
+
+A context outside the range the model was trained on (the skill's context box) gets no
+samples unless ``extrapolate: true`` (one warning per stream; :func:`make_sampler` refuses
+such a context the same way, as ``ltamp sample --context`` does): away from its data a GP's
+mean reverts to its prior, so a set "learned" there is a guess.
 
 The model is loaded once per :class:`LearnedStream` (pass a shared :class:`ModelCache` to load
 a directory once for several streams) and never retrained. Each call of the stream (one input
@@ -20,6 +26,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 import math
 import os
 from collections.abc import Callable, Hashable, Iterator, Mapping
@@ -36,12 +43,13 @@ from ltamp_cli.learning.model import LevelSetModel
 from ltamp_cli.learning.model_dir import load_model
 from ltamp_cli.planner.streams import Binding, StreamInfo
 from ltamp_cli.sampling.base import SetSampler
-from ltamp_cli.sampling.factory import SAMPLER_NAMES, make_sampler
+from ltamp_cli.sampling.factory import SAMPLER_NAMES, make_sampler, outside_trained_range
 from ltamp_cli.sampling.kernel_learning import DiversityKernel, load_kernel, save_kernel
 from ltamp_cli.sampling.superlevel import DEFAULT_LAMBDA, PhysicalValidity
 
 KERNEL_FILE = "diversity_kernel.json"
-_FIELDS = ("model", "sampler", "lambda", "beta", "kernel_file")
+_FIELDS = ("model", "sampler", "lambda", "beta", "kernel_file", "extrapolate")
+LOGGER = logging.getLogger("ltamp")
 
 
 def model_identity(model_dir: Path) -> str:
@@ -64,6 +72,7 @@ class LearnedStreamConfig:
     lam: float = DEFAULT_LAMBDA
     beta: float | None = None
     kernel_file: Path | None = None
+    extrapolate: bool = False
 
     def __post_init__(self) -> None:
         if self.sampler not in SAMPLER_NAMES:
@@ -112,6 +121,9 @@ class LearnedStreamConfig:
         kernel_file = data.get("kernel_file")
         if kernel_file is not None and not isinstance(kernel_file, str):
             raise InputError(f"{where}.kernel_file: expected a path")
+        extrapolate = data.get("extrapolate", False)
+        if not isinstance(extrapolate, bool):
+            raise InputError(f"{where}.extrapolate: expected true or false, got {extrapolate!r}")
         lam = number("lambda")
         beta = number("beta")
         # the same limits as `ltamp sample --lambda/--beta` (ltamp_cli/cli/options.py)
@@ -127,6 +139,7 @@ class LearnedStreamConfig:
                 lam=DEFAULT_LAMBDA if lam is None else lam,
                 beta=beta,
                 kernel_file=None if kernel_file is None else (base / kernel_file).resolve(),
+                extrapolate=extrapolate,
             )
         except InputError as error:
             raise InputError(f"{where}.sampler: {error.message}") from None
@@ -213,19 +226,32 @@ class LearnedStream:
         self._issued: dict[Hashable, tuple[SetSampler, np.ndarray]] = {}
         self.n_samples = 0
         self.n_unusable = 0
+        self.n_outside = 0  # calls whose context lay outside the trained range
 
     @property
     def spec(self) -> SkillSpec:
         return self.model.spec
 
-    def sampler_for(self, *inputs: Any) -> SetSampler:
-        """A fresh sampler for the context of ``inputs``."""
+    def sampler_for(self, *inputs: Any) -> SetSampler | None:
+        """A fresh sampler for the context of ``inputs``, or ``None`` when that context lies
+        outside the model's trained range and the stream may not extrapolate."""
         context = np.asarray(self.to_context(*inputs), dtype=float).reshape(
             self.model.spec.context.dim
         )
+        if not self.config.extrapolate:
+            outside = outside_trained_range(self.model.spec, context)
+            if outside:
+                if not self.n_outside:
+                    LOGGER.warning("learned stream of %s (%s): context outside the trained "
+                                   "range, no samples (%s); set extrapolate: true to sample "
+                                   "there anyway", self.model.spec.name,
+                                   self.config.model_dir, outside)
+                self.n_outside += 1
+                return None
         return make_sampler(
             self.config.sampler, self.model, context, self.rng, beta=self.config.beta,
             is_valid=self.validity(*inputs), lam=self.config.lam, kernel=self.kernel,
+            extrapolate=True,
         )
 
     def validity(self, *inputs: Any) -> PhysicalValidity | None:
@@ -253,7 +279,7 @@ class LearnedStream:
         while True:
             if sampler is None:
                 sampler = self.sampler_for(*inputs)
-                if not _has_valid_member(sampler):
+                if sampler is None or not _has_valid_member(sampler):
                     return
             control = next(sampler, None)
             if control is None:

@@ -59,7 +59,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from tqdm import tqdm
 
-from ltamp_cli.backends.protocol import SkillBackend, SkillSpec
+from ltamp_cli.backends.protocol import SkillBackend, SkillSpec, drawn_context, skill_spec
 from ltamp_cli.backends.sanity import run_trial_safely
 from ltamp_cli.learning.acquisition import evaluate, maximize, straddle
 from ltamp_cli.learning.baselines import SKLEARN_KINDS, RandomModel, SklearnModel
@@ -75,8 +75,10 @@ from ltamp_cli.learning.outcomes import (
     Relabeller,
     propose_for_all_goals,
 )
+from ltamp_cli.seeds import usable_seed
 from ltamp_cli.threads import limits_threads
 from ltamp_cli.trials.record import TrialDataset, TrialRecord, check_against_spec
+from ltamp_cli.writer_lock import exclusive_writer
 
 #: Upper bound of the GP's noise variance (in RMS-scaled score units) for a skill whose
 #: trials are deterministic (:attr:`SkillSpec.deterministic`); others keep
@@ -166,6 +168,8 @@ class LearningConfig:
             )
         if self.budget < 1 or self.init < 1:
             raise ValueError(f"budget and init must be >= 1, got {self.budget} and {self.init}")
+        # any integer is a seed, as for `ltamp train --seed` (negative/huge ones are hashed)
+        object.__setattr__(self, "seed", usable_seed(self.seed))
         if self.refit_every < 1:
             raise ValueError(f"refit_every must be >= 1, got {self.refit_every}")
         if self.lse2_candidates < 1:
@@ -357,8 +361,31 @@ def learn_online(
     Trials already in ``dataset`` (same skill) count toward the budget: a rerun resumes.
     ``evaluator`` with ``eval_every > 0`` records a learning curve every ``eval_every`` trials.
     Thread pools are limited to ``config.threads`` meanwhile, as in ``ltamp train``.
+    ``dataset``'s writer lock is held throughout (:func:`~ltamp_cli.writer_lock.exclusive_writer`),
+    as ``ltamp train`` holds its model directory's: a second writer of the same file (another
+    thread or process) gets an :class:`~ltamp_cli.errors.InputError` instead of appending
+    the same trials again.
     """
-    spec = backend.skills()[skill]
+    if dataset is None:
+        return _learn_online(backend, skill, config, None, evaluator, eval_every, progress,
+                             evaluate_success)
+    with exclusive_writer(dataset.path, is_directory=False, option="dataset"):
+        return _learn_online(backend, skill, config, dataset, evaluator, eval_every,
+                             progress, evaluate_success)
+
+
+def _learn_online(
+    backend: SkillBackend,
+    skill: str,
+    config: LearningConfig,
+    dataset: TrialDataset | None,
+    evaluator: SkillEvaluator | None,
+    eval_every: int,
+    progress: bool,
+    evaluate_success: bool,
+) -> LearningResult:
+    """:func:`learn_online` holding the dataset's writer lock."""
+    spec = skill_spec(backend, skill)  # KeyError naming the backend's skills
     records = dataset.read() if dataset is not None and dataset.exists() else []
     strangers = [r for r in records if r.skill != skill]
     if strangers:
@@ -398,7 +425,7 @@ def learn_online(
         unit="trial",
     )
     held = (HeldContext(spec, config.context_repeats,
-                        lambda r: np.asarray(backend.sample_context(skill, r), dtype=float))
+                        lambda r: drawn_context(backend, skill, r))
             if config.strategy == "lse" and config.context_repeats > 0 else None)
     with bar:
         while len(records) < config.budget:
@@ -447,9 +474,7 @@ def _propose(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Next ``(context (dα,), control (dθ,))`` in physical units; random without a GP."""
     if not isinstance(model, LevelSetModel):
-        context = np.asarray(backend.sample_context(skill, rng), dtype=float).reshape(
-            spec.context.dim
-        )
+        context = drawn_context(backend, skill, rng)
         return context, spec.control.sample_uniform(rng, 1)[0]
     test = model.validity_test(is_valid)
     if (config.strategy == "lse" and config.hindsight_acquisition == "goal-mean"
@@ -469,13 +494,9 @@ def _propose(
         if best is not None:
             contexts, controls = model.from_unit(best.x)
             return contexts[0], controls[0]
-        context = np.asarray(backend.sample_context(skill, rng), dtype=float).reshape(
-            spec.context.dim
-        )
+        context = drawn_context(backend, skill, rng)
     else:
-        context = np.asarray(backend.sample_context(skill, rng), dtype=float).reshape(
-            spec.context.dim
-        )
+        context = drawn_context(backend, skill, rng)
         control = _lse2_control(model, spec, config, context, rng, is_valid)
         if control is not None:
             return context, control

@@ -13,8 +13,9 @@ The most confident control ``θ* = argmax μ/σ`` itself is
 from __future__ import annotations
 
 import math
+import numbers
 
-from scipy.stats import norm
+from scipy.special import log_ndtr, ndtri_exp
 
 LAMBDA_RANGE = (0.95, 0.999)
 
@@ -41,9 +42,26 @@ def beta_star(delta: float, index: int | None = None, count: int | None = None) 
     return math.sqrt(max(2.0 * math.log(pi_i / (2.0 * delta)), 0.0))
 
 
+def confidence_problem(lam: float, beta: float | None) -> tuple[str, str] | None:
+    """``(field, what is wrong)`` with a relaxed-β ``lam`` outside :data:`LAMBDA_RANGE` or a
+    non-finite ``beta``, else ``None``: the one check behind ``--lambda``/``--beta`` of the
+    CLI, ``world.learned_streams`` settings and :func:`~ltamp_cli.sampling.factory.make_sampler`."""
+    if not (_real(lam) and LAMBDA_RANGE[0] <= lam <= LAMBDA_RANGE[1]):
+        return "lambda", f"expected a value in [{LAMBDA_RANGE[0]}, {LAMBDA_RANGE[1]}], got {lam}"
+    if beta is not None and not (_real(beta) and math.isfinite(beta)):
+        return "beta", f"expected a finite number, got {beta}"
+    return None
+
+
+def _real(value: object) -> bool:
+    return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+
 def relaxed_beta(phi_star: float, lam: float = 0.95) -> float:
     """``Φ⁻¹(λ Φ(φ*))`` where ``φ*`` is ``μ/σ`` at the most confident control."""
     if not LAMBDA_RANGE[0] <= lam <= LAMBDA_RANGE[1]:
         raise ValueError(f"lambda must be in [{LAMBDA_RANGE[0]}, {LAMBDA_RANGE[1]}], got {lam}")
-    # logcdf keeps precision when Φ(φ*) is within rounding of 1 (large φ*).
-    return float(norm.ppf(math.exp(math.log(lam) + float(norm.logcdf(phi_star)))))
+    # In log space at both ends: log Φ keeps precision when Φ(φ*) is within rounding of 1
+    # (large φ*), and Φ⁻¹ of a log keeps it when Φ(φ*) underflows (φ* < -38: a model that
+    # saw only failures), where Φ⁻¹(0) = -inf used to admit every control into the set.
+    return float(ndtri_exp(math.log(lam) + float(log_ndtr(phi_star))))

@@ -9,6 +9,8 @@ from typing import Any
 
 import numpy as np
 
+from ltamp_cli.atomic_file import replaced_atomically
+
 METRICS = ("f1", "success_rate")
 LABELS = {"f1": "held-out F1", "success_rate": "success rate of θ*"}
 
@@ -74,7 +76,8 @@ def plot_curves(rows: Iterable[Mapping[str, Any]], path: str | Path, title: str 
     figure.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    figure.savefig(path, dpi=100)
+    with replaced_atomically(path) as temporary:
+        figure.savefig(temporary, dpi=100)
     plt.close(figure)
     return path
 
@@ -171,5 +174,6 @@ def write_curves(rows: list[dict[str, Any]], png: str | Path, title: str = ""
         "rows": rows,
     }
     path = png.with_suffix(".json")
-    path.write_text(json.dumps(_finite(data), indent=2, allow_nan=False) + "\n")
+    with replaced_atomically(path) as temporary:
+        temporary.write_text(json.dumps(_finite(data), indent=2, allow_nan=False) + "\n")
     return png, path

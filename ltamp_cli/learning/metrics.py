@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ltamp_cli.backends.protocol import SkillBackend, SkillSpec
+from ltamp_cli.backends.protocol import SkillBackend, SkillSpec, drawn_context
 from ltamp_cli.learning.model import PhysicalValidity, SkillModel
 
 # physical contexts (k, dα), controls (k, dθ) -> true scores (k,)
@@ -92,7 +92,7 @@ class SkillEvaluator:
         """Evaluator for a backend with a vectorised ``true_score`` (the synthetic backend)."""
         spec = backend.skills()[skill]
         rng = np.random.default_rng(seed)
-        contexts = np.array([backend.sample_context(skill, rng) for _ in range(n_test)]).reshape(
+        contexts = np.array([drawn_context(backend, skill, rng) for _ in range(n_test)]).reshape(
             n_test, -1
         )
         controls = spec.control.sample_uniform(rng, n_test)
@@ -104,7 +104,7 @@ class SkillEvaluator:
             return np.asarray(true_score(skill, c, u), dtype=float)
 
         heldout = HeldOutSet(contexts, controls, score(contexts, controls))
-        eval_contexts = np.array([backend.sample_context(skill, rng) for _ in range(n_contexts)])
+        eval_contexts = np.array([drawn_context(backend, skill, rng) for _ in range(n_contexts)])
         return SkillEvaluator(
             spec, heldout, score, eval_contexts, lambda c, u: backend.is_valid(skill, c, u), seed
         )

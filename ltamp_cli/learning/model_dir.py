@@ -22,8 +22,12 @@ so a crafted directory gives one ``InputError`` line, never a payload or a trace
 from __future__ import annotations
 
 import hashlib
+import io
 import json
 import math
+import os
+import threading
+import time
 import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -49,6 +53,10 @@ MEAN_MODES = ("constant", "zero")
 FORMAT = "ltamp-skill-model"
 VERSION = 1
 METADATA_FILE = "model.json"
+# A reader racing a save (weights replaced, model.json not yet) retries this often, this long
+# apart, before it reports the mismatch: the save's window is one digest and one small write.
+_READ_ATTEMPTS = 6
+_READ_RETRY_S = 0.05
 
 
 def space_to_json(space: ParamSpace) -> dict[str, Any]:
@@ -118,62 +126,74 @@ def save_model(model: SkillModel, directory: str | Path, **metadata: Any) -> Pat
         record["kernel"] = model.kernel
         record["hyperparameters"] = model.gp.hyperparameters()
         record["n_train"] = model.gp.n
-        weights_file = "weights.npz"
-        _replace_atomically(directory / weights_file,
-                            lambda handle: np.savez(handle, **model.gp.state()))
+        arrays: dict[str, Any] = dict(model.gp.state())
     elif isinstance(model, SklearnModel):
         record["constant"] = model.constant
         arrays, settings = (export_estimator(model.kind, model.estimator)
                             if model.estimator is not None else ({}, {}))
         record["estimator"] = settings if model.estimator is not None else None
-        weights_file = "weights.npz"
-        _replace_atomically(directory / weights_file,
-                            lambda handle: np.savez(handle, **arrays))
     elif isinstance(model, RandomModel):
-        weights_file = "weights.npz"
-        _replace_atomically(directory / weights_file,
-                            lambda handle: np.savez(handle, mean_score=np.array(model.mean_score)))
+        arrays = {"mean_score": np.array(model.mean_score)}
     else:
         raise TypeError(f"cannot save a {type(model).__name__}")
-    # The weights are replaced before model.json: a save killed in between leaves new weights
-    # beside the old metadata, which the digest exposes on load instead of mixing them.
-    record["weights_sha256"] = _sha256(directory / weights_file)
-    record.update(metadata)
-    temporary = directory / (METADATA_FILE + ".tmp")
-    temporary.write_text(json.dumps(record, indent=2, sort_keys=True, allow_nan=False) + "\n")
-    temporary.replace(directory / METADATA_FILE)
+    # Both files are written to temporaries first, then renamed over the old ones back to
+    # back, weights first: a reader racing the save sees new weights beside the old metadata
+    # only between two renames (it reads again, see load_model), and a save killed in between
+    # leaves a mismatch that the digest exposes on load instead of mixing the two.
+    weights = _write_temporary(directory / "weights.npz",
+                               lambda handle: np.savez(handle, **arrays))
+    try:
+        record["weights_sha256"] = _sha256(weights)
+        record.update(metadata)
+        text = json.dumps(record, indent=2, sort_keys=True, allow_nan=False) + "\n"
+        meta = _write_temporary(directory / METADATA_FILE,
+                                lambda handle: handle.write(text.encode()))
+        try:
+            weights.replace(directory / "weights.npz")
+            meta.replace(directory / METADATA_FILE)
+        finally:
+            meta.unlink(missing_ok=True)
+    finally:
+        weights.unlink(missing_ok=True)
     return directory
 
 
-def _replace_atomically(path: Path, write: Callable[[BinaryIO], None]) -> None:
-    """Write ``path`` through a temporary file in its directory, then rename it over."""
-    temporary = path.with_name(path.name + ".tmp")
+def _write_temporary(path: Path, write: Callable[[BinaryIO], Any]) -> Path:
+    """Write a temporary file beside ``path`` (a name of this process and thread: two savers
+    never share one) and return its path."""
+    temporary = path.with_name(f"{path.name}.{os.getpid()}-{threading.get_ident()}.tmp")
     with temporary.open("wb") as handle:
         write(handle)
-    temporary.replace(path)
+    return temporary
 
 
 def _sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def _check_weights(directory: Path, metadata: dict[str, Any], path: Path) -> None:
+def _matching_weights(directory: Path, metadata: dict[str, Any], path: Path) -> bytes | None:
+    """The bytes of ``weights.npz``, read once, if they match ``model.json``'s digest (``None``
+    when the weights are no regular file and ``model.json`` predates digests: read them as
+    before). The arrays are then taken from these bytes, not from a second read that another
+    save could have replaced in between."""
     expected = metadata.get("weights_sha256")
-    if expected is None:  # saved before digests were recorded
-        return
     name = "weights.npz"
     weights = directory / name
-    if not weights.is_file() or _sha256(weights) != expected:
+    if not weights.is_file():
+        if expected is None:  # saved before digests were recorded
+            return None
+        data = b""
+    else:
+        data = weights.read_bytes()
+    if expected is not None and hashlib.sha256(data).hexdigest() != expected:
         raise InputError(f"{name} does not match {METADATA_FILE} (a save was interrupted?): "
                          "train again to rewrite the model", location_in(path))
+    return data
 
 
-def load_model(directory: str | Path) -> LoadedModel:
-    """Read a model directory written by :func:`save_model`; bad input raises ``InputError``.
-
-    Data only: the weights are read with ``allow_pickle=False`` and validated (dtype, shape,
-    finite values) before any model is built from them.
-    """
+def load_metadata(directory: str | Path) -> dict[str, Any]:
+    """``model.json`` of a model directory, checked for its format and version only (not
+    its weights: :func:`load_model` checks those). Bad input raises ``InputError``."""
     directory = Path(directory)
     path = directory / METADATA_FILE
     if not path.is_file():
@@ -187,14 +207,37 @@ def load_model(directory: str | Path) -> LoadedModel:
         raise InputError(
             f"unsupported model version {metadata.get('version')!r}", location_in(path)
         )
-    if (directory / "weights.pkl").exists() and not (directory / "weights.npz").exists():
-        raise InputError("weights.pkl is a pickle, which ltamp no longer loads (it can run "
-                         "code): train the model again to write weights.npz", location_in(path))
-    _check_weights(directory, metadata, path)
+    return metadata
+
+
+def load_model(directory: str | Path) -> LoadedModel:
+    """Read a model directory written by :func:`save_model`; bad input raises ``InputError``.
+
+    Data only: the weights are read with ``allow_pickle=False`` and validated (dtype, shape,
+    finite values) before any model is built from them.
+    """
+    directory = Path(directory)
+    path = directory / METADATA_FILE
+    for attempt in range(_READ_ATTEMPTS):
+        metadata = load_metadata(directory)
+        if (directory / "weights.pkl").exists() and not (directory / "weights.npz").exists():
+            raise InputError("weights.pkl is a pickle, which ltamp no longer loads (it can run "
+                             "code): train the model again to write weights.npz",
+                             location_in(path))
+        try:
+            data = _matching_weights(directory, metadata, path)
+            break
+        except InputError:
+            # another process may be saving this directory (new weights, model.json next):
+            # read both again shortly; a save interrupted for good still fails
+            if attempt + 1 == _READ_ATTEMPTS:
+                raise
+            time.sleep(_READ_RETRY_S)
     try:
         spec = checked_spec(metadata["skill"])
         kind = metadata["kind"]
-        weights = _read_arrays(directory / "weights.npz")
+        weights = _read_arrays(io.BytesIO(data) if data is not None
+                               else directory / "weights.npz")
         dim = spec.context.dim + spec.control.dim
         if kind == "gp":
             model: SkillModel = LevelSetModel(spec, _gaussian_process(metadata, weights, dim))
@@ -222,8 +265,9 @@ def load_model(directory: str | Path) -> LoadedModel:
     return LoadedModel(model, metadata)
 
 
-def _read_arrays(path: Path) -> dict[str, np.ndarray]:
-    """Every array of the ``.npz`` at ``path``, refusing pickled (object) arrays."""
+def _read_arrays(path: Path | BinaryIO) -> dict[str, np.ndarray]:
+    """Every array of the ``.npz`` at ``path`` (or in a file object), refusing pickled
+    (object) arrays."""
     with np.load(path, allow_pickle=False) as weights:
         arrays = {name: weights[name] for name in weights.files}
     for name, array in arrays.items():

@@ -23,7 +23,14 @@ from ltamp_cli.learning.active import GP_STRATEGIES, LearningConfig, _training_s
 from ltamp_cli.learning.baselines import RandomModel
 from ltamp_cli.learning.defaults import DEFAULT_STRATEGY
 from ltamp_cli.learning.gp import DEFAULT_PRIOR
-from ltamp_cli.learning.model_dir import METADATA_FILE, LoadedModel, load_model, save_model
+from ltamp_cli.learning.model_dir import (
+    METADATA_FILE,
+    LoadedModel,
+    checked_spec,
+    load_metadata,
+    load_model,
+    save_model,
+)
 from ltamp_cli.trials.record import TrialDataset, without_duplicates
 
 #: Keys :func:`~.model_dir.save_model` writes itself: never copied from the old metadata.
@@ -48,9 +55,15 @@ def refit_model_dir(
     Raises ``InputError`` for a directory that is not a GP model with its trials.
     """
     directory = Path(directory)
-    old = load_model(directory)
-    spec, metadata = old.model.spec, old.metadata
+    # model.json only, not the old weights: a refit killed between replacing weights.npz and
+    # model.json leaves weights its metadata does not match, and the refit that resumes it
+    # needs nothing of them (the trials file and the metadata are the whole input).
+    metadata = load_metadata(directory)
     where = location_in(directory / METADATA_FILE)
+    try:
+        spec = checked_spec(metadata.get("skill"))
+    except ValueError as error:
+        raise InputError(f"incomplete or invalid model directory ({error})", where) from None
     if metadata.get("kind") != "gp":
         raise InputError(f"only GP models can be refitted, this one is {metadata.get('kind')!r}",
                          where)

@@ -47,6 +47,8 @@ class LearnedStreamEntry(BaseModel):
                               description="relaxed-β λ in (0, 1]")
     beta: float | None = None
     kernel_file: str | None = None
+    extrapolate: bool = Field(False, description="also sample contexts outside the model's "
+                              "trained range (default: no samples there)")
 
 
 class WorldObject(BaseModel):

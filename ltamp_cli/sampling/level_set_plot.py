@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ltamp_cli.atomic_file import replaced_atomically
 from ltamp_cli.backends.protocol import SkillSpec
 from ltamp_cli.sampling.superlevel import SuperLevelSet
 
@@ -119,6 +120,7 @@ def plot_level_set(
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     figure.tight_layout()
-    figure.savefig(path, format="png", dpi=DPI)
+    with replaced_atomically(path) as temporary:
+        figure.savefig(temporary, format="png", dpi=DPI)
     plt.close(figure)
     return path

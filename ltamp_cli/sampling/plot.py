@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ltamp_cli.atomic_file import replaced_atomically
 from ltamp_cli.sampling.superlevel import SuperLevelSet
 
 GRID_1D = 600
@@ -66,6 +67,7 @@ def plot_samples(superlevel: SuperLevelSet, samples: np.ndarray, path: str | Pat
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     figure.tight_layout()
-    figure.savefig(path, format="png", dpi=110)
+    with replaced_atomically(path) as temporary:
+        figure.savefig(temporary, format="png", dpi=110)
     plt.close(figure)
     return path

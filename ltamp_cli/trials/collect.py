@@ -36,7 +36,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ltamp_cli.backends import load_backend
-from ltamp_cli.backends.protocol import SkillBackend, skill_spec
+from ltamp_cli.backends.protocol import SkillBackend, drawn_context, skill_spec
 from ltamp_cli.backends.sanity import run_trial_safely
 from ltamp_cli.errors import InputError
 from ltamp_cli.seeds import usable_seed
@@ -100,7 +100,7 @@ def trial_input(
     """Context, control and seed of trial ``index`` (pure function of its arguments)."""
     spec = skill_spec(backend, skill)
     rng = np.random.default_rng(np.random.SeedSequence(base_seed, spawn_key=(index, 1)))
-    context = np.asarray(backend.sample_context(skill, rng), dtype=float)
+    context = drawn_context(backend, skill, rng)
     control = spec.control.sample_uniform(rng, 1)[0]
     if valid_only:
         for _ in range(VALID_DRAW_ROUNDS):

@@ -23,6 +23,7 @@ from typing import Any
 from ltamp_cli.backends.protocol import ParamSpace, SkillSpec
 from ltamp_cli.errors import InputError, location_in
 from ltamp_cli.trials.record import MAX_SCORE_MAGNITUDE, TrialDataset, TrialRecord
+from ltamp_cli.writer_lock import exclusive_writer
 
 ScoreFromFraction = Callable[[str, float], float]
 """``(skill, fraction in [0, 1]) -> score``; ``score > 0`` means success."""
@@ -266,16 +267,19 @@ def append_new(dataset: TrialDataset, records: Sequence[TrialRecord]) -> ImportS
     """Append the records not already in ``dataset`` (same skill, context, control and score).
 
     All new records are written with one atomic append, so a re-run of the same import adds
-    nothing.
+    nothing. ``dataset``'s writer lock is held from reading what it holds to appending (as
+    ``collect`` holds it): a second import, collection or training of the same file meanwhile
+    is an :class:`InputError`, not a second copy of every trial.
     """
-    seen = {_identity(r) for r in dataset.iter_records()}
-    fresh = []
-    for record in records:
-        key = _identity(record)
-        if key not in seen:
-            seen.add(key)
-            fresh.append(record)
-    dataset.append(fresh)
+    with exclusive_writer(dataset.path, is_directory=False):
+        seen = {_identity(r) for r in dataset.iter_records()}
+        fresh = []
+        for record in records:
+            key = _identity(record)
+            if key not in seen:
+                seen.add(key)
+                fresh.append(record)
+        dataset.append(fresh)
     return ImportSummary(rows=len(records), added=len(fresh), skipped=len(records) - len(fresh))
 
 

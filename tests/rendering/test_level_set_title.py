@@ -30,8 +30,9 @@ def test_units_round_trip_and_label_axes() -> None:
     assert spec_from_json(spec_to_json(spec)) == spec
     assert spec.control.label(2) == "angle [rad]" and spec.control.label(3) == "duration [s]"
     bare = ParamSpace(("a",), (0.0,), (1.0,))
+    other = ParamSpace(("b",), (0.0,), (1.0,))  # a skill's names are distinct (SkillSpec)
     assert bare.label(0) == "a" and spec_from_json(spec_to_json(
-        push.SPEC.__class__("s", bare, bare))).control.units == ()
+        push.SPEC.__class__("s", bare, other))).control.units == ()
     with pytest.raises(ValueError, match="units"):
         ParamSpace(("a", "b"), (0.0, 0.0), (1.0, 1.0), ("m",))
 

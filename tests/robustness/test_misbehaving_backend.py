@@ -39,6 +39,8 @@ class OnceWrong(ThrowBackend):
     (TrialResult(1e300, True), "beyond"),
     (None, "not a TrialResult"),
     (TrialResult("lots", True), "no number"),  # type: ignore[arg-type]
+    (TrialResult(0.5, "false"), "not True or False"),  # type: ignore[arg-type]
+    (TrialResult("0.5", True), "no number"),  # type: ignore[arg-type]
 ])
 def test_bad_trial_result_is_an_invalid_trial(tmp_path: Path, answer: Any,
                                               reason: str) -> None:

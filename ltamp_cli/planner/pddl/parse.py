@@ -149,6 +149,7 @@ def parse_atom(expr: SExpr, what: str, allow_variables: bool = True) -> Atom:
 
 
 _CONNECTIVES = ("and", "or", "not", "imply", "exists", "forall")
+_COMPARISONS = ("<", ">", "<=", ">=")
 
 
 def parse_formula(expr: SExpr, what: str = "a formula") -> Formula:
@@ -174,6 +175,13 @@ def parse_formula(expr: SExpr, what: str = "a formula") -> Formula:
         parameters = _parameters(node.items[1], f"'{head}'")
         body = parse_formula(node.items[2], what)
         return Exists(parameters, body) if head == "exists" else ForAll(parameters, body)
+    if head in _COMPARISONS or (head == EQUALITY and any(
+            isinstance(item, SList) for item in node.items[1:])):
+        # PDDLStream's numeric fluents are action costs only; a comparison of function terms
+        # used to be read as a predicate named '>=' ("expected an argument, found a list")
+        raise InputError(f"numeric condition ({head} ...) in {what} is not supported: "
+                         "functions (:functions) may only give action costs, "
+                         "(increase (total-cost) ...)", node.location)
     if head == EQUALITY:
         atom = parse_atom(node, what)
         if len(atom.args) != 2:

@@ -1,0 +1,40 @@
+"""Output files that are never seen half-written.
+
+A GIF, plot or other output is written to a temporary file beside it and renamed over it
+(:func:`replaced_atomically`): a reader sees the old file or the new one, never a torn one;
+two writers of one path (two ``ltamp solve --render out.gif``) leave one whole file, the last
+one renamed; a writer killed mid-way leaves the old file (and possibly its temporary, a
+hidden ``.NAME.<pid>-<thread>.tmp.SUFFIX`` beside it) instead of a truncated one.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+
+@contextmanager
+def replaced_atomically(path: str | Path) -> Iterator[Path]:
+    """Yield the temporary path to write instead of ``path``; rename it over ``path`` when the
+    ``with`` body succeeds, remove it when it fails.
+
+    The temporary keeps ``path``'s suffix (writers that pick a format by suffix still do) and
+    is created by the writer itself, so the file mode follows the umask as before. A
+    symlink is written through (its target is replaced); an existing output that is not a
+    regular file (``/dev/stdout``, a FIFO) is written directly.
+    """
+    path = Path(path)
+    if path.exists() and not path.is_file():
+        yield path
+        return
+    target = Path(os.path.realpath(path)) if path.is_symlink() else path
+    temporary = target.with_name(f".{target.stem}.{os.getpid()}-{threading.get_ident()}"
+                                 f".tmp{target.suffix}")
+    try:
+        yield temporary
+        os.replace(temporary, target)
+    finally:
+        temporary.unlink(missing_ok=True)
