@@ -78,6 +78,13 @@ def test_a_round_object_is_pushed_only_with_two_contacts() -> None:
         # A flat face is pushed closed, under any yaw.
         assert skill_paths.push_hand_gap(block, BOWL_AT, goal, heading + offset) == 0.0
         assert skill_paths.push_holds_line(block, BOWL_AT, goal, heading + offset)
+    # A cup narrower than the full opening (7 cm): the open fingers still touch it either
+    # side of the line (inside its diameter), not straddle it.
+    cup = spec.objects["cup"]
+    r_cup = cup.footprint()[0]
+    cup_gap = skill_paths.push_finger_gap(cup, True)
+    assert 0.0 < cup_gap < 2.0 * r_cup < skill_paths.PUSH_FINGER_GAP_M
+    assert skill_paths.push_contact_distance(cup, cup_gap) > skill_paths.FINGER_HALF_M + 0.02
 
 
 def test_the_across_push_is_solved_from_the_arm_facing_the_push(planning) -> None:  # type: ignore[no-untyped-def]

@@ -59,6 +59,10 @@ FINGER_HALF_M = 0.012
 #: Two contacts either side of the line push it back onto the line (the same push with the
 #: fingers open: 1 mm off the line, 0.013 m from the target).
 PUSH_FINGER_GAP_M = 0.08
+#: ...but at most this fraction of a round object's diameter (footprint), so that the open
+#: fingers touch it either side of the line rather than straddle it: a 7 cm cup would pass
+#: between fingers 8 cm apart and meet the hand's body. For the 0.2 m bowl the full opening.
+PUSH_FINGER_GAP_FRACTION = 0.8
 #: Pushed kinds that are round (revolved about their vertical axis).
 ROUND_KINDS = ("cup", "bowl")
 
@@ -151,10 +155,14 @@ def fingers_across(finger_axis: np.ndarray, direction: np.ndarray) -> bool:
 
 
 def push_finger_gap(obj: ObjectSpec, across: bool) -> float:
-    """Gap (m) between the fingers pushing ``obj``: :data:`PUSH_FINGER_GAP_M` for a round
-    object pushed with the fingers across the line, closed (0) otherwise (a flat face is
-    stable under one contact; fingers along the line would put the front one ahead)."""
-    return PUSH_FINGER_GAP_M if across and obj.kind in ROUND_KINDS else 0.0
+    """Gap (m) between the fingers pushing ``obj``: for a round object pushed with the
+    fingers across the line :data:`PUSH_FINGER_GAP_M`, at most
+    :data:`PUSH_FINGER_GAP_FRACTION` of its footprint's diameter; closed (0) otherwise (a
+    flat face is stable under one contact; fingers along the line would put the front one
+    ahead)."""
+    if not across or obj.kind not in ROUND_KINDS:
+        return 0.0
+    return min(PUSH_FINGER_GAP_M, PUSH_FINGER_GAP_FRACTION * 2.0 * float(obj.footprint()[0]))
 
 
 def push_contact_distance(obj: ObjectSpec, gap: float) -> float:
