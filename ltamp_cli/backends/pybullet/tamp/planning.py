@@ -301,12 +301,12 @@ class PlanningWorld:
         fingers ``finger_gap`` (m) apart (``None``: fully open) as they will be executed.
 
         The first pose is solved from :meth:`aimed_home` first, then from the arm's current
-        configuration (home). Solved from home alone, the IK of a push along the line away
-        from arm r1's base (push_to_reach) landed on a twisted elbow (joint 3 at -1.2 rad)
-        whose joints then ran away along the descent: "IK failed or jumped" 4 waypoints
-        down on every restart (each restart solves the first pose from the same
-        configuration), for 5 of 7 goals in the middle region; from the aimed posture the
-        same 5 paths were found (``bench/push_exec_diag.py --reach-map``)."""
+        configuration (home). Solved from home alone (every restart of the Cartesian
+        follower solves the first pose from the same configuration), arm r1's push of
+        push_to_reach's bowl with the fingers across the line landed on a twisted elbow
+        (joint 3 at -1.2 rad) whose joints then ran away along the descent ("IK failed or
+        jumped" 4 waypoints down): found for 6 of 16 targets in the middle region, 15 of 16
+        with the aimed posture first (``bench/push_exec_diag.py --reach-map 4``)."""
         robot = self.scene.arms[arm]
         opening = robot.finger_opening()
         here = robot.get_configuration()
