@@ -200,8 +200,8 @@ def push_holds_line(obj: ObjectSpec, start: XY, goal: XY, hand_yaw: float) -> bo
     """Can the push's contact hold ``obj`` on its line? A flat-faced object (block) under
     any hand yaw (one contact on a face); a round one (cup, bowl) only with the fingers
     open across the line (two contacts either side of it). Closed fingers along the line
-    touch a round wall at one point: the object turns and slides off the line, and the
-    error grows with the stroke (push_to_reach PyBullet seeds 3 and 5: 0.049 and 0.039 m
+    touch a round wall at one point: the object turns and slides off the line by an amount
+    that varies from push to push (push_to_reach PyBullet seeds 3 and 5: 0.049 and 0.039 m
     from the target, tolerance 0.03; seeds 0, 2, 6: 0.015-0.029 m)."""
     return obj.kind not in ROUND_KINDS or push_hand_gap(obj, start, goal, hand_yaw) > 0.0
 
