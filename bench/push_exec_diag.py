@@ -12,6 +12,17 @@ the trajectory every ``--every`` steps. ``--pour-trials N``: the plan's pour con
 runs as the pour skill's own trial with seeds 0..N-1 (does the learned pour spill in its
 own simulation too?); ``--no-execute``: only that.
 
+``--reach-map N``: no planning: arm r1's push of the bowl from where it stands to each of an
+N x N grid of targets in the ``middle`` region, for each hand yaw the push stream may use
+(fingers across the line, across turned by π, along it), solved from the arm's home
+configuration alone (as before issue #20's fix) and by the planning world
+(``PlanningWorld.follow_hand_path``: from the home posture turned to face the push, then from
+home); per target and yaw: found or the follower's failure and where (densified waypoint),
+the hand's end distance from the base (m), CPU seconds.
+
+    OMP_NUM_THREADS=1 nice -n 5 .venv/bin/python bench/push_exec_diag.py --reach-map 4 \\
+        --out docs/results/exec3d/push_to_reach_reach_map.json
+
     OMP_NUM_THREADS=1 nice -n 5 .venv/bin/python bench/push_exec_diag.py --seed 1 \\
         --out docs/results/exec3d/push_to_reach_seed1_auto.json
 """
@@ -180,6 +191,76 @@ def summarise(record: dict[str, Any], every: int) -> dict[str, Any]:
     return record
 
 
+def reach_map(n: int) -> dict[str, Any]:
+    """The push paths of arm r1 to an ``n`` x ``n`` grid of bowl targets (module docstring)."""
+    import math
+
+    from ltamp_cli.backends.pybullet.robot.arm import PANDA_HOME
+    from ltamp_cli.backends.pybullet.robot.cartesian import follow_tool_path
+    from ltamp_cli.backends.pybullet.robot.pose import Pose
+    from ltamp_cli.backends.pybullet.tamp import skill_paths
+    from ltamp_cli.backends.pybullet.tamp.planning import PlanningWorld
+    from ltamp_cli.backends.pybullet.tamp.scene import scene_from_world
+    from ltamp_cli.planner.problem import load_problem
+
+    problem = load_problem(PROBLEM)
+    spec = scene_from_world(problem.world)
+    bowl = spec.objects["bowl"]
+    start = tuple(float(v) for v in problem.objects["pbowl"][1])
+    area = spec.regions["middle"]
+    r = bowl.footprint()[0]
+    xs = np.linspace(area.x[0] + r, area.x[1] - r, n) if area.x[1] - area.x[0] > 2 * r \
+        else np.array([(area.x[0] + area.x[1]) / 2])
+    ys = np.linspace(area.y[0] + r, area.y[1] - r, n) if area.y[1] - area.y[0] > 2 * r \
+        else np.array([(area.y[0] + area.y[1]) / 2])
+    planning = PlanningWorld(spec)
+    arm = planning.scene.arms[1]
+    base = planning.base_xy(1)
+    yaws = {"across": 0.0, "across_turned": math.pi, "along": math.pi / 2}
+    rows = []
+    try:
+        for gx in xs:
+            for gy in ys:
+                goal = (float(gx), float(gy))
+                heading = math.atan2(goal[1] - start[1], goal[0] - start[0])
+                row: dict[str, Any] = {"goal": [round(goal[0], 4), round(goal[1], 4)]}
+                for name, offset in yaws.items():
+                    yaw = heading + offset
+                    poses = skill_paths.push_hand_poses(bowl, start, goal, planning.table_z, yaw)
+                    gap = skill_paths.push_hand_gap(bowl, start, goal, yaw)
+                    end = poses[2].position
+                    c0 = time.process_time()
+                    arm.set_configuration(np.asarray(PANDA_HOME))
+                    arm.set_finger_opening(gap)
+                    home = follow_tool_path(arm, poses, Pose(), np.random.default_rng(0),
+                                            is_valid=planning.checker(1),
+                                            config=planning.cartesian)
+                    arm.open_gripper()
+                    c1 = time.process_time()
+                    fixed = planning.follow_hand_path(poses, 1, np.random.default_rng(0), "push",
+                                                      touching="bowl", finger_gap=gap)
+                    row[name] = {
+                        "finger_gap_m": gap,
+                        "hand_end_from_base_m": round(math.hypot(end[0] - base[0],
+                                                                 end[1] - base[1]), 4),
+                        "from_home": home.status, "from_home_failed_at": home.failed_index,
+                        "waypoints": len(home.tool_poses),
+                        "from_home_cpu_s": round(c1 - c0, 3),
+                        "planning_world": fixed is not None,
+                        "planning_world_cpu_s": round(time.process_time() - c1, 3)}
+                rows.append(row)
+                print(row["goal"], {k: (row[k]["from_home"], row[k]["planning_world"])
+                                    for k in yaws}, file=sys.stderr)
+    finally:
+        planning.close()
+    counts = {name: {"targets": len(rows),
+                     "from_home": sum(r[name]["from_home"] == "solved" for r in rows),
+                     "planning_world": sum(r[name]["planning_world"] for r in rows)}
+              for name in yaws}
+    return {"benchmark": "push_reach_map", "start": list(start), "grid": n,
+            "found": counts, "targets": rows}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=1)
@@ -189,11 +270,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--pour-trials", type=int, default=0,
                         help="also run the plan's pour control as its skill trial, N seeds")
     parser.add_argument("--no-execute", action="store_true", help="plan (and pour trials) only")
+    parser.add_argument("--reach-map", type=int, default=0, metavar="N",
+                        help="no planning: arm r1's push paths to an N x N grid of targets")
     parser.add_argument("--out", type=Path, required=True)
     args = parser.parse_args(argv)
-    if args.max_time <= 0 or args.every <= 0 or args.seed < 0:
-        print("error: --max-time and --every must be positive, --seed >= 0", file=sys.stderr)
+    if args.max_time <= 0 or args.every <= 0 or args.seed < 0 or args.reach_map < 0:
+        print("error: --max-time and --every must be positive, --seed and --reach-map >= 0",
+              file=sys.stderr)
         return 2
+    if args.reach_map:
+        summary = reach_map(args.reach_map)
+        print(json.dumps(summary["found"], indent=1))
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        args.out.write_text(json.dumps(summary, indent=1) + "\n")
+        return 0
     record = run(args.seed, args.fingers, args.max_time, args.every, args.pour_trials,
                  not args.no_execute)
     print(json.dumps({k: v for k, v in record.items()

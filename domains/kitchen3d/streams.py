@@ -73,6 +73,10 @@ YAW_OFFSETS = tuple(k * math.pi / 4 for k in (0, 1, -1, 2, -2, 3, -3, 4))
 #: yaws come first.
 DUMP_YAW_OFFSETS = tuple(k * math.pi / 4 for k in (3, -2, 2, 1, 4, -3, -1, 0))
 
+#: Push hand yaws, as offsets from the push line's heading (radians): the fingers across
+#: the line, the same turned round, then along it (flat-faced objects only).
+PUSH_YAW_OFFSETS = (0.0, math.pi, math.pi / 2)
+
 
 #: Placements keep this far (m, footprint to footprint) from other movable objects where
 #: they stand, if one of this many uniform draws does.
@@ -428,10 +432,19 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         a, b = _xy(start), _xy(goal)
         if arm is None or a == b:
             return
+        obj = scene.object(name)
         heading = math.atan2(b[1] - a[1], b[0] - a[0])
-        for hand_yaw in (heading, heading + math.pi / 2):  # fingers across or along the line
-            poses = skill_paths.push_hand_poses(scene.object(name), a, b, table_z, hand_yaw)
-            path = planning.follow_hand_path(poses, arm, rng, "push", touching=name)
+        # Fingers across the line (either way round), then along it; a round object only
+        # across (open, two contacts: the one contact of fingers along the line does not
+        # hold it on the line, skill_paths.push_holds_line).
+        for offset in PUSH_YAW_OFFSETS:
+            hand_yaw = heading + offset
+            if not skill_paths.push_holds_line(obj, a, b, hand_yaw):
+                continue
+            poses = skill_paths.push_hand_poses(obj, a, b, table_z, hand_yaw)
+            gap = skill_paths.push_hand_gap(obj, a, b, hand_yaw)
+            path = planning.follow_hand_path(poses, arm, rng, "push", touching=name,
+                                             finger_gap=gap)
             if path is not None and planning.approach_collides(path, name, a, poses[1]):
                 path = None  # the hand would come down on the object, not behind it
             yield [] if path is None else [(path.start, path.end, path)]

@@ -693,7 +693,8 @@ class Kitchen3DRun:
         rest = self.object_xy(name)
         error = float(np.hypot(rest[0] - goal[0], rest[1] - goal[1]))
         self.log.append({"action": "push", "object": name, "start_xy": start, "rest_xy": rest,
-                         "error_m": error, "finger_gap_m": gap})
+                         "error_m": error, "finger_gap_m": gap,
+                         "planned_finger_gap_m": path.finger_gap})
         if error > PUSH_TOLERANCE_M:
             raise ActionFailed(f"push {name}: came to rest {error:.3f} m from its target")
 

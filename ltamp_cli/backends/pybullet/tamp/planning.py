@@ -282,16 +282,52 @@ class PlanningWorld:
         assert found.configurations is not None
         return ArmPath(arm, found.configurations, kind, (name, grasp), target=target)
 
+    def aimed_home(self, arm: int, xy: Sequence[float]) -> np.ndarray:
+        """Arm ``arm``'s home configuration (7,) with its first joint turned to face the
+        table point ``xy`` (world, m): the elbow-up, palm-down posture a path starting
+        above ``xy`` is best solved from."""
+        base = self.base_xy(arm)
+        base_yaw = 0.0 if arm == 0 else math.pi  # the scene's arms face each other
+        heading = math.atan2(float(xy[1]) - base[1], float(xy[0]) - base[0]) - base_yaw
+        q = np.asarray(PANDA_HOME, dtype=float).copy()
+        q[0] = (heading + math.pi) % (2.0 * math.pi) - math.pi
+        return q
+
     def follow_hand_path(self, poses: Sequence[Pose], arm: int, rng: np.random.Generator,
-                         kind: str, touching: str | None = None) -> ArmPath | None:
+                         kind: str, touching: str | None = None,
+                         finger_gap: float | None = None) -> ArmPath | None:
         """Arm configurations moving the empty hand's grasp target along ``poses`` (world),
-        collision-free with the fixed scenery (movable objects: ``CFreeTraj``)."""
-        found = follow_tool_path(self.scene.arms[arm], poses, Pose(), rng,
-                                 is_valid=self.checker(arm), config=self.cartesian)
-        if not found.success:
+        collision-free with the fixed scenery (movable objects: ``CFreeTraj``), the hand's
+        fingers ``finger_gap`` (m) apart (``None``: fully open) as they will be executed.
+
+        The first pose is solved from :meth:`aimed_home` first, then from the arm's current
+        configuration (home). Solved from home alone (every restart of the Cartesian
+        follower solves the first pose from the same configuration), arm r1's push of
+        push_to_reach's bowl with the fingers across the line landed on a twisted elbow
+        (joint 3 at -1.2 rad) whose joints then ran away along the descent ("IK failed or
+        jumped" 4 waypoints down): found for 6 of 16 targets in the middle region, 15 of 16
+        with the aimed posture first (``bench/push_exec_diag.py --reach-map 4``)."""
+        robot = self.scene.arms[arm]
+        opening = robot.finger_opening()
+        here = robot.get_configuration()
+        found = None
+        try:
+            if finger_gap is not None:
+                robot.set_finger_opening(finger_gap)
+            for seed in (self.aimed_home(arm, poses[0].position[:2]), here):
+                robot.set_configuration(seed)
+                found = follow_tool_path(robot, poses, Pose(), rng, is_valid=self.checker(arm),
+                                         config=self.cartesian)
+                if found.success:
+                    break
+        finally:
+            robot.set_configuration(here)
+            robot.set_finger_opening(opening)
+        if found is None or not found.success:
             return None
         assert found.configurations is not None
-        return ArmPath(arm, found.configurations, kind, None, touching=touching)
+        return ArmPath(arm, found.configurations, kind, None, touching=touching,
+                       finger_gap=finger_gap)
 
     def base_xy(self, arm: int) -> XY:
         """Where arm ``arm``'s base stands (x, y), metres."""
@@ -330,6 +366,9 @@ class PlanningWorld:
         if path.held is not None:
             held_body = self.bodies[path.held[0]].body
             held_grasp = self.grasp(*path.held).tool_in_gripper
+        opening = arm.finger_opening()
+        if path.finger_gap is not None:
+            arm.set_finger_opening(path.finger_gap)
         self.place(name, xy)
         try:
             for q in densify_path(path.configurations, CHECK_RESOLUTION):
@@ -347,6 +386,7 @@ class PlanningWorld:
                         return True
             return False
         finally:
+            arm.set_finger_opening(opening)
             self.park(name)
             if path.held is not None:
                 self.park(path.held[0])
@@ -355,22 +395,17 @@ class PlanningWorld:
         """Does the arm hit ``name`` (standing at ``xy``) on ``path`` before its hand first
         reaches ``contact`` (a push's pose behind the object, where touching it starts)?
         Push paths may touch what they push, but not on the way down to it (a palm coming
-        down on a bowl's rim). The fingers are closed, as the executor pushes."""
+        down on a bowl's rim). The fingers are ``path.finger_gap`` apart, as the executor
+        pushes (closed if the path does not say)."""
         arm = self.scene.arms[path.arm]
         configurations = np.asarray(path.configurations)
         # The hand passes ``contact`` once (straight down, then straight along the push).
         distances = [float(np.linalg.norm(arm.forward_kinematics(q).position - contact.position))
                      for q in configurations]
         end = int(np.argmin(distances)) + 1
-        # A push is made with the fingers closed (the executor closes them first); open,
-        # they reach 4 cm further along the push.
-        opening = arm.finger_opening()
-        arm.set_finger_opening(0.0)
-        try:
-            return self.path_collides(ArmPath(path.arm, configurations[:end], path.kind),
-                                      name, xy)
-        finally:
-            arm.set_finger_opening(opening)
+        gap = 0.0 if path.finger_gap is None else path.finger_gap
+        return self.path_collides(ArmPath(path.arm, configurations[:end], path.kind,
+                                          finger_gap=gap), name, xy)
 
     def footprints_overlap(self, a: str, pa: XY, b: str, pb: XY) -> bool:
         ha = self.spec.objects[a].footprint()

@@ -59,6 +59,10 @@ FINGER_HALF_M = 0.012
 #: Two contacts either side of the line push it back onto the line (the same push with the
 #: fingers open: 1 mm off the line, 0.013 m from the target).
 PUSH_FINGER_GAP_M = 0.08
+#: ...but at most this fraction of a round object's diameter (footprint), so that the open
+#: fingers touch it either side of the line rather than straddle it: a 7 cm cup would pass
+#: between fingers 8 cm apart and meet the hand's body. For the 0.2 m bowl the full opening.
+PUSH_FINGER_GAP_FRACTION = 0.8
 #: Pushed kinds that are round (revolved about their vertical axis).
 ROUND_KINDS = ("cup", "bowl")
 
@@ -151,10 +155,14 @@ def fingers_across(finger_axis: np.ndarray, direction: np.ndarray) -> bool:
 
 
 def push_finger_gap(obj: ObjectSpec, across: bool) -> float:
-    """Gap (m) between the fingers pushing ``obj``: :data:`PUSH_FINGER_GAP_M` for a round
-    object pushed with the fingers across the line, closed (0) otherwise (a flat face is
-    stable under one contact; fingers along the line would put the front one ahead)."""
-    return PUSH_FINGER_GAP_M if across and obj.kind in ROUND_KINDS else 0.0
+    """Gap (m) between the fingers pushing ``obj``: for a round object pushed with the
+    fingers across the line :data:`PUSH_FINGER_GAP_M`, at most
+    :data:`PUSH_FINGER_GAP_FRACTION` of its footprint's diameter; closed (0) otherwise (a
+    flat face is stable under one contact; fingers along the line would put the front one
+    ahead)."""
+    if not across or obj.kind not in ROUND_KINDS:
+        return 0.0
+    return min(PUSH_FINGER_GAP_M, PUSH_FINGER_GAP_FRACTION * 2.0 * float(obj.footprint()[0]))
 
 
 def push_contact_distance(obj: ObjectSpec, gap: float) -> float:
@@ -167,6 +175,37 @@ def push_contact_distance(obj: ObjectSpec, gap: float) -> float:
     return math.sqrt(r * r - half * half) + FINGER_HALF_M
 
 
+def push_direction(start: XY, goal: XY) -> np.ndarray:
+    """Unit vector (world xy, (2,)) from ``start`` to ``goal`` (any unit vector if equal)."""
+    s, g = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
+    return (g - s) / max(float(np.linalg.norm(g - s)), 1e-9)
+
+
+def hand_finger_axis(hand_yaw: float) -> np.ndarray:
+    """The line through the fingers (world xy, (2,)) of the palm-down hand turned by
+    ``hand_yaw`` (radians) about the vertical: the hand's ``y`` axis."""
+    return np.array([-math.sin(hand_yaw), math.cos(hand_yaw)])
+
+
+def push_hand_gap(obj: ObjectSpec, start: XY, goal: XY, hand_yaw: float) -> float:
+    """Finger gap (m) of the push of ``obj`` from ``start`` to ``goal`` with the hand turned
+    by ``hand_yaw``: :func:`push_finger_gap` of whether the fingers lie across the line. The
+    gap :func:`push_hand_poses` plans the stroke for, that the planner's collision checks
+    give the hand (:attr:`~.values.ArmPath.finger_gap`) and that the executor opens."""
+    return push_finger_gap(obj, fingers_across(hand_finger_axis(hand_yaw),
+                                               push_direction(start, goal)))
+
+
+def push_holds_line(obj: ObjectSpec, start: XY, goal: XY, hand_yaw: float) -> bool:
+    """Can the push's contact hold ``obj`` on its line? A flat-faced object (block) under
+    any hand yaw (one contact on a face); a round one (cup, bowl) only with the fingers
+    open across the line (two contacts either side of it). Closed fingers along the line
+    touch a round wall at one point: the object turns and slides off the line by an amount
+    that varies from push to push (push_to_reach PyBullet seeds 3 and 5: 0.049 and 0.039 m
+    from the target, tolerance 0.03; seeds 0, 2, 6: 0.015-0.029 m)."""
+    return obj.kind not in ROUND_KINDS or push_hand_gap(obj, start, goal, hand_yaw) > 0.0
+
+
 def push_hand_poses(obj: ObjectSpec, start: XY, goal: XY, table_z: float, hand_yaw: float
                     ) -> list[Pose]:
     """World poses of the gripper (palm down) pushing ``obj`` in a straight line from
@@ -177,9 +216,8 @@ def push_hand_poses(obj: ObjectSpec, start: XY, goal: XY, table_z: float, hand_y
     line, and a round object is pushed with them :func:`push_finger_gap` apart (the
     executor opens them the same way); otherwise they are closed."""
     s, g = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
-    direction = (g - s) / max(float(np.linalg.norm(g - s)), 1e-9)
-    across = fingers_across(np.array([-math.sin(hand_yaw), math.cos(hand_yaw)]), direction)
-    behind = push_contact_distance(obj, push_finger_gap(obj, across))
+    direction = push_direction(start, goal)
+    behind = push_contact_distance(obj, push_hand_gap(obj, start, goal, hand_yaw))
     # The approach starts clear of the whole footprint (as for closed fingers) whatever the
     # gap: open fingers then meet the wall a little later, which nothing depends on.
     clear = push_contact_distance(obj, 0.0)

@@ -55,7 +55,9 @@ class ArmPath:
     names the object a held tool works in (the bowl poured or scooped into), which the
     tool may touch (its skill's own geometric pre-check has validated that) but the arm
     may not. ``kind``: ``free``, ``holding``, ``approach``, ``pour``, ``scoop``, ``dump``,
-    ``stir``, ``push``."""
+    ``stir``, ``push``. ``finger_gap`` (m): the opening the hand executes the path with and
+    the planner's collision tests give it (a push: open across a round object's line, else
+    closed); ``None``: the planning world's default hand, fully open (the widest sweep)."""
 
     arm: int
     configurations: np.ndarray
@@ -63,6 +65,7 @@ class ArmPath:
     held: tuple[str, GraspValue] | None = None
     touching: str | None = None
     target: str | None = None
+    finger_gap: float | None = None
 
     @property
     def start(self) -> ArmConf:
