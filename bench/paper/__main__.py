@@ -231,6 +231,43 @@ def experiment_records(units: list[Unit], results: list[Result]) -> dict[str, di
     return records
 
 
+def merge_run_records(earlier: dict[str, Any], newer: dict[str, Any]) -> dict[str, Any]:
+    """``run.json`` after an ``--only`` rerun into a folder whose run.json is ``earlier``.
+
+    The result is ``newer`` (its commit, finish time and jobs) with: the earlier ``notes``
+    kept (before any of ``newer``'s own); total, per-experiment and per-unit wall/CPU seconds
+    *added* for entries present in both (the rerun is more work on top of the earlier, not
+    a replacement: resumed jobs cost nothing again), entries present in one only copied;
+    each entry's ``error`` the newest run's (a rerun that succeeds clears an earlier error);
+    and ``invocations`` counting every run folded in (a record without it counts as one).
+    Neither input is modified.
+    """
+    record = dict(newer)
+    record["invocations"] = (int(earlier.get("invocations", 1))
+                             + int(newer.get("invocations", 1)))
+    for key in ("total_wall_s", "total_cpu_s"):
+        record[key] = round(float(newer.get(key, 0.0)) + float(earlier.get(key, 0.0)), 1)
+    for key in ("experiments", "units"):
+        merged = {name: dict(entry) for name, entry in earlier.get(key, {}).items()}
+        for name, entry in newer.get(key, {}).items():
+            if name not in merged:
+                merged[name] = dict(entry)
+                continue
+            before = merged[name]
+            merged[name] = {**before, **entry,
+                            "wall_s": round(float(before.get("wall_s", 0.0))
+                                            + float(entry.get("wall_s", 0.0)), 1),
+                            "cpu_s": round(float(before.get("cpu_s", 0.0))
+                                           + float(entry.get("cpu_s", 0.0)), 1),
+                            "error": entry.get("error", "")}
+        record[key] = merged
+    notes = list(earlier.get("notes", [])) + [n for n in newer.get("notes", [])
+                                               if n not in earlier.get("notes", [])]
+    if notes:
+        record["notes"] = notes
+    return record
+
+
 def source_commit() -> str:
     """The checked-out commit (``+dirty`` with uncommitted changes), or ``unknown``."""
     try:
@@ -309,11 +346,7 @@ def main(argv: list[str] | None = None) -> int:
     if previous.is_file() and args.only:
         earlier = json.loads(previous.read_text())
         if earlier.get("mode") == args.mode:
-            record["invocations"] = earlier.get("invocations", 1) + 1
-            for key in ("total_wall_s", "total_cpu_s"):
-                record[key] = round(record[key] + earlier.get(key, 0.0), 1)
-            for key in ("experiments", "units"):
-                record[key] = {**earlier.get(key, {}), **record[key]}
+            record = merge_run_records(earlier, record)
     previous.write_text(json.dumps(record, indent=2))
     print(f"{args.mode}: {len(record['experiments'])} experiment(s) in {total:.1f} s wall, "
           f"{total_cpu:.1f} s CPU", flush=True)
