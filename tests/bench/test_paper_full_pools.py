@@ -58,8 +58,7 @@ def test_committed_full_pools_restore_without_simulating(
     def no_trials(*_args: Any, **_kwargs: Any) -> Any:
         raise AssertionError("a committed trial was simulated again")
 
-    monkeypatch.setattr(collect_module, "_serial", no_trials)
-    monkeypatch.setattr(collect_module, "_parallel", no_trials)
+    monkeypatch.setattr(collect_module, "_run_guarded", no_trials)  # every trial runs here
     ctx = Context("full", tmp_path, False, 1)  # a fresh clone: archives, no cache
     (tmp_path / "pools").mkdir()
     for archive in archives:
