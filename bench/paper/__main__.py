@@ -35,6 +35,7 @@ for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_variable, "1")
 
 from bench.paper.common import REPO, Context  # noqa: E402
+from bench.paper.pools import skill_backend  # noqa: E402
 from bench.paper.schedule import Unit, pick, ranks, ready_units, simulate  # noqa: E402
 
 # name -> module; the order is the report's (and the paper's) order.
@@ -55,8 +56,11 @@ POOLED = ("confident", "supervised3d", "active3d")
 ESTIMATED_CPU_S = {"supervised3d": 140.0, "active3d": 150.0,
                    "kernel_learning": 60.0, "confident": 100.0, "coffee": 60.0}
 #: Estimated CPU seconds per collected pool trial (valid-only: redrawn until the pre-check
-#: passes; a quick run's 100 + 100 trials cost ~650 s CPU, ~30 % of it pour).
-POOL_TRIAL_CPU_S = {("pybullet", "pour"): 2.0, ("pybullet", "scoop"): 4.6}
+#: passes; a quick run's 100 + 100 trials cost ~650 s CPU, ~30 % of it pour; SAPIEN: the
+#: fidelity engine rows' 0.21 s per pour trial plus its pre-check redraws, and 0.81 s per
+#: scoop trial on the bead bed before c6ce341, ~1.2x that on today's bed).
+POOL_TRIAL_CPU_S = {("pybullet", "pour"): 2.0, ("pybullet", "scoop"): 4.6,
+                    ("sapien", "pour"): 0.3, ("sapien", "scoop"): 1.1}
 
 
 def pool_units(ctx: Context, pooled: list[str]) -> list[Unit]:
@@ -65,18 +69,21 @@ def pool_units(ctx: Context, pooled: list[str]) -> list[Unit]:
     for name in pooled:
         entry = ctx.sizes(importlib.import_module(EXPERIMENTS[name]).SIZES)
         for skill in entry["skills"]:
-            key = (str(entry["backend"]), str(skill))
+            key = (skill_backend(entry, str(skill)), str(skill))
             wanted[key] = max(wanted.get(key, 0), int(entry["n_train"]) + int(entry["n_test"]))
     return [Unit(f"pool:{backend}_{skill}", None, f"{backend}:{skill}:{n}",
                  n * POOL_TRIAL_CPU_S.get((backend, skill), 0.05))
             for (backend, skill), n in wanted.items()]
 
 
-def plan(ctx: Context, names: list[str]) -> list[Unit]:
-    """The units of work for the experiments ``names``: pools, parts and whole experiments."""
+def plan(ctx: Context, names: list[str], pools_only: bool = False) -> list[Unit]:
+    """The units of work for the experiments ``names``: pools, parts and whole experiments
+    (``pools_only``: only the trial-pool collections the pooled ones among them need)."""
     pooled = [n for n in names if n in POOLED]
     pools = pool_units(ctx, pooled) if pooled else []
     units = list(pools)
+    if pools_only:
+        return units
     for name in names:
         module = importlib.import_module(EXPERIMENTS[name])
         after = tuple(p.key for p in pools) if name in POOLED else ()
@@ -231,6 +238,43 @@ def experiment_records(units: list[Unit], results: list[Result]) -> dict[str, di
     return records
 
 
+def merge_run_records(earlier: dict[str, Any], newer: dict[str, Any]) -> dict[str, Any]:
+    """``run.json`` after an ``--only`` rerun into a folder whose run.json is ``earlier``.
+
+    The result is ``newer`` (its commit, finish time and jobs) with: the earlier ``notes``
+    kept (before any of ``newer``'s own); total, per-experiment and per-unit wall/CPU seconds
+    *added* for entries present in both (the rerun is more work on top of the earlier, not
+    a replacement: resumed jobs cost nothing again), entries present in one only copied;
+    each entry's ``error`` the newest run's (a rerun that succeeds clears an earlier error);
+    and ``invocations`` counting every run folded in (a record without it counts as one).
+    Neither input is modified.
+    """
+    record = dict(newer)
+    record["invocations"] = (int(earlier.get("invocations", 1))
+                             + int(newer.get("invocations", 1)))
+    for key in ("total_wall_s", "total_cpu_s"):
+        record[key] = round(float(newer.get(key, 0.0)) + float(earlier.get(key, 0.0)), 1)
+    for key in ("experiments", "units"):
+        merged = {name: dict(entry) for name, entry in earlier.get(key, {}).items()}
+        for name, entry in newer.get(key, {}).items():
+            if name not in merged:
+                merged[name] = dict(entry)
+                continue
+            before = merged[name]
+            merged[name] = {**before, **entry,
+                            "wall_s": round(float(before.get("wall_s", 0.0))
+                                            + float(entry.get("wall_s", 0.0)), 1),
+                            "cpu_s": round(float(before.get("cpu_s", 0.0))
+                                           + float(entry.get("cpu_s", 0.0)), 1),
+                            "error": entry.get("error", "")}
+        record[key] = merged
+    notes = list(earlier.get("notes", [])) + [n for n in newer.get("notes", [])
+                                               if n not in earlier.get("notes", [])]
+    if notes:
+        record["notes"] = notes
+    return record
+
+
 def source_commit() -> str:
     """The checked-out commit (``+dirty`` with uncommitted changes), or ``unknown``."""
     try:
@@ -265,6 +309,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--report", type=Path, default=None,
                         help="Markdown report path (default: docs/RESULTS.md; smoke: OUT)")
     parser.add_argument("--no-report", action="store_true")
+    parser.add_argument("--pools-only", action="store_true",
+                        help="only collect (or resume) the trial pools the pooled experiments "
+                             f"({', '.join(POOLED)}) need, then stop (no run.json, no report)")
     args = parser.parse_args(argv)
     names = [n.strip() for n in args.only.split(",") if n.strip()] or list(EXPERIMENTS)
     unknown = [n for n in names if n not in EXPERIMENTS]
@@ -278,7 +325,11 @@ def main(argv: list[str] | None = None) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     ctx = Context(args.mode, args.out.resolve(), sys.stderr.isatty(), args.workers)
     started = time.perf_counter()
-    units = plan(ctx, names)
+    units = plan(ctx, names, args.pools_only)
+    if args.pools_only and not units:
+        print(f"--pools-only: none of {', '.join(names)} uses a trial pool (those that do: "
+              f"{', '.join(POOLED)})", file=sys.stderr)
+        return 2
     estimate, _lanes = simulate(units, max(1, args.jobs))
     print(f"[{0.0:7.1f} s] {len(units)} unit(s) on {max(1, args.jobs)} lane(s), estimated "
           f"{estimate:.0f} s on idle cores", flush=True)
@@ -290,9 +341,21 @@ def main(argv: list[str] | None = None) -> int:
 
     # Collection runs in its lane's process when lanes run in parallel (one process per
     # core), with ``--workers`` processes only when nothing else runs beside it.
-    results = run_units(units, ctx, args.jobs, args.workers if args.jobs <= 1 else 1,
-                        report_done)
+    if args.pools_only and args.jobs <= 1:
+        # One after another, cheapest pool first: a finished pool is usable sooner.
+        results = []
+        for unit in sorted(units, key=lambda u: u.cost):
+            results.append(run_unit(unit, ctx, args.workers))
+            report_done(results[-1])
+    else:
+        results = run_units(units, ctx, args.jobs, args.workers if args.jobs <= 1 else 1,
+                            report_done)
     total = time.perf_counter() - started
+    if args.pools_only:
+        failed = [r for r in results if r[3]]
+        print(f"{args.mode}: {len(results)} pool(s) in {total:.1f} s wall, "
+              f"{len(failed)} failed", flush=True)
+        return 1 if failed else 0
     # CPU of this process and of every finished child (experiment and collection workers):
     # what the run would cost on dedicated cores, whatever else shares the machine.
     usage = [resource.getrusage(who) for who in (resource.RUSAGE_SELF,
@@ -309,11 +372,7 @@ def main(argv: list[str] | None = None) -> int:
     if previous.is_file() and args.only:
         earlier = json.loads(previous.read_text())
         if earlier.get("mode") == args.mode:
-            record["invocations"] = earlier.get("invocations", 1) + 1
-            for key in ("total_wall_s", "total_cpu_s"):
-                record[key] = round(record[key] + earlier.get(key, 0.0), 1)
-            for key in ("experiments", "units"):
-                record[key] = {**earlier.get(key, {}), **record[key]}
+            record = merge_run_records(earlier, record)
     previous.write_text(json.dumps(record, indent=2))
     print(f"{args.mode}: {len(record['experiments'])} experiment(s) in {total:.1f} s wall, "
           f"{total_cpu:.1f} s CPU", flush=True)

@@ -26,8 +26,13 @@ from bench.paper.common import (
     write_json,
 )
 from bench.paper.poollearn import CheckpointEvaluator, held_out_contexts, pool_curve
-from bench.paper.pools import get_pool
-from ltamp_cli.backends import load_backend
+from bench.paper.pools import (
+    FULL_SKILL_BACKENDS,
+    SkillBackends,
+    backends_label,
+    get_pool,
+    skill_backend,
+)
 from ltamp_cli.learning.active import LearningConfig
 from ltamp_cli.learning.curves import summarize
 
@@ -46,7 +51,8 @@ SIZES: dict[str, dict[str, Any]] = {
               "n_test": 30, "budget": 50, "eval_every": 10, "seeds": 2, "contexts": 3,
               "success_at": [50], "candidates": 1000, "rep_init": 25, "rep_budget": 50,
               "rep_every": 5, "reps": 2},
-    "full": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 9000,
+    "full": {"backend": "pybullet", "skill_backends": FULL_SKILL_BACKENDS,
+             "skills": ["pour", "scoop"], "n_train": 9000,
              "n_test": 1000, "budget": 400, "eval_every": 10, "seeds": 10, "contexts": 45,
              "success_at": list(range(10, 201, 10)), "candidates": 1000, "rep_init": 50,
              "rep_budget": 100, "rep_every": 10, "reps": 200},
@@ -57,16 +63,19 @@ def run(ctx: Context) -> dict[str, Any]:
     """Writes ``active3d.json``, ``active3d.png`` (400-style curves), ``active3d_100.png``."""
     started = time.perf_counter()
     sizes = ctx.sizes(SIZES)
-    backend = load_backend(sizes["backend"])
+    backends = SkillBackends(sizes)
     log = JobLog(ctx, NAME, sizes)  # finished jobs: a rerun continues after the last one
     skills: dict[str, Any] = {}
     try:
         for skill in sizes["skills"]:
-            pool = get_pool(ctx, sizes["backend"], skill, sizes["n_train"], sizes["n_test"])
+            backend = backends[skill]
+            pool = get_pool(ctx, skill_backend(sizes, skill), skill, sizes["n_train"],
+                            sizes["n_test"])
             spec = backend.skills()[skill]
             contexts = held_out_contexts(backend, skill, sizes["contexts"], seed=3)
 
-            def full_test(context: Any, controls: Any, skill: str = skill) -> Any:
+            def full_test(context: Any, controls: Any, skill: str = skill,
+                          backend: Any = backend) -> Any:
                 return backend.is_valid(skill, context, controls)
 
             is_valid = first_valid_lazy(full_test)  # same θ*, far fewer pre-checks
@@ -78,7 +87,8 @@ def run(ctx: Context) -> dict[str, Any]:
 
                     def job(learner: str = learner, seed: int = seed, skill: str = skill,
                             pool: Any = pool, spec: Any = spec, contexts: Any = contexts,
-                            is_valid: Any = is_valid) -> list[dict[str, Any]]:
+                            is_valid: Any = is_valid,
+                            backend: Any = backend) -> list[dict[str, Any]]:
                         evaluator = CheckpointEvaluator(
                             spec, pool.heldout(), live_score(backend, skill, 700 + seed),
                             contexts, is_valid, set(sizes["success_at"]), seed,
@@ -109,7 +119,7 @@ def run(ctx: Context) -> dict[str, Any]:
                              "repeated_summary": summarize(rep_rows), "runs": rows,
                              "repeated_runs": rep_rows}
     finally:
-        backend.close()
+        backends.close()
     names = sizes["skills"]
     panels = [{"title": f"{skill}: success rate of θ*", "ylabel": "success rate",
                "series": curve_series(skills[skill]["summary"], "success_rate", LEARNERS,
@@ -118,13 +128,15 @@ def run(ctx: Context) -> dict[str, Any]:
                 "series": curve_series(skills[skill]["summary"], "f1", LEARNERS, LABELS)}
                for skill in names]
     plot_panels(panels, ctx.out / f"{NAME}.png",
-                title=f"Active learning, pool mode ({sizes['backend']}, {ctx.mode})")
+                title=f"Active learning, pool mode ({backends_label(sizes)}, {ctx.mode})")
     plot_panels([{"title": f"{skill}: F1, {sizes['rep_init']}→{sizes['rep_budget']} trials "
                            f"x{sizes['reps']}", "ylabel": "F1",
                   "series": curve_series(skills[skill]["repeated_summary"], "f1", LEARNERS,
                                          LABELS)} for skill in names],
                 ctx.out / f"{NAME}_100.png", title=f"Repeated protocol ({ctx.mode})")
-    payload = {"sizes": sizes, "backend": sizes["backend"], "skills": skills,
+    payload = {"sizes": sizes, "backend": sizes["backend"],
+               "skill_backends": {s: skill_backend(sizes, s) for s in sizes["skills"]},
+               "skills": skills,
                "pngs": [f"{NAME}.png", f"{NAME}_100.png"]}
     write_json(ctx, NAME, payload, started)
     return payload

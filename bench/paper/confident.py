@@ -22,8 +22,13 @@ from tqdm import tqdm
 
 from bench.paper.common import Context, first_valid_lazy, live_score, write_json
 from bench.paper.poollearn import held_out_contexts
-from bench.paper.pools import get_pool
-from ltamp_cli.backends import load_backend
+from bench.paper.pools import (
+    FULL_SKILL_BACKENDS,
+    SkillBackends,
+    backends_label,
+    get_pool,
+    skill_backend,
+)
 from ltamp_cli.learning.active import LearningConfig, learn_from_pool
 
 NAME = "confident"
@@ -35,7 +40,8 @@ SIZES: dict[str, dict[str, Any]] = {
     # 25 among the 45 unused trials of the small quick pool.
     "quick": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 70,
               "n_test": 30, "small": 25, "large": 50, "contexts": 4, "candidates": 1000},
-    "full": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 9000,
+    "full": {"backend": "pybullet", "skill_backends": FULL_SKILL_BACKENDS,
+             "skills": ["pour", "scoop"], "n_train": 9000,
              "n_test": 1000, "small": 50, "large": 100, "contexts": 30, "candidates": 1000},
 }
 
@@ -54,11 +60,13 @@ def run(ctx: Context) -> dict[str, Any]:
     """Writes ``confident.json`` and ``confident.png`` (bar chart of the table)."""
     started = time.perf_counter()
     sizes = ctx.sizes(SIZES)
-    backend = load_backend(sizes["backend"])
+    backends = SkillBackends(sizes)
     table: dict[str, dict[str, Any]] = {}
     try:
         for skill in sizes["skills"]:
-            pool = get_pool(ctx, sizes["backend"], skill, sizes["n_train"], sizes["n_test"])
+            backend = backends[skill]
+            pool = get_pool(ctx, skill_backend(sizes, skill), skill, sizes["n_train"],
+                            sizes["n_test"])
             spec = backend.skills()[skill]
             contexts = held_out_contexts(backend, skill, sizes["contexts"], seed=6)
             table[skill] = {"pool": pool.stats(), "learners": {}}
@@ -74,7 +82,7 @@ def run(ctx: Context) -> dict[str, Any]:
                 fills: list[float | None] = []
                 for context in contexts:
                     # The lazy test picks the same θ* with far fewer pre-checks.
-                    lazy = first_valid_lazy(lambda c, u, s=skill: backend.is_valid(s, c, u))
+                    lazy = first_valid_lazy(lambda c, u, s=skill, b=backend: b.is_valid(s, c, u))
                     control, _ = model.most_confident_control(context, rng, lazy,
                                                               sizes["candidates"])
                     ok = bool(backend.is_valid(skill, context, control[None, :])[0])
@@ -97,9 +105,11 @@ def run(ctx: Context) -> dict[str, Any]:
                                     "filled": fills},
                 }
     finally:
-        backend.close()
+        backends.close()
     _plot(table, ctx, sizes)
-    payload = {"sizes": sizes, "backend": sizes["backend"], "table": table,
+    payload = {"sizes": sizes, "backend": sizes["backend"],
+               "skill_backends": {s: skill_backend(sizes, s) for s in sizes["skills"]},
+               "table": table,
                "pngs": [f"{NAME}.png"]}
     write_json(ctx, NAME, payload, started)
     return payload
@@ -122,7 +132,7 @@ def _plot(table: dict[str, Any], ctx: Context, sizes: dict[str, Any]) -> None:
         axis.set_ylim(0, 1.05)
         axis.set_title(f"{skill} ({sizes['contexts']} held-out contexts)", fontsize=10)
         axis.legend(fontsize=8)
-    figure.suptitle(f"Most confident prediction ({sizes['backend']}, {ctx.mode})", fontsize=11)
+    figure.suptitle(f"Most confident prediction ({backends_label(sizes)}, {ctx.mode})", fontsize=11)
     figure.tight_layout()
     figure.savefig(ctx.out / f"{NAME}.png", dpi=90)
     plt.close(figure)

@@ -234,6 +234,18 @@ SCOOP_RARITY = (
     "successes per bowl for the bowls it kept.")
 
 
+def _backends(data: dict[str, Any], skill: str | None = None) -> str:
+    """The engine of ``skill`` in a pooled experiment's JSON (``skill_backends`` per skill
+    when the mode gives each skill its own, else ``backend``); without ``skill``, all of
+    them (``pour: sapien, scoop: pybullet``) or the one they share."""
+    per_skill = dict(data.get("skill_backends") or {})
+    if skill is not None:
+        return str(per_skill.get(skill, data["backend"]))
+    if len(set(per_skill.values())) > 1:
+        return ", ".join(f"{name}: {engine}" for name, engine in per_skill.items())
+    return str(data["backend"])
+
+
 def _few_positives(pool: dict[str, Any], skill: str = "", backend: str = "") -> str:
     """A warning when the held-out set has too few successes for F1 to say anything."""
     if pool["test_positives"] >= 5:
@@ -304,7 +316,7 @@ def section_supervised(out: Path, report: Path) -> list[str]:
     learners = [s for s, _ in LEARNERS]
     sizes = data["sizes"]
     lines = [f"## {title}", "", f"Paper: {PAPER_CLAIMS['supervised3d']}", "",
-             f"Ours ({data['mode']}, backend {data['backend']}): pool of {sizes['n_train']} "
+             f"Ours ({data['mode']}, backend {_backends(data)}): pool of {sizes['n_train']} "
              f"uniform random {_pool_kind(data)}trials + {sizes['n_test']} held-out test "
              "trials per skill "
              f"(paper: 10,000 trials; 400 training / 1,000 test), {sizes['seeds']} shuffle(s), "
@@ -315,7 +327,7 @@ def section_supervised(out: Path, report: Path) -> list[str]:
         pool = entry["pool"]
         lines += [f"**{skill}** — pool: valid {pool['valid_fraction']:.0%}, positive "
                   f"{pool['positive_fraction']:.0%}, {pool['test_positives']} positives among "
-                  "the test trials." + _few_positives(pool, skill, data["backend"]), "",
+                  "the test trials." + _few_positives(pool, skill, _backends(data, skill)), "",
                   "Success rate:", ""]
         lines += _curve_table(entry["summary"], learners, LABELS, "success_rate")
         lines += ["", "Held-out F1:", ""]
@@ -351,7 +363,7 @@ def section_active(out: Path, report: Path) -> list[str]:
 
     sizes = data["sizes"]
     lines = [f"## {title}", "", f"Paper: {PAPER_CLAIMS['active3d']}", "",
-             f"Ours ({data['mode']}, backend {data['backend']}, MLP kernel, pool mode over "
+             f"Ours ({data['mode']}, backend {_backends(data)}, MLP kernel, pool mode over "
              f"{sizes['n_train']} random {_pool_kind(data)}trials — the paper's pool had "
              "10,000; "
              f"{sizes['seeds']} run(s); repeated protocol {sizes['rep_init']}→"
@@ -360,7 +372,7 @@ def section_active(out: Path, report: Path) -> list[str]:
         pool = entry["pool"]
         lines += [f"**{skill}** — pool: valid {pool['valid_fraction']:.0%}, positive "
                   f"{pool['positive_fraction']:.0%}, {pool['test_positives']} positives among "
-                  "the test trials." + _few_positives(pool, skill, data["backend"]), "",
+                  "the test trials." + _few_positives(pool, skill, _backends(data, skill)), "",
                   "Success rate:", ""]
         lines += _curve_table(entry["summary"], LEARNERS, LABELS, "success_rate")
         lines += ["", "Held-out F1:", ""]
@@ -543,7 +555,7 @@ def section_confident(out: Path, report: Path) -> list[str]:
         return failed
     sizes = data["sizes"]
     lines = [f"## {title}", "",
-             f"Ours ({data['mode']}, backend {data['backend']}, MLP-kernel GPs from a pool of "
+             f"Ours ({data['mode']}, backend {_backends(data)}, MLP-kernel GPs from a pool of "
              f"{sizes['n_train']} random {_pool_kind(data)}trials, {sizes['contexts']} "
              "held-out contexts per "
              "skill). Valid = passes the skill's geometric pre-check (the paper: a full robot "

@@ -29,8 +29,13 @@ from bench.paper.common import (
     write_json,
 )
 from bench.paper.poollearn import CheckpointEvaluator, held_out_contexts, pool_curve
-from bench.paper.pools import get_pool
-from ltamp_cli.backends import load_backend
+from bench.paper.pools import (
+    FULL_SKILL_BACKENDS,
+    SkillBackends,
+    backends_label,
+    get_pool,
+    skill_backend,
+)
 from ltamp_cli.learning.active import LearningConfig
 from ltamp_cli.learning.curves import summarize
 
@@ -52,7 +57,8 @@ SIZES: dict[str, dict[str, Any]] = {
     "quick": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 70,
               "n_test": 30, "budget": 60, "eval_every": 20, "seeds": 1, "contexts": 3,
               "success_at": [60], "candidates": 1000},
-    "full": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 9000,
+    "full": {"backend": "pybullet", "skill_backends": FULL_SKILL_BACKENDS,
+             "skills": ["pour", "scoop"], "n_train": 9000,
              "n_test": 1000, "budget": 400, "eval_every": 10, "seeds": 10, "contexts": 45,
              "success_at": list(range(10, 201, 10)), "candidates": 1000},
 }
@@ -62,16 +68,19 @@ def run(ctx: Context) -> dict[str, Any]:
     """Writes ``supervised3d.json``, ``supervised3d.png`` and ``supervised3d_kernels.png``."""
     started = time.perf_counter()
     sizes = ctx.sizes(SIZES)
-    backend = load_backend(sizes["backend"])
+    backends = SkillBackends(sizes)
     log = JobLog(ctx, NAME, sizes)  # finished jobs: a rerun continues after the last one
     skills: dict[str, Any] = {}
     try:
         for skill in sizes["skills"]:
-            pool = get_pool(ctx, sizes["backend"], skill, sizes["n_train"], sizes["n_test"])
+            backend = backends[skill]
+            pool = get_pool(ctx, skill_backend(sizes, skill), skill, sizes["n_train"],
+                            sizes["n_test"])
             spec = backend.skills()[skill]
             contexts = held_out_contexts(backend, skill, sizes["contexts"], seed=3)
 
-            def full_test(context: Any, controls: Any, skill: str = skill) -> Any:
+            def full_test(context: Any, controls: Any, skill: str = skill,
+                          backend: Any = backend) -> Any:
                 return backend.is_valid(skill, context, controls)
 
             is_valid = first_valid_lazy(full_test)  # same θ*, far fewer pre-checks
@@ -87,7 +96,8 @@ def run(ctx: Context) -> dict[str, Any]:
                     def job(strategy: str = strategy, kernel: str = kernel, kind: str = kind,
                             seed: int = seed, skill: str = skill, pool: Any = pool,
                             spec: Any = spec, contexts: Any = contexts,
-                            is_valid: Any = is_valid) -> list[dict[str, Any]]:
+                            is_valid: Any = is_valid,
+                            backend: Any = backend) -> list[dict[str, Any]]:
                         evaluator = CheckpointEvaluator(
                             spec, pool.heldout(),
                             live_score(backend, skill, 500 + seed) if kind == "learner"
@@ -108,7 +118,7 @@ def run(ctx: Context) -> dict[str, Any]:
                              "kernel_summary": summarize(kernel_rows), "runs": rows,
                              "kernel_runs": kernel_rows}
     finally:
-        backend.close()
+        backends.close()
     learners = [s for s, _ in LEARNERS]
     names = sizes["skills"]
     panels = [{"title": f"{skill}: success rate of θ*", "ylabel": "success rate",
@@ -118,13 +128,15 @@ def run(ctx: Context) -> dict[str, Any]:
                 "series": curve_series(skills[skill]["summary"], "f1", learners, LABELS)}
                for skill in names]
     plot_panels(panels, ctx.out / f"{NAME}.png",
-                title=f"Kitchen3D supervised learners ({sizes['backend']}, {ctx.mode})")
+                title=f"Kitchen3D supervised learners ({backends_label(sizes)}, {ctx.mode})")
     kernels = [f"gp-{k}" for k in KERNELS]
     plot_panels([{"title": f"{skill}: GP kernels, held-out F1", "ylabel": "F1",
                   "series": curve_series(skills[skill]["kernel_summary"], "f1", kernels,
                                          LABELS)} for skill in names],
                 ctx.out / f"{NAME}_kernels.png", title=f"Kernel comparison ({ctx.mode})")
-    payload = {"sizes": sizes, "backend": sizes["backend"], "skills": skills,
+    payload = {"sizes": sizes, "backend": sizes["backend"],
+               "skill_backends": {s: skill_backend(sizes, s) for s in sizes["skills"]},
+               "skills": skills,
                "pngs": [f"{NAME}.png", f"{NAME}_kernels.png"]}
     write_json(ctx, NAME, payload, started)
     return payload
