@@ -59,12 +59,15 @@ def exclusive_writer(output: str | Path, *, is_directory: bool, wait: bool = Fal
     except OSError as error:
         raise InputError(f"{option}: cannot write {output}: {error.strerror or error}") from None
     try:
-        identity = None if is_directory else _lock_identity(output, wait, option)
+        # The file a symlink names (even a dangling one): ``O_EXCL`` refuses to create
+        # through a symlink, and releasing must remove the created file, not the link.
+        target = output.resolve()
+        identity = None if is_directory else _lock_identity(target, wait, option)
         try:
             yield
         finally:
             if identity is not None:
-                _release_identity(output, *identity)
+                _release_identity(target, *identity)
     finally:
         lock.release()
 

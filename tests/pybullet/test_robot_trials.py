@@ -140,7 +140,7 @@ def test_the_robot_is_part_of_the_backend_identity() -> None:
         free.close()
         robot.close()
         side_only.close()
-    with pytest.raises(ValueError, match="robot"):
+    with pytest.raises(InputError, match="robot"):  # bad input: one line, exit 2
         load_backend("pybullet", robot="kuka")
 
 

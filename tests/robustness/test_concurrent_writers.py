@@ -105,3 +105,15 @@ def test_interrupted_collect_resumes_without_loss_or_duplicates(tmp_path: Path,
     # the trials kept from before the interruption are unchanged, byte for byte
     first = {json.loads(line)["index"]: line for line in lines[:len(before)]}
     assert set(first) == set(before)
+
+
+def test_a_dangling_symlink_output_is_created_through_and_cleaned_up(tmp_path: Path) -> None:
+    # Before: the file lock opened the link itself with O_EXCL ("File exists") when the
+    # link's collect took the lock first, and releasing would have removed the link.
+    (tmp_path / "link.jsonl").symlink_to("a.jsonl")
+    with exclusive_writer(tmp_path / "link.jsonl", is_directory=False):
+        assert (tmp_path / "a.jsonl").is_file()
+        with pytest.raises(InputError, match="being written by another"), \
+                exclusive_writer(tmp_path / "a.jsonl", is_directory=False):
+            pass
+    assert (tmp_path / "link.jsonl").is_symlink() and not (tmp_path / "a.jsonl").exists()
