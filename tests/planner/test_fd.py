@@ -7,6 +7,7 @@ from __future__ import annotations
 import importlib.util
 import json
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -185,15 +186,50 @@ def test_unsolvable_task_gives_no_plan(make_problem: MakeProblem, search: str) -
     assert result.status == "infeasible"
 
 
-def test_deadline_kills_fast_downward() -> None:
+@pytest.fixture
+def started_processes(monkeypatch: pytest.MonkeyPatch) -> list[subprocess.Popen[Any]]:
+    """Every process ``subprocess`` starts during the test, in order."""
+    started: list[subprocess.Popen[Any]] = []
+
+    class RecordedPopen(subprocess.Popen):  # type: ignore[type-arg]
+        def __init__(self, *args: Any, **kwargs: Any) -> None:
+            super().__init__(*args, **kwargs)
+            started.append(self)
+
+    monkeypatch.setattr(subprocess, "Popen", RecordedPopen)
+    return started
+
+
+def test_deadline_kills_fast_downward(started_processes: list[subprocess.Popen[Any]]) -> None:
     task = blocksworld_task()
     start = time.perf_counter()
     with pytest.raises(SearchTimeout):
         # Shorter than the translator's start-up: the subprocess must be stopped.
         search_with_fast_downward(task, start + 0.02)
-    assert time.perf_counter() - start < 2.0
+    # Whatever the machine's load, no Fast Downward process outlives the call.
+    assert all(process.returncode is not None for process in started_processes)
     with pytest.raises(SearchTimeout):
         search_with_fast_downward(task, start - 1.0)
+
+
+def test_deadline_kills_a_translator_that_never_ends(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        started_processes: list[subprocess.Popen[Any]]) -> None:
+    # A stand-in translator that would run for a minute: the deadline, not the process,
+    # must end the call, and the process must be killed (returncode -SIGKILL), not left.
+    stand_in = tmp_path / "python"
+    stand_in.write_text("#!/bin/sh\nexec sleep 60\n")
+    stand_in.chmod(0o755)
+    real = fast_downward.locate_fast_downward()
+    monkeypatch.setattr(fast_downward, "locate_fast_downward",
+                        lambda: fast_downward.FastDownward(str(stand_in), real.downward))
+    start = time.perf_counter()
+    with pytest.raises(SearchTimeout):
+        search_with_fast_downward(blocksworld_task(), start + 0.5)
+    elapsed = time.perf_counter() - start
+    assert len(started_processes) == 1
+    assert started_processes[0].returncode == -signal.SIGKILL
+    assert elapsed < 30.0  # the stand-in alone would take 60 s
 
 
 def test_time_limit_gives_timeout_status() -> None:
