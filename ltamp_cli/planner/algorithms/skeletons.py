@@ -113,6 +113,16 @@ SPECULATIVE_MIN_EXPANSIONS = 100
 # tamp2d_blocked with a first search budget of one expansion: 3 -> 2 took 7 -> 3 s CPU;
 # 1 slowed tamp2d_uniform_tight_4 (6 seeds, median CPU 0.066 -> 0.096 s).
 MAX_SPECULATIVE_IN_A_ROW = 2
+# The full search after a plan whose shared placeholders were refined (the same task but
+# for the refined instances' own placeholders) is bounded by this many times the
+# expansions of the search that found that plan (at least SPECULATIVE_MIN_EXPANSIONS, at
+# most the budget); when it runs out, the bounds are raised as after a full search that
+# found nothing, but the budget is not doubled. A refined task that has a plan needs
+# about as much search as the one refined (kitchen_fluent: 61 -> 103 expansions); one
+# that has none at this complexity was searched up to the whole budget (PDDLStream's
+# kitchen/run.py under ltamp: 74 expansions, then 601 in vain, 0.16 of 0.40 s CPU).
+# 0 disables the bound.
+REFINED_SEARCH_FACTOR = 4
 
 
 @dataclass
@@ -356,6 +366,7 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
     # After a plan whose shared placeholders were refined: whether the search that found it
     # was a full one (the next iteration searches again, as that one would have).
     refining: bool | None = None
+    refined_expansions = 0  # expansions of the search whose plan was refined
     try:
         while not state.timed_out():
             state.iterations += 1
@@ -380,6 +391,9 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                 # queue has sampled more, and a search that fails explores everything
                 # within its budget: 600, then 1,200 expansions (2 s) each time.
                 speculative = not stalled
+                # The full search that follows a refinement is bounded by what the refined
+                # search needed (see REFINED_SEARCH_FACTOR).
+                after_refinement = refining is True and REFINED_SEARCH_FACTOR > 0
                 refining = None
                 speculative_in_a_row = speculative_in_a_row + 1 if speculative else 0
                 facts_at_search = len(state.facts.members)
@@ -402,12 +416,14 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                         + state.max_object_level() else None)
                 limit = (min(state.search_budget, max(
                     SPECULATIVE_MIN_EXPANSIONS, SPECULATIVE_FACTOR * solved_expansions))
-                    if speculative else None)
+                    if speculative else min(state.search_budget, max(
+                        SPECULATIVE_MIN_EXPANSIONS, REFINED_SEARCH_FACTOR * refined_expansions))
+                    if after_refinement else None)
                 discrete = state.search(evaluation.index.members, evaluation.object_types,
                                         evaluation.function_values, limit,
                                         context_blocks=evaluation.context_blocks,
-                                        budgeted=not speculative, guess=guess,
-                                        skip_if_grounded_as=skip)
+                                        budgeted=not speculative and not after_refinement,
+                                        guess=guess, skip_if_grounded_as=skip)
                 if discrete.solved and discrete.outcome is not None:
                     solved_expansions = max(solved_expansions, discrete.outcome.expanded)
                 if discrete.capped and not discrete.skipped:
@@ -438,6 +454,10 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                                                  placeholders)
                     if found is None:
                         refining = not speculative  # shared placeholders refined
+                        refined_expansions = max(
+                            discrete.outcome.expanded if discrete.outcome else 0,
+                            solved_expansions if discrete.outcome is None
+                            or discrete.outcome.guessed else 0)
                         continue
                     plan = tuple(found)
                     if not plan:
