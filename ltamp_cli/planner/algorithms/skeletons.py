@@ -22,6 +22,12 @@ cheap generator of the later one for its next value at once (local repair, see
   full search's share is its floor of one step and searches have found two skeletons or
   more, the bindings within the retry bound are processed first, as ``binding`` does,
   while the streams' CPU time stays below the searches' (see :data:`SEARCH_SAMPLE_RATIO`).
+
+Both learn several conflicts from one failed stream plan: when a cheap generator of it runs
+out, its siblings in the plan are tried at once with the plan's tests
+(:func:`probe_siblings`). The full search after a plan whose shared placeholders were
+refined is bounded by the effort of the search that found it
+(:data:`REFINED_SEARCH_FACTOR`).
 """
 
 from __future__ import annotations
@@ -335,7 +341,7 @@ def probe_siblings(state: PlannerState, failed: Binding) -> None:
     kitchen_fluent: the coaster has one slot, where the saucer stands. A plan that parks
     the pitcher, the saucer and the spoon on "fresh" coaster poses failed at the pitcher's
     (its sampler's only slot collides), and each of the two others cost one more search
-    and skeleton (seeds 0-9 adaptive: 96 -> 84 searches, binding 108 -> 93, plans
+    and skeleton (seeds 0-9 adaptive: 96 -> 84 searches, binding 107 -> 94, plans
     unchanged; docs/results/planner/issue19.md). Only siblings: probing every generator of
     the failed plan, or every one with real inputs, raised the searches of the seeds that
     needed 7 to 8-9 (the probed table samplers' higher complexity sent the next search to
