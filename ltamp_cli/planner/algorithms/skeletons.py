@@ -36,7 +36,7 @@ import heapq
 import itertools
 from dataclasses import dataclass, field
 
-from ltamp_cli.planner.algorithms.common import PlannerState, bound_plan
+from ltamp_cli.planner.algorithms.common import PlannerState, bound_plan, instantiate_atoms
 from ltamp_cli.planner.algorithms.effort import observed_cheap
 from ltamp_cli.planner.algorithms.optimistic import (
     MAX_LOCAL_REPAIRS,
@@ -363,6 +363,12 @@ def probe_siblings(state: PlannerState, failed: Binding) -> None:
             continue
         instance = state.instance(name, real_inputs)
         if instance.num_calls or instance.exhausted:
+            continue
+        # Only within its domain: a domain fact certified by a later entry of the plan
+        # is not real yet.
+        domain = instantiate_atoms(external.domain,
+                                   dict(zip(external.inputs, real_inputs, strict=True)))
+        if not all(fact in state.facts.members for fact in domain):
             continue
         outputs = skeleton.outputs_at(position)
         tests = []
