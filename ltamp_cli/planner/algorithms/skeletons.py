@@ -26,8 +26,8 @@ cheap generator of the later one for its next value at once (local repair, see
 Both learn several conflicts from one failed stream plan: when a cheap generator of it runs
 out, its siblings in the plan are tried at once with the plan's tests
 (:func:`probe_siblings`). The full search after a plan whose shared placeholders were
-refined is bounded by the effort of the search that found it
-(:data:`REFINED_SEARCH_FACTOR`).
+refined may be bounded by the effort of the search that found it (opt-in,
+:data:`REFINED_SEARCH_FACTOR`).
 """
 
 from __future__ import annotations
@@ -119,16 +119,18 @@ SPECULATIVE_MIN_EXPANSIONS = 100
 # tamp2d_blocked with a first search budget of one expansion: 3 -> 2 took 7 -> 3 s CPU;
 # 1 slowed tamp2d_uniform_tight_4 (6 seeds, median CPU 0.066 -> 0.096 s).
 MAX_SPECULATIVE_IN_A_ROW = 2
-# The full search after a plan whose shared placeholders were refined (the same task but
-# for the refined instances' own placeholders) is bounded by this many times the
-# expansions of the search that found that plan (at least SPECULATIVE_MIN_EXPANSIONS, at
-# most the budget); when it runs out, the bounds are raised as after a full search that
-# found nothing, but the budget is not doubled. A refined task that has a plan needs
-# about as much search as the one refined (kitchen_fluent: 61 -> 103 expansions); one
-# that has none at this complexity was searched up to the whole budget (PDDLStream's
-# kitchen/run.py under ltamp: 74 expansions, then 601 in vain, 0.16 of 0.40 s CPU).
-# 0 disables the bound.
-REFINED_SEARCH_FACTOR = 4
+# Opt-in (0: off, the default): the full search after a plan whose shared placeholders
+# were refined (the same task but for the refined instances' own placeholders) bounded by
+# this many times the expansions of the search that found that plan (at least
+# SPECULATIVE_MIN_EXPANSIONS, at most the budget); when it runs out, the bounds are raised
+# as after a full search that found nothing, but the budget is not doubled. At 4 it halved
+# the one costly search of PDDLStream's kitchen/run.py under ltamp (a refined task without
+# a plan: 601 -> 297 expansions, 0.42 -> 0.36 s CPU, same plan), but made the unseeded
+# continuous_tamp/run.py's plans costlier more often (12 runs each: 13-17 actions, cost
+# 125-157, in 4 runs with it, 1 without; else 9 actions, cost ~95): a refined search there
+# that runs out raises the complexity, and plans at a higher complexity are longer
+# (docs/results/planner/issue19.md).
+REFINED_SEARCH_FACTOR = 0
 
 
 @dataclass
