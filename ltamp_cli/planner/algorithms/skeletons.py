@@ -22,6 +22,12 @@ cheap generator of the later one for its next value at once (local repair, see
   full search's share is its floor of one step and searches have found two skeletons or
   more, the bindings within the retry bound are processed first, as ``binding`` does,
   while the streams' CPU time stays below the searches' (see :data:`SEARCH_SAMPLE_RATIO`).
+
+Both learn several conflicts from one failed stream plan: when a cheap generator of it runs
+out, its siblings in the plan are tried at once with the plan's tests
+(:func:`probe_siblings`). The full search after a plan whose shared placeholders were
+refined may be bounded by the effort of the search that found it (opt-in,
+:data:`REFINED_SEARCH_FACTOR`).
 """
 
 from __future__ import annotations
@@ -30,7 +36,7 @@ import heapq
 import itertools
 from dataclasses import dataclass, field
 
-from ltamp_cli.planner.algorithms.common import PlannerState, bound_plan
+from ltamp_cli.planner.algorithms.common import PlannerState, bound_plan, instantiate_atoms
 from ltamp_cli.planner.algorithms.effort import observed_cheap
 from ltamp_cli.planner.algorithms.optimistic import (
     MAX_LOCAL_REPAIRS,
@@ -113,6 +119,18 @@ SPECULATIVE_MIN_EXPANSIONS = 100
 # tamp2d_blocked with a first search budget of one expansion: 3 -> 2 took 7 -> 3 s CPU;
 # 1 slowed tamp2d_uniform_tight_4 (6 seeds, median CPU 0.066 -> 0.096 s).
 MAX_SPECULATIVE_IN_A_ROW = 2
+# Opt-in (0: off, the default): the full search after a plan whose shared placeholders
+# were refined (the same task but for the refined instances' own placeholders) bounded by
+# this many times the expansions of the search that found that plan (at least
+# SPECULATIVE_MIN_EXPANSIONS, at most the budget); when it runs out, the bounds are raised
+# as after a full search that found nothing, but the budget is not doubled. At 4 it halved
+# the one costly search of PDDLStream's kitchen/run.py under ltamp (a refined task without
+# a plan: 601 -> 297 expansions, 0.42 -> 0.36 s CPU, same plan), but made the unseeded
+# continuous_tamp/run.py's plans costlier more often (12 runs each: 13-17 actions, cost
+# 125-157, in 4 runs with it, 1 without; else 9 actions, cost ~95): a refined search there
+# that runs out raises the complexity, and plans at a higher complexity are longer
+# (docs/results/planner/issue19.md).
+REFINED_SEARCH_FACTOR = 0
 
 
 @dataclass
@@ -297,9 +315,96 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
         state.record_failure(instance)
         report_unusable(state, real_inputs, binding.made_by)
         binding.skeleton.retries.cheap = not state_dependent(instance)
+        if SIBLING_PROBE_OUTPUTS:
+            probe_siblings(state, binding)
         return []
     binding.attempts += 1  # nothing this call: retry later
     return [binding]
+
+
+# When a cheap generator of a stream plan runs out of outputs that its tests accept, its
+# siblings in the same stream plan (instances of the same stream never called, over real
+# inputs that differ from its own in one value) are tried at once with the stream plan's
+# tests on their outputs, up to this many outputs each (0: off); see probe_siblings.
+SIBLING_PROBE_OUTPUTS = 4
+
+
+def probe_siblings(state: PlannerState, failed: Binding) -> None:
+    """Learn several conflicts from one failed stream plan (PDDLStream learns them one
+    search at a time): after the cheap generator at ``failed``'s step ran out of outputs,
+    each *sibling* in its stream plan, an instance of the same stream over real inputs that
+    differ from the exhausted one's in at most one value and that was never called, is
+    called and its outputs checked by the stream plan's tests that take that output and
+    otherwise real values, until an output passes them, the instance runs out, or
+    :data:`SIBLING_PROBE_OUTPUTS` outputs were tried. A sibling that runs out gets no
+    placeholder in the next optimistic evaluation, and its outputs and test results are
+    real facts either way.
+
+    kitchen_fluent: the coaster has one slot, where the saucer stands. A plan that parks
+    the pitcher, the saucer and the spoon on "fresh" coaster poses failed at the pitcher's
+    (its sampler's only slot collides), and each of the two others cost one more search
+    and skeleton (seeds 0-9 adaptive: 96 -> 84 searches, binding 107 -> 94, plans
+    unchanged; docs/results/planner/issue19.md). Only siblings: probing every generator of
+    the failed plan, or every one with real inputs, raised the searches of the seeds that
+    needed 7 to 8-9 (the probed table samplers' higher complexity sent the next search to
+    other untried samplers)."""
+    skeleton = failed.skeleton
+    plan = skeleton.stream_plan
+    name = plan[failed.step][0]
+    external = state.externals[name]
+    if (not isinstance(external, Stream) or external.fluents
+            or not observed_cheap(state.history.get(name), state.stream_stats.get(name))):
+        return
+    failed_inputs = tuple(failed.mapping.get(x, x) for x in plan[failed.step][1])
+    for position, (other, inputs) in enumerate(plan):
+        if other != name or position == failed.step:
+            continue
+        real_inputs = tuple(failed.mapping.get(x, x) for x in inputs)
+        if any(x.startswith("#") for x in real_inputs) or sum(
+                a != b for a, b in zip(real_inputs, failed_inputs, strict=True)) > 1:
+            continue
+        instance = state.instance(name, real_inputs)
+        if instance.num_calls or instance.exhausted:
+            continue
+        # Only within its domain: a domain fact certified by a later entry of the plan
+        # is not real yet.
+        domain = instantiate_atoms(external.domain,
+                                   dict(zip(external.inputs, real_inputs, strict=True)))
+        if not all(fact in state.facts.members for fact in domain):
+            continue
+        outputs = skeleton.outputs_at(position)
+        tests = []
+        for test_position, (test, test_inputs) in enumerate(plan):
+            test_external = state.externals[test]
+            if (test_position == position or isinstance(test_external, StreamFunction)
+                    or (isinstance(test_external, Stream) and (not test_external.is_test
+                                                               or test_external.fluents))
+                    or not set(test_inputs) & set(outputs)):
+                continue
+            bound = [failed.mapping.get(x, x) for x in test_inputs]
+            if all(x in outputs or not x.startswith("#") for x in bound):
+                tests.append((test, test_inputs))
+        for index in range(SIBLING_PROBE_OUTPUTS):
+            if index >= len(instance.results):
+                if instance.exhausted:
+                    break
+                state.call(instance)
+                if index >= len(instance.results):
+                    break
+            mapping = {**failed.mapping,
+                       **dict(zip(outputs, instance.results[index], strict=True))}
+            accepted = True
+            for test, test_inputs in tests:
+                checked = state.instance(test, tuple(mapping.get(x, x) for x in test_inputs))
+                if checked.num_calls == 0:
+                    state.call(checked)
+                if not checked.value:
+                    accepted = False
+                    break
+            if accepted:
+                break
+        if instance.exhausted:
+            state.record_failure(instance)
 
 
 def state_dependent(instance: StreamInstance) -> bool:
@@ -356,6 +461,7 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
     # After a plan whose shared placeholders were refined: whether the search that found it
     # was a full one (the next iteration searches again, as that one would have).
     refining: bool | None = None
+    refined_expansions = 0  # expansions of the search whose plan was refined
     try:
         while not state.timed_out():
             state.iterations += 1
@@ -380,6 +486,9 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                 # queue has sampled more, and a search that fails explores everything
                 # within its budget: 600, then 1,200 expansions (2 s) each time.
                 speculative = not stalled
+                # The full search that follows a refinement is bounded by what the refined
+                # search needed (see REFINED_SEARCH_FACTOR).
+                after_refinement = refining is True and REFINED_SEARCH_FACTOR > 0
                 refining = None
                 speculative_in_a_row = speculative_in_a_row + 1 if speculative else 0
                 facts_at_search = len(state.facts.members)
@@ -402,12 +511,14 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                         + state.max_object_level() else None)
                 limit = (min(state.search_budget, max(
                     SPECULATIVE_MIN_EXPANSIONS, SPECULATIVE_FACTOR * solved_expansions))
-                    if speculative else None)
+                    if speculative else min(state.search_budget, max(
+                        SPECULATIVE_MIN_EXPANSIONS, REFINED_SEARCH_FACTOR * refined_expansions))
+                    if after_refinement else None)
                 discrete = state.search(evaluation.index.members, evaluation.object_types,
                                         evaluation.function_values, limit,
                                         context_blocks=evaluation.context_blocks,
-                                        budgeted=not speculative, guess=guess,
-                                        skip_if_grounded_as=skip)
+                                        budgeted=not speculative and not after_refinement,
+                                        guess=guess, skip_if_grounded_as=skip)
                 if discrete.solved and discrete.outcome is not None:
                     solved_expansions = max(solved_expansions, discrete.outcome.expanded)
                 if discrete.capped and not discrete.skipped:
@@ -438,6 +549,10 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                                                  placeholders)
                     if found is None:
                         refining = not speculative  # shared placeholders refined
+                        refined_expansions = max(
+                            discrete.outcome.expanded if discrete.outcome else 0,
+                            solved_expansions if discrete.outcome is None
+                            or discrete.outcome.guessed else 0)
                         continue
                     plan = tuple(found)
                     if not plan:
