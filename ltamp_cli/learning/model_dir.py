@@ -171,24 +171,21 @@ def _sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def _matching_weights(directory: Path, metadata: dict[str, Any], path: Path) -> bytes | None:
-    """The bytes of ``weights.npz``, read once, if they match ``model.json``'s digest (``None``
-    when the weights are no regular file and ``model.json`` predates digests: read them as
-    before). The arrays are then taken from these bytes, not from a second read that another
-    save could have replaced in between."""
+def _weights_bytes(directory: Path) -> bytes | None:
+    """The bytes of ``weights.npz``, read once (``None`` when it is no regular file). The
+    arrays are then taken from these bytes, not from a second read that another save could
+    have replaced in between."""
+    weights = directory / "weights.npz"
+    return weights.read_bytes() if weights.is_file() else None
+
+
+def _matches(metadata: dict[str, Any], data: bytes | None) -> bool:
+    """Whether ``data`` are the weights ``model.json`` was saved with (``True`` when it
+    predates digests and so cannot tell)."""
     expected = metadata.get("weights_sha256")
-    name = "weights.npz"
-    weights = directory / name
-    if not weights.is_file():
-        if expected is None:  # saved before digests were recorded
-            return None
-        data = b""
-    else:
-        data = weights.read_bytes()
-    if expected is not None and hashlib.sha256(data).hexdigest() != expected:
-        raise InputError(f"{name} does not match {METADATA_FILE} (a save was interrupted?): "
-                         "train again to rewrite the model", location_in(path))
-    return data
+    if expected is None:
+        return True
+    return hashlib.sha256(data if data is not None else b"").hexdigest() == expected
 
 
 def load_metadata(directory: str | Path) -> dict[str, Any]:
@@ -218,21 +215,25 @@ def load_model(directory: str | Path) -> LoadedModel:
     """
     directory = Path(directory)
     path = directory / METADATA_FILE
+    data: bytes | None = None
     for attempt in range(_READ_ATTEMPTS):
         metadata = load_metadata(directory)
         if (directory / "weights.pkl").exists() and not (directory / "weights.npz").exists():
             raise InputError("weights.pkl is a pickle, which ltamp no longer loads (it can run "
                              "code): train the model again to write weights.npz",
                              location_in(path))
-        try:
-            data = _matching_weights(directory, metadata, path)
+        # Another process may be saving this directory (new weights renamed in, model.json
+        # next): the weights read on the previous attempt often belong to the model.json
+        # read now, so they are tried before reading the weights again.
+        if attempt > 0 and _matches(metadata, data):
             break
-        except InputError:
-            # another process may be saving this directory (new weights, model.json next):
-            # read both again shortly; a save interrupted for good still fails
-            if attempt + 1 == _READ_ATTEMPTS:
-                raise
-            time.sleep(_READ_RETRY_S)
+        data = _weights_bytes(directory)
+        if _matches(metadata, data):
+            break
+        if attempt + 1 == _READ_ATTEMPTS:  # a save interrupted for good
+            raise InputError(f"weights.npz does not match {METADATA_FILE} (a save was "
+                             "interrupted?): train again to rewrite the model", location_in(path))
+        time.sleep(_READ_RETRY_S)
     try:
         spec = checked_spec(metadata["skill"])
         kind = metadata["kind"]
