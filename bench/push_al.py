@@ -121,6 +121,15 @@ VARIANTS: dict[str, dict[str, Any]] = {
     "gp-hs-data": {"strategy": "gp", "hindsight": True, "hindsight_lengthscale_max": None},
     # = LearningConfig's defaults for ``gp`` on a skill with an outcome
     "gp-hs-cap1-data": {"strategy": "gp", "hindsight": True, "lengthscale_max": 1.0},
+    # Outcome-model acquisitions (ltamp_cli.learning.outcome_acquisition; issue #21 part 2):
+    # the trial chosen by the expected number of goals its outcome resolves / by the summed
+    # predictive std of its outcome; otherwise as lse-hs-cap1-data (= today's lse default).
+    "lse-ov": {"strategy": "lse", "hindsight": True, "lengthscale_max": 1.0,
+               "hindsight_acquisition": "outcome-var"},
+    "lse-osd": {"strategy": "lse", "hindsight": True, "lengthscale_max": 1.0,
+                "hindsight_acquisition": "outcome-sd"},
+    "lse-oc": {"strategy": "lse", "hindsight": True, "lengthscale_max": 1.0,
+               "hindsight_acquisition": "outcome-cover"},
     # The paper's NN_r / NN_c loop (bench.paper.al2d.learn_nn_argmax), with and without the
     # same relabelled points.
     "nn-r": {"strategy": "nn-r", "hindsight": False},

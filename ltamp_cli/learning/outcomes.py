@@ -85,6 +85,8 @@ class Relabeller:
         self._x: list[np.ndarray] = []
         self._y: list[np.ndarray] = []
         self._keys: list[np.ndarray] = []
+        #: The trials themselves, physical units: ``(context, control, outcome)`` each.
+        self.trials: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
 
     @property
     def size(self) -> int:
@@ -119,6 +121,8 @@ class Relabeller:
     def add(self, context: np.ndarray, control: np.ndarray, outcome: np.ndarray) -> None:
         """Relabel one trial (physical units) and keep its points."""
         contexts, controls, scores = self.relabel(context, control, outcome)
+        self.trials.append((np.asarray(context, dtype=float), np.asarray(control, dtype=float),
+                            np.asarray(outcome, dtype=float)))
         keys = self.rng.random(len(scores))
         if self.outcome.achieved_goal is not None and len(keys):
             keys[0] -= 1.0  # achieved-goal points are kept before drawn ones
