@@ -378,6 +378,30 @@ class _Learner:
                          n_trials=len(self.y))
 
 
+def learner_from_records(spec: SkillSpec, config: LearningConfig,
+                         records: Sequence[TrialRecord],
+                         rng: np.random.Generator) -> _Learner:
+    """The learner of ``records`` (in their order) exactly as a training run builds it: the
+    trials' normalised inputs and scores, plus their relabelled points when ``spec`` declares
+    an outcome and ``config.hindsight`` is on (records without an outcome add their score
+    only). ``ltamp train --refit``, the ask/tell API and a resumed run all fit this one."""
+    learner = _Learner(spec, config, rng)
+    template = RandomModel(spec, 0.0)  # coordinates only
+    for record in records:
+        learner.add(template.to_unit(record.context, record.control)[0], record.score, record)
+    return learner
+
+
+def training_metadata(spec: SkillSpec, config: LearningConfig) -> dict[str, object]:
+    """What a saved model records of its relabelling (``model.json``'s
+    ``training.hindsight``): ``None`` when its data are the trials' scores only."""
+    if config.relabeller(spec) is None:
+        return {"hindsight": None}
+    return {"hindsight": {"goals": config.hindsight_goals, "cap": config.hindsight_cap,
+                          "acquisition": config.hindsight_acquisition,
+                          "theta_data": config.hindsight_theta_data}}
+
+
 class _Curve:
     def __init__(self, evaluator: SkillEvaluator | None, eval_every: int, success: bool) -> None:
         self.evaluator = evaluator
@@ -453,10 +477,8 @@ def _learn_online(
         raise ValueError(f"{dataset.path if dataset else ''}: trial {repeated} is recorded "
                          "twice (two writers shared it); keep one copy of each trial")
     rng = np.random.default_rng([config.seed, len(records)])
-    learner = _Learner(spec, config, rng)
+    learner = learner_from_records(spec, config, records, rng)
     template = RandomModel(spec, 0.0)  # coordinates and validity only
-    for record in records:
-        learner.add(template.to_unit(record.context, record.control)[0], record.score, record)
     curve = _Curve(evaluator, eval_every, evaluate_success)
 
     def is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
