@@ -308,10 +308,14 @@ def _training_score(spec: SkillSpec, score: float) -> float:
     return score if math.isfinite(score) else spec.invalid_score
 
 
-def goes_active(config: LearningConfig, scores: Sequence[float]) -> bool:
+def goes_active(config: LearningConfig, scores: Sequence[float],
+                n_trials: int | None = None) -> bool:
     """Whether the next trial is chosen by the acquisition: an active strategy, past ``init``
-    trials and (with ``explore_until_success``) at least one score above the level."""
-    if config.strategy not in ACTIVE_STRATEGIES or len(scores) < config.init:
+    trials and (with ``explore_until_success``) at least one score above the level.
+    ``n_trials``: the trials so far (default ``len(scores)``; pass it when ``scores`` holds
+    relabelled points too, which count as successes but not as trials)."""
+    n = len(scores) if n_trials is None else n_trials
+    if config.strategy not in ACTIVE_STRATEGIES or n < config.init:
         return False
     return not config.explore_until_success or any(s > 0 for s in scores)
 
@@ -497,7 +501,8 @@ def _learn_online(
             if config.strategy == "lse" and config.context_repeats > 0 else None)
     with bar:
         while len(records) < config.budget:
-            model = learner.current() if goes_active(config, learner.scores()) else None
+            model = (learner.current() if goes_active(config, learner.scores(), len(learner.y))
+                     else None)
             if held is not None and isinstance(model, LevelSetModel):
                 context, control = held.propose(model, rng, is_valid, config.n_candidates,
                                                 config.acquisition_restarts)
@@ -652,7 +657,8 @@ def learn_from_pool(
     )
     with bar:
         while len(chosen) < budget:
-            model = learner.current() if goes_active(config, learner.scores()) else None
+            model = (learner.current() if goes_active(config, learner.scores(), len(learner.y))
+                     else None)
             if isinstance(model, LevelSetModel):
                 index = _pool_pick(model, config, spec, x_pool, available, rng)
             else:

@@ -136,7 +136,7 @@ def ask(
     model: SkillModel | None = None
     learner = learner_from_records(spec, config, records, rng)
     outcome_model = None
-    if goes_active(config, learner.scores()):
+    if goes_active(config, learner.scores(), len(records)):
         x, y = learner.training_set()
         model = fit_model(spec, config, x, y, _previous_model(directory), rng=rng,
                           n_trials=len(records))
