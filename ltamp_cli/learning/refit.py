@@ -14,8 +14,9 @@ A skill that declares an outcome (issue #21) is refitted on its trials *and* the
 points, exactly as training built them (:func:`~.active.learner_from_records`): the outcome
 spec is code, so it comes from the skill as its backend declares it (``spec``, which must
 match the saved one), never from the directory. ``training.hindsight`` in ``model.json``
-says which relabelling the model was trained with (``null``: none); a model trained with
-one cannot be refitted without its backend's spec.
+says which relabelling the model was trained with (``null``: none; absent, in models saved
+before it existed: the default relabelling if the trials carry outcomes, none otherwise); a
+model trained with one cannot be refitted without its backend's spec.
 """
 
 from __future__ import annotations
@@ -112,8 +113,10 @@ def refit_model_dir(
         raise InputError(f"{path} must hold trials of skill {spec.name!r} only, and at least one")
     strategy = str(metadata.get("strategy", DEFAULT_STRATEGY))
     hyper = metadata.get("hyperparameters") or {}
-    # Models saved before `training.hindsight` existed were trained with today's default.
-    hindsight = training.get("hindsight", {})
+    # Models saved before `training.hindsight` existed: relabelled iff their trials carry
+    # outcomes (the default since outcomes exist); the shipped push's trials predate them.
+    hindsight = training.get("hindsight",
+                             {} if any(r.outcome is not None for r in records) else None)
     try:
         if hindsight is not None and not isinstance(hindsight, dict):
             raise ValueError(f"training.hindsight must be an object or null, not "

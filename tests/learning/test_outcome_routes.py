@@ -121,3 +121,33 @@ def test_tell_refuses_an_outcome_for_a_skill_without_one(tmp_path: Path) -> None
     with pytest.raises(InputError, match="declares no outcome"):
         tell(tmp_path, 0.1, outcome=[1.0])
     tell(tmp_path, 0.1)  # scores only: as before
+
+
+def test_the_first_init_trials_are_random_with_relabelling() -> None:
+    """``init`` counts trials, not relabelled points: toss's drawn goals lie in [0.5, 1.5],
+    the straddle's anywhere in [0, 10], so the first ``init`` trials must all lie there."""
+    config = LearningConfig(strategy="lse", budget=12, init=8, seed=2, hindsight_goals=2,
+                            hindsight_cap=30)
+    goals = [r.context[0] for r in learn_online(TossBackend(), "toss", config).records]
+    assert all(0.5 <= g <= 1.5 for g in goals[:8]), goals
+    assert not all(0.5 <= g <= 1.5 for g in goals[8:]), goals  # then the straddle chooses
+
+
+@pytest.mark.parametrize("with_outcomes", [False, True])
+def test_refit_of_a_model_saved_before_training_hindsight(tmp_path: Path,
+                                                          with_outcomes: bool) -> None:
+    """``model.json`` without ``training.hindsight`` (saved before it existed): relabelled
+    iff its trials carry outcomes (the shipped push's predate them and stay score-only)."""
+    config = LearningConfig(strategy="lse", budget=10, init=5, seed=3, hindsight=False)
+    _train(tmp_path / "m", config)
+    meta = json.loads((tmp_path / "m" / "model.json").read_text())
+    del meta["training"]["hindsight"]
+    (tmp_path / "m" / "model.json").write_text(json.dumps(meta))
+    if not with_outcomes:
+        trials = tmp_path / "m" / "trials.jsonl"
+        lines = [json.loads(line) for line in trials.read_text().splitlines()]
+        trials.write_text("".join(json.dumps({k: v for k, v in line.items() if k != "outcome"})
+                                  + "\n" for line in lines))
+    refitted = refit_model_dir(tmp_path / "m", spec=TOSS).model
+    assert (refitted.gp.n > 10) is with_outcomes
+    assert refitted.data_candidates is with_outcomes
