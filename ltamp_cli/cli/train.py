@@ -150,8 +150,11 @@ def train_command(
         from ltamp_cli.learning.refit import refit_model_dir
 
         # The skill's outcome (code) comes from its backend, never from the directory.
-        trained_on = load_metadata(out).get("backend")
-        declared = backend_spec(trained_on if isinstance(trained_on, str) else backend, skill)
+        saved = load_metadata(out)
+        trained_on, saved_skill = saved.get("backend"), saved.get("skill")
+        name = saved_skill.get("name") if isinstance(saved_skill, dict) else None
+        declared = (backend_spec(trained_on if isinstance(trained_on, str) else backend, name)
+                    if isinstance(name, str) and name == skill else None)
         refitted = refit_model_dir(out, skill=skill, spec=declared)
         emit({"model": str(out), "kind": refitted.model.kind,
               "n_trials": refitted.metadata["training"]["n_trials"],
