@@ -14,7 +14,9 @@ push protocol, live Box2D θ*).
 ``docs/results/push/outcome-acq.json``: per variant and skill the final θ* success rate
 (per seed, pooled with a Wilson interval) and the training diagnostics, and paired
 comparisons over seed × held-out context units (bootstrap 95 % interval of the mean
-difference, exact sign test; :func:`bench.paper.stats.paired_comparison`).
+difference, exact sign test; :func:`bench.paper.stats.paired_comparison`) and, since the
+contexts of one seed share a model, the same at the seed level (per-seed mean differences,
+bootstrap over seeds, sign test over seeds).
 Times are CPU seconds of the job's process (the machine is shared).
 """
 
@@ -30,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from bench.lse2 import _seeds, _wilson
-from bench.paper.stats import paired_comparison
+from bench.paper.stats import bootstrap_interval, paired_comparison, sign_test
 from bench.push_al import SIZES, VARIANTS
 from ltamp_cli.backends import load_backend
 from ltamp_cli.learning.active import LearningConfig, learn_online
@@ -112,9 +114,16 @@ def _skill_report(jobs: dict[tuple[str, int], dict[str, Any]]) -> dict[str, Any]
         seeds = sorted(set(finals[a]) & set(finals[b]))
         c = paired_comparison(a, [float(v) for s in seeds for v in finals[a][s]],
                               b, [float(v) for s in seeds for v in finals[b][s]])
+        per_seed = np.array([np.mean(finals[a][s]) - np.mean(finals[b][s]) for s in seeds])
+        low, high = bootstrap_interval(per_seed)
+        p_seeds, wins, losses = sign_test(per_seed)
         comparisons.append({"a": a, "b": b, "seeds": seeds, "text": c.describe(),
                             "verdict": c.verdict, "difference": c.difference,
-                            "interval": [c.low, c.high], "p_value": c.p_value})
+                            "interval": [c.low, c.high], "p_value": c.p_value,
+                            "seed_level": {"differences": [round(float(v), 3) for v in per_seed],
+                                           "interval": [round(low, 4), round(high, 4)],
+                                           "wins": wins, "losses": losses,
+                                           "sign_p": p_seeds}})
     return {"variants": rows, "comparisons": comparisons}
 
 
@@ -140,7 +149,12 @@ def report(push_log: Path, flick_log: Path, out: Path) -> dict[str, Any]:
             print(f"  {variant:17} {per_seed:50} {row['final_pooled']:.3f} "
                   f"[{low:.3f}, {high:.3f}]  moved {moved:4d}  replay {row['replay_bound']}")
         for comparison in part["comparisons"]:
-            print(f"    {comparison['text']}: {comparison['verdict']}")
+            level = comparison["seed_level"]
+            print(f"    {comparison['text']}: {comparison['verdict']}\n"
+                  f"      seed level (bootstrap over {len(comparison['seeds'])} seeds): "
+                  f"[{level['interval'][0]:+.3f}, {level['interval'][1]:+.3f}], "
+                  f"{level['wins']} wins / {level['losses']} losses, sign p = "
+                  f"{level['sign_p']:.3g}")
     return payload
 
 

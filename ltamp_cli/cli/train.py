@@ -76,7 +76,9 @@ def train_command(
             "--hindsight/--no-hindsight",
             help="Skills that declare an outcome (e.g. the 2D push's end position): also "
             "learn from each trial relabelled for other goals (achieved goal + 4 drawn, at "
-            "most 300 relabelled points). No effect on other skills.",
+            "most 300 relabelled points); lse then chooses the trial expected to reach the "
+            "most goals no trial has reached (a GP on the outcomes). No effect on other "
+            "skills.",
         ),
     ] = True,
     kernel: Annotated[str, typer.Option("--kernel", help="rbf, matern52 or mlp.")] = "matern52",

@@ -147,13 +147,16 @@ class LearningConfig:
     hindsight: bool = True
     hindsight_goals: int = DEFAULT_GOALS_PER_TRIAL
     hindsight_cap: int = DEFAULT_CAP
-    #: ``lse`` with relabelled trials: ``"goal-mean"`` — the control whose ψ averaged over
-    #: drawn goals is largest (:func:`~ltamp_cli.learning.outcomes.propose_for_all_goals`);
-    #: ``"joint"`` — the plain straddle over control and context; ``"outcome-var"`` /
-    #: ``"outcome-sd"`` — a GP on the trials' outcomes chooses the control whose outcome
-    #: resolves the most goals' labels / is the least certain
-    #: (:mod:`~ltamp_cli.learning.outcome_acquisition`).
-    hindsight_acquisition: str = "goal-mean"
+    #: ``lse`` with relabelled trials: ``"outcome-cover"`` (default) — a GP on the trials'
+    #: outcomes chooses the control expected to reach the most goals no trial has reached;
+    #: ``"outcome-var"`` / ``"outcome-sd"`` — the one whose outcome resolves the most goals'
+    #: labels / is the least certain (:mod:`~ltamp_cli.learning.outcome_acquisition`);
+    #: ``"goal-mean"`` — the control whose ψ averaged over drawn goals is largest
+    #: (:func:`~ltamp_cli.learning.outcomes.propose_for_all_goals`, the default before the
+    #: second outcome session: on the 2D push and flick2d it chose trials that did not move
+    #: the object, ``docs/results/push/README.md``); ``"joint"`` — the plain straddle over
+    #: control and context.
+    hindsight_acquisition: str = "outcome-cover"
     #: GP strategies with relabelled trials: θ* also considers the training controls
     #: (:attr:`~ltamp_cli.learning.model.LevelSetModel.data_candidates`).
     hindsight_theta_data: bool = True
