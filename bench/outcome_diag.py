@@ -1,7 +1,7 @@
 """Why the goal-averaged straddle picks pushes that do not move the object (issue #21).
 
-``python -m bench.outcome_diag --seeds 0-1`` trains today's default ``lse`` (relabelled
-trials, goal-averaged straddle ψ̄, al2d standard sizes: 100 trials, 10 random first) on the
+``python -m bench.outcome_diag --seeds 0-1`` trains ``lse`` with the goal-averaged straddle
+ψ̄ (the default before ``outcome-cover``; relabelled trials, al2d standard sizes: 100 trials, 10 random first) on the
 Box2D push and, at every straddle choice, records for the chosen candidate and for
 ``--probe`` uniform candidates of the same batch: the goal-averaged ``|μ|``, ``σ`` and ψ
 (score units; the level is 0), and whether the push moves the object (each probe is
@@ -88,7 +88,8 @@ def run_seed(seed: int, probe: int) -> dict[str, Any]:
         chosen_context, chosen_control = model.from_unit(candidates[pick][None, :])
         return chosen_context[0], chosen_control[0]
 
-    config = LearningConfig(budget=SIZES["budget"], init=SIZES["init"], seed=seed)
+    config = LearningConfig(budget=SIZES["budget"], init=SIZES["init"], seed=seed,
+                            hindsight_acquisition="goal-mean")
     original = active.propose_for_all_goals
     active.propose_for_all_goals = proposer  # type: ignore[assignment]
     cpu0 = time.process_time()
