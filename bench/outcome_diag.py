@@ -1,12 +1,13 @@
 """Why the goal-averaged straddle picks pushes that do not move the object (issue #21).
 
-``python -m bench.outcome_diag --seeds 0-1`` trains ``lse`` with the goal-averaged straddle
-ψ̄ (the default before ``outcome-cover``; relabelled trials, al2d standard sizes: 100 trials, 10 random first) on the
-Box2D push and, at every straddle choice, records for the chosen candidate and for
-``--probe`` uniform candidates of the same batch: the goal-averaged ``|μ|``, ``σ`` and ψ
-(score units; the level is 0), and whether the push moves the object (each probe is
-simulated once; the chosen one's own trial says). The choice is unchanged: the wrapper
-repeats :func:`ltamp_cli.learning.outcomes.propose_for_all_goals` draw for draw.
+``python -m bench.outcome_diag --seeds 0-1`` trains ``lse`` with the goal-averaged
+straddle ψ̄ (the default before ``outcome-cover``; relabelled trials, al2d standard sizes:
+100 trials, 10 random first) on the Box2D push and, at every straddle choice, records for
+the chosen candidate and for ``--probe`` uniform candidates of the same batch: the
+goal-averaged ``|μ|``, ``σ`` and ψ (score units; the level is 0), and whether the push
+moves the object (each probe is simulated once; the chosen one's own trial says). The
+choice is unchanged: the wrapper repeats
+:func:`ltamp_cli.learning.outcomes.propose_for_all_goals` draw for draw.
 
 Writes ``docs/results/push/outcome-diag.json`` (``--out``): per seed, the per-choice
 rows and a summary (means over choices, movers vs non-movers among the probes).
