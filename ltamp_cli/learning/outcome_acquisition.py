@@ -23,8 +23,11 @@ a goal's label. The trial's own goal is the drawn goal with the largest ``p_g (1
 outcome's values (plain uncertainty sampling of the outcome map, goal-blind).
 ``kind="outcome-cover"`` scores by the expected number of goals the trial would reach that
 no trial has reached yet (``mean_g p_g · [no recorded outcome scores > 0 at g]``): what θ*
-can use, since a goal some training control reached is one θ* can replay. All three are
-compared in ``docs/results/push/README.md``.
+can use, since a goal some training control reached is one θ* can replay. A goal counts as
+reached whatever the non-goal context of the trial that reached it (flick2d's friction):
+an approximation for skills with such contexts. All three are compared in
+``docs/results/push/README.md``; ``outcome-cover`` won on the push and flick2d and is the
+default (``LearningConfig.hindsight_acquisition``).
 
 This module only *chooses* trials; the learned model stays the score GP on the trials and
 their relabelled points (what is saved, sampled and used for θ*). The outcome GPs are
@@ -96,7 +99,7 @@ class OutcomeModel:
         gps = []
         for j in range(spec.outcome.space.dim):
             warm = previous.gps[j] if previous is not None else None
-            gps.append(fit_gp(x, outcomes[:, j], kernel, restarts=0 if warm else 1, rng=rng,
+            gps.append(fit_gp(x, outcomes[:, j], kernel, restarts=0 if warm is not None else 1, rng=rng,
                               warm_start=warm, bounds=bounds, prior=prior))
         return OutcomeModel(spec, gps, (np.asarray(contexts, dtype=float).reshape(len(x), -1),
                                         np.asarray(controls, dtype=float).reshape(len(x), -1),
