@@ -99,7 +99,8 @@ class OutcomeModel:
         gps = []
         for j in range(spec.outcome.space.dim):
             warm = previous.gps[j] if previous is not None else None
-            gps.append(fit_gp(x, outcomes[:, j], kernel, restarts=0 if warm is not None else 1, rng=rng,
+            gps.append(fit_gp(x, outcomes[:, j], kernel,
+                              restarts=0 if warm is not None else 1, rng=rng,
                               warm_start=warm, bounds=bounds, prior=prior))
         return OutcomeModel(spec, gps, (np.asarray(contexts, dtype=float).reshape(len(x), -1),
                                         np.asarray(controls, dtype=float).reshape(len(x), -1),
