@@ -15,10 +15,11 @@ among ``candidates`` uniform ones); the network is retrained after every trial
 Outcomes (issue #21): the push declares an outcome (the object's end position), so with
 ``LearningConfig``'s defaults (``hindsight=True``) GP-LSE and both networks also learn from
 every trial relabelled for other goals (:mod:`ltamp_cli.learning.outcomes`), GP-LSE chooses
-its trials with ``LearningConfig.hindsight_acquisition`` (``outcome-cover``: the trial expected
-to reach most goals no trial has reached yet, :mod:`ltamp_cli.learning.outcome_acquisition`;
-its job key names the acquisition, so jobs of the earlier goal-averaged straddle are not
-resumed) and its GP's lengthscales are capped at 1.0; Random is unchanged (it trains nothing). :data:`HINDSIGHT` ``= False`` restores the
+its trials with ``LearningConfig.hindsight_acquisition`` (``outcome-cover``: the trial
+expected to reach most goals no trial has reached yet,
+:mod:`ltamp_cli.learning.outcome_acquisition`; its job key names the acquisition, so jobs of
+the earlier goal-averaged straddle are not resumed) and its GP's lengthscales are capped at
+1.0; Random is unchanged (it trains nothing). :data:`HINDSIGHT` ``= False`` restores the
 score-only learners of the earlier standard runs (pour and scoop declare no outcome: their
 jobs are the same either way). Measured in ``docs/results/learning/README.md``, "Outcomes",
 and ``docs/results/push/README.md`` (the acquisitions compared).
