@@ -100,19 +100,23 @@ VARIANTS: dict[str, dict[str, Any]] = {
     # (-hs variants without "-data": θ* from uniform candidates only, as before issue #21;
     # "-data": θ* also tries the training controls, LevelSetModel.data_candidates)
     "lse-hs": {"strategy": "lse", "hindsight": True, "hindsight_theta_data": False,
-               "hindsight_lengthscale_max": None},
-    "lse-hs-data": {"strategy": "lse", "hindsight": True, "hindsight_lengthscale_max": None},
+               "hindsight_lengthscale_max": None, "hindsight_acquisition": "goal-mean"},
+    "lse-hs-data": {"strategy": "lse", "hindsight": True, "hindsight_lengthscale_max": None,
+                    "hindsight_acquisition": "goal-mean"},
     "lse-hs-k0": {"strategy": "lse", "hindsight": True, "hindsight_goals": 0,
-                  "hindsight_theta_data": False, "hindsight_lengthscale_max": None},
+                  "hindsight_theta_data": False, "hindsight_lengthscale_max": None,
+                  "hindsight_acquisition": "goal-mean"},
     # the plain straddle over (control, goal) on the relabelled data (not goal-averaged)
     "lse-hs-joint": {"strategy": "lse", "hindsight": True, "hindsight_acquisition": "joint",
                      "hindsight_theta_data": False, "hindsight_lengthscale_max": None},
     # goal-averaged straddle with every lengthscale capped at 1.0 (half the normalised box):
     # the fit cannot call the controls irrelevant when few pushes moved the object.
     "lse-hs-cap1": {"strategy": "lse", "hindsight": True, "lengthscale_max": 1.0,
-                    "hindsight_theta_data": False},
+                    "hindsight_theta_data": False, "hindsight_acquisition": "goal-mean"},
     # = LearningConfig's defaults for a skill with an outcome (hindsight_lengthscale_max 1.0)
-    "lse-hs-cap1-data": {"strategy": "lse", "hindsight": True, "lengthscale_max": 1.0},
+    # before the outcome-cover acquisition (the goal-averaged straddle, named explicitly)
+    "lse-hs-cap1-data": {"strategy": "lse", "hindsight": True, "lengthscale_max": 1.0,
+                         "hindsight_acquisition": "goal-mean"},
     # the same cap without outcomes: what the cap alone does
     "lse-cap1": {"strategy": "lse", "hindsight": False, "lengthscale_max": 1.0},
     # GP (same relabelling) on uniformly random trials: what the straddle's choice adds.
@@ -121,6 +125,15 @@ VARIANTS: dict[str, dict[str, Any]] = {
     "gp-hs-data": {"strategy": "gp", "hindsight": True, "hindsight_lengthscale_max": None},
     # = LearningConfig's defaults for ``gp`` on a skill with an outcome
     "gp-hs-cap1-data": {"strategy": "gp", "hindsight": True, "lengthscale_max": 1.0},
+    # Outcome-model acquisitions (ltamp_cli.learning.outcome_acquisition; issue #21 part 2):
+    # the trial chosen by the expected number of goals its outcome resolves / by the summed
+    # predictive std of its outcome; otherwise as lse-hs-cap1-data (= today's lse default).
+    "lse-ov": {"strategy": "lse", "hindsight": True, "lengthscale_max": 1.0,
+               "hindsight_acquisition": "outcome-var"},
+    "lse-osd": {"strategy": "lse", "hindsight": True, "lengthscale_max": 1.0,
+                "hindsight_acquisition": "outcome-sd"},
+    "lse-oc": {"strategy": "lse", "hindsight": True, "lengthscale_max": 1.0,
+               "hindsight_acquisition": "outcome-cover"},
     # The paper's NN_r / NN_c loop (bench.paper.al2d.learn_nn_argmax), with and without the
     # same relabelled points.
     "nn-r": {"strategy": "nn-r", "hindsight": False},

@@ -15,10 +15,14 @@ among ``candidates`` uniform ones); the network is retrained after every trial
 Outcomes (issue #21): the push declares an outcome (the object's end position), so with
 ``LearningConfig``'s defaults (``hindsight=True``) GP-LSE and both networks also learn from
 every trial relabelled for other goals (:mod:`ltamp_cli.learning.outcomes`), GP-LSE chooses
-its trials by the goal-averaged straddle and its GP's lengthscales are capped at 1.0;
-Random is unchanged (it trains nothing). :data:`HINDSIGHT` ``= False`` restores the
+its trials with ``LearningConfig.hindsight_acquisition`` (``outcome-cover``: the trial
+expected to reach most goals no trial has reached yet,
+:mod:`ltamp_cli.learning.outcome_acquisition`; its job key names the acquisition, so jobs of
+the earlier goal-averaged straddle are not resumed) and its GP's lengthscales are capped at
+1.0; Random is unchanged (it trains nothing). :data:`HINDSIGHT` ``= False`` restores the
 score-only learners of the earlier standard runs (pour and scoop declare no outcome: their
-jobs are the same either way). Measured in ``docs/results/learning/README.md``, "Outcomes".
+jobs are the same either way). Measured in ``docs/results/learning/README.md``, "Outcomes",
+and ``docs/results/push/README.md`` (the acquisitions compared).
 """
 
 from __future__ import annotations
@@ -95,17 +99,30 @@ def parts(ctx: Context) -> list[tuple[str, float]]:
     return estimates
 
 
+def _learns_from_outcome(skill: str) -> bool:
+    """Whether ``skill`` declares an outcome that this experiment's learners use."""
+    backend = load_backend("box2d")
+    try:
+        return HINDSIGHT and backend.skills()[skill].outcome is not None
+    finally:
+        backend.close()
+
+
 def _job_key_sizes(own: dict[str, Any], skill: str) -> dict[str, Any]:
     """What identifies a job in the log: the sizes, plus ``hindsight`` for a skill that
     declares an outcome and learns from it (its jobs differ from the score-only ones of
     earlier runs, which must not be resumed as if they were the same; pour's and scoop's keys
     are unchanged, so their logged jobs stay valid)."""
-    backend = load_backend("box2d")
-    try:
-        has_outcome = backend.skills()[skill].outcome is not None
-    finally:
-        backend.close()
-    return {**own, "hindsight": True} if HINDSIGHT and has_outcome else own
+    return {**own, "hindsight": True} if _learns_from_outcome(skill) else own
+
+
+def job_key(learner: str, seed: int, learns_from_outcome: bool) -> str:
+    """The log key of one job. GP-LSE on a skill with an outcome chooses its trials with
+    ``LearningConfig.hindsight_acquisition``, so the key names it: a job logged under another
+    acquisition (an earlier default) is not resumed as if it were this one."""
+    if learner == "lse" and learns_from_outcome:
+        return f"lse+{LearningConfig().hindsight_acquisition}/{seed}"
+    return f"{learner}/{seed}"
 
 
 def _skill_rows(ctx: Context, skill: str, backend: SkillBackend | None) -> list[dict[str, Any]]:
@@ -115,14 +132,16 @@ def _skill_rows(ctx: Context, skill: str, backend: SkillBackend | None) -> list[
     sizes = ctx.sizes(SIZES)
     own = _skill_sizes(sizes, skill)
     log = JobLog(ctx, f"{NAME}-{skill}", _job_key_sizes(own, skill))
+    outcome = _learns_from_outcome(skill)
     jobs = [(learner, seed) for learner in LEARNERS for seed in range(own["seeds"])]
     if backend is None:
-        missing = [f"{learner}/{seed}" for learner, seed in jobs
-                   if log.get(f"{learner}/{seed}") is None]
+        missing = [job_key(learner, seed, outcome) for learner, seed in jobs
+                   if log.get(job_key(learner, seed, outcome)) is None]
         if missing:
             raise FileNotFoundError(f"al2d {skill}: job {missing[0]} has not run "
                                     f"({len(missing)} missing in {log.path})")
-        return [row for learner, seed in jobs for row in log.get(f"{learner}/{seed}") or []]
+        return [row for learner, seed in jobs
+                for row in log.get(job_key(learner, seed, outcome)) or []]
     spec = backend.skills()[skill]
     context_rng = np.random.default_rng([2024, len(skill)])
     contexts = np.array([backend.sample_context(skill, context_rng)
@@ -151,8 +170,8 @@ def _skill_rows(ctx: Context, skill: str, backend: SkillBackend | None) -> list[
 
     rows: list[dict[str, Any]] = []
     for learner, seed in tqdm(jobs, desc=f"al2d {skill}", disable=not ctx.progress):
-        rows += log.run(f"{learner}/{seed}", lambda learner=learner, seed=seed: job(learner,
-                                                                                      seed))
+        rows += log.run(job_key(learner, seed, outcome),
+                        lambda learner=learner, seed=seed: job(learner, seed))
     return rows
 
 

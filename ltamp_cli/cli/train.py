@@ -76,7 +76,9 @@ def train_command(
             "--hindsight/--no-hindsight",
             help="Skills that declare an outcome (e.g. the 2D push's end position): also "
             "learn from each trial relabelled for other goals (achieved goal + 4 drawn, at "
-            "most 300 relabelled points). No effect on other skills.",
+            "most 300 relabelled points); lse then chooses the trial expected to reach the "
+            "most goals no trial has reached (a GP on the outcomes). No effect on other "
+            "skills.",
         ),
     ] = True,
     kernel: Annotated[str, typer.Option("--kernel", help="rbf, matern52 or mlp.")] = "matern52",
@@ -128,7 +130,12 @@ def train_command(
     from ltamp_cli.backends import load_backend
     from ltamp_cli.cli.collect import check_robot
     from ltamp_cli.cli.conventions import emit, progress_enabled
-    from ltamp_cli.learning.active import LearningConfig, learn_from_pool, learn_online
+    from ltamp_cli.learning.active import (
+        LearningConfig,
+        learn_from_pool,
+        learn_online,
+        training_metadata,
+    )
     from ltamp_cli.learning.confidence import beta_star
     from ltamp_cli.learning.curves import plot_curves
     from ltamp_cli.learning.metrics import SkillEvaluator
@@ -140,9 +147,17 @@ def train_command(
         if data is not None or ask:
             raise InputError("--refit refits OUT on its own trials: it cannot be used with "
                              "--data or --ask")
+        from ltamp_cli.learning.ask_tell import backend_spec
+        from ltamp_cli.learning.model_dir import load_metadata
         from ltamp_cli.learning.refit import refit_model_dir
 
-        refitted = refit_model_dir(out, skill=skill)
+        # The skill's outcome (code) comes from its backend, never from the directory.
+        saved = load_metadata(out)
+        trained_on, saved_skill = saved.get("backend"), saved.get("skill")
+        name = saved_skill.get("name") if isinstance(saved_skill, dict) else None
+        declared = (backend_spec(trained_on if isinstance(trained_on, str) else backend, name)
+                    if isinstance(name, str) and name == skill else None)
+        refitted = refit_model_dir(out, skill=skill, spec=declared)
         emit({"model": str(out), "kind": refitted.model.kind,
               "n_trials": refitted.metadata["training"]["n_trials"],
               "hyperparameters": refitted.metadata["hyperparameters"],
@@ -229,6 +244,7 @@ def train_command(
             "init": init,
             "seed": seed,
             "trials_file": trials_file,
+            **training_metadata(spec, config),
         },
         beta={"lambda": 0.95, "delta": 0.05, "beta_star_50": beta_star(0.05, count=50)},
         curve=curve_rows,

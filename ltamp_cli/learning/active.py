@@ -69,6 +69,11 @@ from ltamp_cli.learning.held_context import HeldContext
 from ltamp_cli.learning.kernels import KERNEL_NAMES
 from ltamp_cli.learning.metrics import Evaluation, SkillEvaluator
 from ltamp_cli.learning.model import LevelSetModel, PhysicalValidity, SkillModel
+from ltamp_cli.learning.outcome_acquisition import (
+    OUTCOME_ACQUISITIONS,
+    OutcomeModel,
+    propose_by_outcome,
+)
 from ltamp_cli.learning.outcomes import (
     DEFAULT_CAP,
     DEFAULT_GOALS_PER_TRIAL,
@@ -90,6 +95,7 @@ from ltamp_cli.writer_lock import exclusive_writer
 #: and θ* succeeded for 30 of 40.
 DETERMINISTIC_NOISE = 0.01
 
+HINDSIGHT_ACQUISITIONS = ("goal-mean", "joint", *OUTCOME_ACQUISITIONS)
 STRATEGIES = ("lse", "lse2", "gp", "random", *SKLEARN_KINDS)
 ACTIVE_STRATEGIES = ("lse", "lse2")
 GP_STRATEGIES = ("lse", "lse2", "gp")
@@ -141,10 +147,16 @@ class LearningConfig:
     hindsight: bool = True
     hindsight_goals: int = DEFAULT_GOALS_PER_TRIAL
     hindsight_cap: int = DEFAULT_CAP
-    #: ``lse`` with relabelled trials: ``"goal-mean"`` — the control whose ψ averaged over
-    #: drawn goals is largest (:func:`~ltamp_cli.learning.outcomes.propose_for_all_goals`);
-    #: ``"joint"`` — the plain straddle over control and context.
-    hindsight_acquisition: str = "goal-mean"
+    #: ``lse`` with relabelled trials: ``"outcome-cover"`` (default) — a GP on the trials'
+    #: outcomes chooses the control expected to reach the most goals no trial has reached;
+    #: ``"outcome-var"`` / ``"outcome-sd"`` — the one whose outcome resolves the most goals'
+    #: labels / is the least certain (:mod:`~ltamp_cli.learning.outcome_acquisition`);
+    #: ``"goal-mean"`` — the control whose ψ averaged over drawn goals is largest
+    #: (:func:`~ltamp_cli.learning.outcomes.propose_for_all_goals`, the default before the
+    #: second outcome session: on the 2D push and flick2d it chose trials that did not move
+    #: the object, ``docs/results/push/README.md``); ``"joint"`` — the plain straddle over
+    #: control and context.
+    hindsight_acquisition: str = "outcome-cover"
     #: GP strategies with relabelled trials: θ* also considers the training controls
     #: (:attr:`~ltamp_cli.learning.model.LevelSetModel.data_candidates`).
     hindsight_theta_data: bool = True
@@ -176,8 +188,9 @@ class LearningConfig:
             raise ValueError(f"lse2_candidates must be >= 1, got {self.lse2_candidates}")
         if self.context_repeats < 0:
             raise ValueError(f"context_repeats must be >= 0, got {self.context_repeats}")
-        if self.hindsight_acquisition not in ("goal-mean", "joint"):
-            raise ValueError(f"hindsight_acquisition must be 'goal-mean' or 'joint', got "
+        if self.hindsight_acquisition not in HINDSIGHT_ACQUISITIONS:
+            raise ValueError(f"hindsight_acquisition must be one of "
+                             f"{', '.join(HINDSIGHT_ACQUISITIONS)}, got "
                              f"{self.hindsight_acquisition!r}")
         if self.hindsight_goals < 0 or self.hindsight_cap < 0:
             raise ValueError(f"hindsight_goals and hindsight_cap must be >= 0, got "
@@ -263,6 +276,33 @@ def fit_model(
     return SklearnModel.fit(spec, config.strategy, x, y, seed=config.seed)
 
 
+def uses_outcome_model(config: LearningConfig) -> bool:
+    """Whether ``config``'s acquisition chooses trials with an :class:`OutcomeModel`."""
+    return (config.strategy == "lse" and config.hindsight
+            and config.hindsight_acquisition in OUTCOME_ACQUISITIONS)
+
+
+def fit_outcome_model(
+    spec: SkillSpec,
+    config: LearningConfig,
+    trials: Sequence[tuple[np.ndarray, np.ndarray, np.ndarray]],
+    rng: np.random.Generator,
+    previous: OutcomeModel | None = None,
+) -> OutcomeModel | None:
+    """The outcome GPs on ``trials`` (physical ``(context, control, outcome)`` each; ``None``
+    when there are none), with the score GP's kernel, lengthscale cap and prior."""
+    if not trials:
+        return None
+    cap = config.lengthscale_max if config.lengthscale_max is not None \
+        else config.hindsight_lengthscale_max
+    default = HyperBounds()
+    bounds = HyperBounds(lengthscale=default.lengthscale if cap is None
+                         else (default.lengthscale[0], cap), noise=default.noise)
+    contexts, controls, outcomes = (np.array([t[i] for t in trials]) for i in range(3))
+    return OutcomeModel.fit(spec, contexts, controls, outcomes, config.kernel, rng, previous,
+                            bounds, config.lengthscale_prior())
+
+
 def _trial_seed(seed: int, index: int) -> int:
     return int(np.random.SeedSequence([seed, index]).generate_state(1)[0] & 0x7FFFFFFF)
 
@@ -271,10 +311,14 @@ def _training_score(spec: SkillSpec, score: float) -> float:
     return score if math.isfinite(score) else spec.invalid_score
 
 
-def goes_active(config: LearningConfig, scores: Sequence[float]) -> bool:
+def goes_active(config: LearningConfig, scores: Sequence[float],
+                n_trials: int | None = None) -> bool:
     """Whether the next trial is chosen by the acquisition: an active strategy, past ``init``
-    trials and (with ``explore_until_success``) at least one score above the level."""
-    if config.strategy not in ACTIVE_STRATEGIES or len(scores) < config.init:
+    trials and (with ``explore_until_success``) at least one score above the level.
+    ``n_trials``: the trials so far (default ``len(scores)``; pass it when ``scores`` holds
+    relabelled points too, which count as successes but not as trials)."""
+    n = len(scores) if n_trials is None else n_trials
+    if config.strategy not in ACTIVE_STRATEGIES or n < config.init:
         return False
     return not config.explore_until_success or any(s > 0 for s in scores)
 
@@ -295,6 +339,7 @@ class _Learner:
         self.model: SkillModel | None = None
         self._fitted_on = -1
         self.relabeller = config.relabeller(spec)
+        self._outcome: OutcomeModel | None = None
 
     def add(self, x: np.ndarray, score: float, record: TrialRecord | None = None) -> None:
         """One trial: normalised ``x (d,)`` and its score; ``record`` (its physical values
@@ -326,10 +371,42 @@ class _Learner:
             self._fitted_on = len(self.y)
         return self.model
 
+    def outcome_model(self) -> OutcomeModel | None:
+        """The outcome GPs on the trials so far, when the acquisition uses them."""
+        if self.relabeller is None or not uses_outcome_model(self.config):
+            return None
+        self._outcome = fit_outcome_model(self.spec, self.config, self.relabeller.trials,
+                                          self.rng, self._outcome)
+        return self._outcome
+
     def final(self) -> SkillModel:
         x, y = self.training_set()
         return fit_model(self.spec, self.config, x, y, self.model, final=True, rng=self.rng,
                          n_trials=len(self.y))
+
+
+def learner_from_records(spec: SkillSpec, config: LearningConfig,
+                         records: Sequence[TrialRecord],
+                         rng: np.random.Generator) -> _Learner:
+    """The learner of ``records`` (in their order) exactly as a training run builds it: the
+    trials' normalised inputs and scores, plus their relabelled points when ``spec`` declares
+    an outcome and ``config.hindsight`` is on (records without an outcome add their score
+    only). ``ltamp train --refit``, the ask/tell API and a resumed run all fit this one."""
+    learner = _Learner(spec, config, rng)
+    template = RandomModel(spec, 0.0)  # coordinates only
+    for record in records:
+        learner.add(template.to_unit(record.context, record.control)[0], record.score, record)
+    return learner
+
+
+def training_metadata(spec: SkillSpec, config: LearningConfig) -> dict[str, object]:
+    """What a saved model records of its relabelling (``model.json``'s
+    ``training.hindsight``): ``None`` when its data are the trials' scores only."""
+    if config.relabeller(spec) is None:
+        return {"hindsight": None}
+    return {"hindsight": {"goals": config.hindsight_goals, "cap": config.hindsight_cap,
+                          "acquisition": config.hindsight_acquisition,
+                          "theta_data": config.hindsight_theta_data}}
 
 
 class _Curve:
@@ -407,10 +484,8 @@ def _learn_online(
         raise ValueError(f"{dataset.path if dataset else ''}: trial {repeated} is recorded "
                          "twice (two writers shared it); keep one copy of each trial")
     rng = np.random.default_rng([config.seed, len(records)])
-    learner = _Learner(spec, config, rng)
+    learner = learner_from_records(spec, config, records, rng)
     template = RandomModel(spec, 0.0)  # coordinates and validity only
-    for record in records:
-        learner.add(template.to_unit(record.context, record.control)[0], record.score, record)
     curve = _Curve(evaluator, eval_every, evaluate_success)
 
     def is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
@@ -429,12 +504,16 @@ def _learn_online(
             if config.strategy == "lse" and config.context_repeats > 0 else None)
     with bar:
         while len(records) < config.budget:
-            model = learner.current() if goes_active(config, learner.scores()) else None
+            model = (learner.current() if goes_active(config, learner.scores(), len(learner.y))
+                     else None)
             if held is not None and isinstance(model, LevelSetModel):
                 context, control = held.propose(model, rng, is_valid, config.n_candidates,
                                                 config.acquisition_restarts)
             else:
-                context, control = _propose(backend, skill, spec, config, rng, model, is_valid)
+                outcome_model = (learner.outcome_model() if isinstance(model, LevelSetModel)
+                                 else None)
+                context, control = _propose(backend, skill, spec, config, rng, model, is_valid,
+                                            outcome_model)
             index = len(records)
             seed = _trial_seed(config.seed, index)
             start = time.perf_counter()
@@ -471,12 +550,20 @@ def _propose(
     rng: np.random.Generator,
     model: SkillModel | None,
     is_valid: PhysicalValidity,
+    outcome_model: OutcomeModel | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Next ``(context (dα,), control (dθ,))`` in physical units; random without a GP."""
+    """Next ``(context (dα,), control (dθ,))`` in physical units; random without a GP.
+    ``outcome_model``: the outcome GPs, for the outcome acquisitions."""
     if not isinstance(model, LevelSetModel):
         context = drawn_context(backend, skill, rng)
         return context, spec.control.sample_uniform(rng, 1)[0]
     test = model.validity_test(is_valid)
+    if outcome_model is not None and uses_outcome_model(config):
+        x = propose_by_outcome(spec, outcome_model, rng, config.n_candidates, test,
+                               config.hindsight_acquisition)
+        if x is not None:
+            contexts, controls = model.from_unit(x[None, :])
+            return contexts[0], controls[0]
     if (config.strategy == "lse" and config.hindsight_acquisition == "goal-mean"
             and config.relabeller(spec) is not None):
         chosen = propose_for_all_goals(model, rng, config.n_candidates, test)
@@ -573,7 +660,8 @@ def learn_from_pool(
     )
     with bar:
         while len(chosen) < budget:
-            model = learner.current() if goes_active(config, learner.scores()) else None
+            model = (learner.current() if goes_active(config, learner.scores(), len(learner.y))
+                     else None)
             if isinstance(model, LevelSetModel):
                 index = _pool_pick(model, config, spec, x_pool, available, rng)
             else:

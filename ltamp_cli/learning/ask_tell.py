@@ -5,12 +5,19 @@
 and only then removes ``pending.json``. Every step leaves a consistent directory on disk, and a
 ``tell`` repeated after a crash never records the same trial twice (the pending trial's
 ``index`` is checked against the file).
+
+A skill that declares an outcome (issue #21) is learned as in ``ltamp train``: the trials
+and their relabelled points (:func:`~.active.learner_from_records`), the outcome acquisition
+if configured. :func:`tell` then takes the trial's outcome beside its score; the outcome spec
+(code) comes from the skill as its backend declares it, which :func:`tell` loads by the
+pending trial's backend name — never from ``pending.json``.
 """
 
 from __future__ import annotations
 
 import json
 import os
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -18,17 +25,18 @@ from typing import Any
 import numpy as np
 
 from ltamp_cli.backends.protocol import SkillBackend, SkillSpec
+from ltamp_cli.backends.sanity import checked_outcome
 from ltamp_cli.errors import InputError, location_in
 from ltamp_cli.jsondata import read_json_data
 from ltamp_cli.learning.active import (
     LearningConfig,
     _propose,
-    _training_score,
     _trial_seed,
     fit_model,
     goes_active,
+    learner_from_records,
+    training_metadata,
 )
-from ltamp_cli.learning.baselines import RandomModel
 from ltamp_cli.learning.model import SkillModel
 from ltamp_cli.learning.model_dir import (
     METADATA_FILE,
@@ -77,12 +85,22 @@ def _previous_model(directory: Path) -> SkillModel | None:
     return load_model(directory).model
 
 
-def _training_arrays(
-    records: list[TrialRecord], template: RandomModel
-) -> tuple[np.ndarray, np.ndarray]:
-    x = np.array([template.to_unit(r.context, r.control)[0] for r in records])
-    y = np.array([_training_score(template.spec, r.score) for r in records])
-    return x.reshape(len(records), template.dim), y
+def backend_spec(backend_name: str, skill: str) -> SkillSpec | None:
+    """The skill as backend ``backend_name`` declares it (``"pybullet+panda"``: with that
+    robot), or ``None`` when the backend cannot be loaded here or lacks the skill."""
+    from ltamp_cli.backends import load_backend
+
+    name, _, robot = backend_name.partition("+")
+    try:
+        backend = load_backend(name, **({"robot": robot} if robot else {}))
+    except Exception:  # an unknown plugin, a missing optional dependency: no outcome
+        return None
+    try:
+        return backend.skills().get(skill)
+    except Exception:
+        return None
+    finally:
+        backend.close()
 
 
 def ask(
@@ -116,16 +134,19 @@ def ask(
         )
     rng = np.random.default_rng([config.seed, len(records), 7])
     model: SkillModel | None = None
-    template = RandomModel(spec, 0.0)
-    x, y = _training_arrays(records, template)
-    if goes_active(config, y.tolist()):
-        previous = _previous_model(directory)
-        model = fit_model(spec, config, x, y, previous, rng=rng)
+    learner = learner_from_records(spec, config, records, rng)
+    outcome_model = None
+    if goes_active(config, learner.scores(), len(records)):
+        x, y = learner.training_set()
+        model = fit_model(spec, config, x, y, _previous_model(directory), rng=rng,
+                          n_trials=len(records))
+        outcome_model = learner.outcome_model()
 
     def is_valid(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
         return backend.is_valid(skill, context, controls)
 
-    context, control = _propose(backend, skill, spec, config, rng, model, is_valid)
+    context, control = _propose(backend, skill, spec, config, rng, model, is_valid,
+                                outcome_model)
     index = len(records)
     proposal = Proposal(
         skill=skill,
@@ -138,7 +159,9 @@ def ask(
     directory.mkdir(parents=True, exist_ok=True)
     _write_json(
         pending_path,
-        {"proposal": proposal.to_json(), "spec": spec_to_json(spec), "config": asdict(config)},
+        {"proposal": proposal.to_json(), "spec": spec_to_json(spec), "config": asdict(config),
+         # data, not code: tell loads the outcome spec from the backend when this is true
+         "has_outcome": spec.outcome is not None},
     )
     return proposal
 
@@ -186,10 +209,15 @@ def _pending_record(spec: SkillSpec, proposal: Proposal) -> TrialRecord:
 
 
 def tell(directory: str | Path, score: float, valid: bool = True, *,
-         wait: bool = False) -> TrialRecord:
-    """Record the outcome of the pending trial, refit and save the model, clear the pending.
+         wait: bool = False, outcome: Sequence[float] | None = None,
+         spec: SkillSpec | None = None) -> TrialRecord:
+    """Record the result of the pending trial, refit and save the model, clear the pending.
 
-    Raises :class:`InputError` when nothing is pending or ``score`` is not finite.
+    ``outcome``: what the trial observed, for a skill that declares an outcome (physical
+    units, ``(d_outcome,)``); it must fit the declared outcome and reproduce ``score``.
+    ``spec``: the skill as its backend declares it (default: loaded from the pending trial's
+    backend, module doc). Raises :class:`InputError` when nothing is pending, ``score`` is not
+    finite or ``outcome`` does not fit.
     """
     directory = Path(directory)
     if not np.isfinite(score):
@@ -202,28 +230,45 @@ def tell(directory: str | Path, score: float, valid: bool = True, *,
     # The same lock as `ltamp train`: a tell never records its score under a running
     # trainer's model, and of two tells of one trial the second finds nothing pending.
     with exclusive_writer(directory, is_directory=True, wait=wait, option="DIR"):
-        return _tell_locked(directory, score, valid)
+        return _tell_locked(directory, score, valid, outcome, spec)
 
 
-def _tell_locked(directory: Path, score: float, valid: bool) -> TrialRecord:
+def _tell_locked(directory: Path, score: float, valid: bool,
+                 outcome: Sequence[float] | None, declared: SkillSpec | None) -> TrialRecord:
     pending = _read_pending(directory)
     if not np.isfinite(score):
         raise InputError(f"--score: expected a finite number, got {score}")
     spec = checked_spec(pending["spec"])
     config = LearningConfig(**pending["config"])
     proposal = Proposal(**pending["proposal"])
-    dataset = TrialDataset(directory / TRIALS_FILE)
-    records = dataset.read()
+    if declared is None and (outcome is not None or pending.get("has_outcome") is True):
+        declared = backend_spec(proposal.backend, proposal.skill)
+    if declared is not None and spec_to_json(declared) == spec_to_json(spec):
+        spec = declared  # the same skill, with its outcome (code) if it declares one
     record = replace(_pending_record(spec, proposal), score=float(score), valid=bool(valid),
                      info={"strategy": config.strategy, "source": "tell"})
+    if outcome is not None:
+        if spec.outcome is None:
+            raise InputError(f"--outcome: skill {spec.name!r} of backend "
+                             f"{proposal.backend!r} declares no outcome (or its backend "
+                             "cannot be loaded here)")
+        if valid:
+            try:
+                values = checked_outcome(spec, np.asarray(record.context),
+                                         np.asarray(record.control), float(score), outcome)
+            except ValueError as error:
+                raise InputError(f"--outcome: {error}") from None
+            record = replace(record, outcome=values)
+    dataset = TrialDataset(directory / TRIALS_FILE)
+    records = dataset.read()
     # A crash between appending and clearing pending.json must not duplicate the trial.
     if not any(r.index == proposal.index for r in records):
         dataset.append(record)
         records.append(record)
-    template = RandomModel(spec, 0.0)
-    x, y = _training_arrays(records, template)
     rng = np.random.default_rng([config.seed, len(records), 11])
-    model = fit_model(spec, config, x, y, _previous_model(directory), rng=rng)
+    x, y = learner_from_records(spec, config, records, rng).training_set()
+    model = fit_model(spec, config, x, y, _previous_model(directory), rng=rng,
+                      n_trials=len(records))
     model.save(
         str(directory),
         backend=proposal.backend,
@@ -236,6 +281,7 @@ def _tell_locked(directory: Path, score: float, valid: bool) -> TrialRecord:
             "init": config.init,
             "seed": config.seed,
             "trials_file": TRIALS_FILE,
+            **training_metadata(spec, config),
         },
     )
     (directory / PENDING_FILE).unlink()

@@ -6,8 +6,10 @@ Layout of ``DIR/``:
   ``nn-c``, ``nn-r``, ``rf-c``, ``rf-r``, ``random``), ``skill`` (the full
   :class:`~ltamp_cli.backends.protocol.SkillSpec`), ``input_order`` (GP input names, controls
   first), ``normalization`` (physical box mapped to ``[-1, 1]``), ``kernel`` and
-  ``hyperparameters`` (GP), plus whatever the trainer adds (``backend``, ``strategy``,
-  ``training`` — trial counts and the trials file —, ``beta`` …).
+  ``hyperparameters`` (GP), ``data_candidates`` (GP: θ* also tries the training controls, as
+  for a skill whose trials were relabelled by their outcome), plus whatever the trainer adds
+  (``backend``, ``strategy``, ``training`` — trial counts, the trials file and
+  ``hindsight``, the relabelling used or ``null`` —, ``beta`` …).
 * ``weights.npz`` — GP: training inputs ``x`` (normalised) and scores ``y``, log
   hyperparameters ``theta``, score scale (no pickle); ``random``: the mean score.
   scikit-learn baselines: the fitted trees or layer weights as plain arrays
@@ -126,6 +128,9 @@ def save_model(model: SkillModel, directory: str | Path, **metadata: Any) -> Pat
         record["kernel"] = model.kernel
         record["hyperparameters"] = model.gp.hyperparameters()
         record["n_train"] = model.gp.n
+        # θ* also tries the training controls (relabelled skills): a reloaded model must
+        # consider the same candidates as the one trained in memory
+        record["data_candidates"] = bool(model.data_candidates)
         arrays: dict[str, Any] = dict(model.gp.state())
     elif isinstance(model, SklearnModel):
         record["constant"] = model.constant
@@ -241,7 +246,12 @@ def load_model(directory: str | Path) -> LoadedModel:
                                else directory / "weights.npz")
         dim = spec.context.dim + spec.control.dim
         if kind == "gp":
-            model: SkillModel = LevelSetModel(spec, _gaussian_process(metadata, weights, dim))
+            data_candidates = metadata.get("data_candidates", False)
+            if not isinstance(data_candidates, bool):
+                raise ValueError(f"'data_candidates' must be true or false, not "
+                                 f"{data_candidates!r:.40}")
+            model: SkillModel = LevelSetModel(spec, _gaussian_process(metadata, weights, dim),
+                                              data_candidates)
         elif kind in SKLEARN_KINDS:
             settings = metadata.get("estimator")
             constant = _finite_number(metadata.get("constant", 0.0), "constant")

@@ -14,10 +14,12 @@ goals. :class:`Relabeller` turns each trial into extra training points of that k
   which show where the same control fails.
 
 The learners then fit their model (GP, network) to the real trials plus the relabelled points;
-everything downstream is unchanged — the straddle ψ chooses the next trial on that GP, θ* is
-``argmax μ/σ`` on it, and a learned stream samples from the saved GP without refitting. The
-relabelled points are *exact* scores of the real control (no model in between), so a
-deterministic skill's noise cap still applies.
+everything downstream is unchanged — θ* is ``argmax μ/σ`` on that GP (``lse`` chooses the
+next trial with a GP on the outcomes by default,
+:mod:`~ltamp_cli.learning.outcome_acquisition`; :func:`propose_for_all_goals` is the
+goal-averaged straddle it replaced), and a learned stream samples from the saved GP
+without refitting. The relabelled points are *exact* scores of the real control (no model
+in between), so a deterministic skill's noise cap still applies.
 
 **Size.** Relabelled points multiply the data (``1 + goals_per_trial`` per trial). The GP sees
 every real trial, every achieved-goal point and at most ``cap`` relabelled points in all: past
@@ -85,6 +87,8 @@ class Relabeller:
         self._x: list[np.ndarray] = []
         self._y: list[np.ndarray] = []
         self._keys: list[np.ndarray] = []
+        #: The trials themselves, physical units: ``(context, control, outcome)`` each.
+        self.trials: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
 
     @property
     def size(self) -> int:
@@ -119,6 +123,8 @@ class Relabeller:
     def add(self, context: np.ndarray, control: np.ndarray, outcome: np.ndarray) -> None:
         """Relabel one trial (physical units) and keep its points."""
         contexts, controls, scores = self.relabel(context, control, outcome)
+        self.trials.append((np.asarray(context, dtype=float), np.asarray(control, dtype=float),
+                            np.asarray(outcome, dtype=float)))
         keys = self.rng.random(len(scores))
         if self.outcome.achieved_goal is not None and len(keys):
             keys[0] -= 1.0  # achieved-goal points are kept before drawn ones

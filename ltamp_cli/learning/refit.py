@@ -9,6 +9,14 @@ lengthscale prior; the same random generator as a resumed run at the same budget
 the directory, keeping the trainer's metadata (``backend``, ``strategy``, ``training`` …) and
 recording the previous hyperparameters under ``refit``. ``ltamp train SKILL --out DIR --refit``
 is the command-line form.
+
+A skill that declares an outcome (issue #21) is refitted on its trials *and* their relabelled
+points, exactly as training built them (:func:`~.active.learner_from_records`): the outcome
+spec is code, so it comes from the skill as its backend declares it (``spec``, which must
+match the saved one), never from the directory. ``training.hindsight`` in ``model.json``
+says which relabelling the model was trained with (``null``: none; absent, in models saved
+before it existed: the default relabelling if the trials carry outcomes, none otherwise); a
+model trained with one cannot be refitted without its backend's spec.
 """
 
 from __future__ import annotations
@@ -18,9 +26,15 @@ from pathlib import Path
 
 import numpy as np
 
+from ltamp_cli.backends.protocol import SkillSpec
 from ltamp_cli.errors import InputError, location_in
-from ltamp_cli.learning.active import GP_STRATEGIES, LearningConfig, _training_score, fit_model
-from ltamp_cli.learning.baselines import RandomModel
+from ltamp_cli.learning.active import (
+    GP_STRATEGIES,
+    LearningConfig,
+    fit_model,
+    learner_from_records,
+    training_metadata,
+)
 from ltamp_cli.learning.defaults import DEFAULT_STRATEGY
 from ltamp_cli.learning.gp import DEFAULT_PRIOR
 from ltamp_cli.learning.model_dir import (
@@ -30,6 +44,7 @@ from ltamp_cli.learning.model_dir import (
     load_metadata,
     load_model,
     save_model,
+    spec_to_json,
 )
 from ltamp_cli.trials.record import TrialDataset, without_duplicates
 
@@ -37,19 +52,30 @@ from ltamp_cli.trials.record import TrialDataset, without_duplicates
 _WRITTEN_BY_SAVE = frozenset({
     "format", "version", "ltamp_version", "saved_at", "kind", "skill", "input_order",
     "normalization", "kernel", "hyperparameters", "n_train", "weights_sha256", "constant",
-    "estimator",
+    "estimator", "data_candidates",
 })
+
+
+def _shape(skill: object) -> object:
+    """The parameters and bounds of a saved skill (what must match the backend's)."""
+    if not isinstance(skill, dict):
+        return None
+    return [(part, skill.get(part, {}).get(key)) for part in ("context", "control")
+            for key in ("names", "lows", "highs")]
 
 
 def refit_model_dir(
     directory: str | Path,
     lengthscale_prior_sd: float | None = DEFAULT_PRIOR.log_sd,
     skill: str | None = None,
+    spec: SkillSpec | None = None,
 ) -> LoadedModel:
     """Refit the GP of model ``directory`` on its ``trials.jsonl`` and save it in place.
 
     ``lengthscale_prior_sd``: log-sd of the lengthscale prior (``None``: maximum marginal
     likelihood, the fit before issue #21). ``skill``, if given, must be the model's skill.
+    ``spec``: the skill as its backend declares it (module doc; its outcome, if any, is
+    used); ``None``: the saved spec, which has no outcome.
     Strategy, kernel, mean mode and seed come from ``model.json``; every trial in the file
     counts (``training.n_trials`` is updated). Returns the refitted model and its metadata.
     Raises ``InputError`` for a directory that is not a GP model with its trials.
@@ -61,9 +87,14 @@ def refit_model_dir(
     metadata = load_metadata(directory)
     where = location_in(directory / METADATA_FILE)
     try:
-        spec = checked_spec(metadata.get("skill"))
+        saved = checked_spec(metadata.get("skill"))
     except ValueError as error:
         raise InputError(f"incomplete or invalid model directory ({error})", where) from None
+    if spec is not None and _shape(spec_to_json(spec)) != _shape(metadata["skill"]):
+        raise InputError(f"the backend's skill {spec.name!r} has other parameters or bounds "
+                         "than the saved model's: refit with the backend it was trained on",
+                         where)
+    spec = saved if spec is None else spec
     if metadata.get("kind") != "gp":
         raise InputError(f"only GP models can be refitted, this one is {metadata.get('kind')!r}",
                          where)
@@ -82,7 +113,19 @@ def refit_model_dir(
         raise InputError(f"{path} must hold trials of skill {spec.name!r} only, and at least one")
     strategy = str(metadata.get("strategy", DEFAULT_STRATEGY))
     hyper = metadata.get("hyperparameters") or {}
+    # Models saved before `training.hindsight` existed: relabelled iff their trials carry
+    # outcomes (the default since outcomes exist); the shipped push's trials predate them.
+    hindsight = training.get("hindsight",
+                             {} if any(r.outcome is not None for r in records) else None)
     try:
+        if hindsight is not None and not isinstance(hindsight, dict):
+            raise ValueError(f"training.hindsight must be an object or null, not "
+                             f"{hindsight!r:.40}")
+        relabelling = {} if hindsight is None else {
+            key: hindsight[name] for key, name in (
+                ("hindsight_goals", "goals"), ("hindsight_cap", "cap"),
+                ("hindsight_acquisition", "acquisition"),
+                ("hindsight_theta_data", "theta_data")) if name in hindsight}
         config = LearningConfig(
             strategy=strategy if strategy in GP_STRATEGIES else "gp",
             kernel=str(metadata.get("kernel", "matern52")),
@@ -91,17 +134,23 @@ def refit_model_dir(
             seed=int(training.get("seed", 0)),
             mean=str(hyper.get("mean_mode", "constant")),
             lengthscale_prior_sd=lengthscale_prior_sd,
+            hindsight=hindsight is not None,
+            **relabelling,
         )
     except (TypeError, ValueError) as error:
         raise InputError(f"model.json: {error}", where) from None
-    template = RandomModel(spec, 0.0)  # normalisation only
-    x = np.array([template.to_unit(r.context, r.control)[0] for r in records])
-    y = np.array([_training_score(spec, r.score) for r in records])
-    # The generator a resumed `ltamp train` at the same budget uses for its final fit.
+    if isinstance(training.get("hindsight"), dict) and spec.outcome is None:
+        raise InputError(f"the model was trained on outcomes of skill {spec.name!r}: refitting "
+                         "it needs the skill's outcome from its backend", where)
+    # The generator a resumed `ltamp train` at the same budget uses for its final fit, and
+    # the same training data (trials + relabelled points) as training built.
     rng = np.random.default_rng([config.seed, len(records)])
-    model = fit_model(spec, config, x, y, final=True, rng=rng)
+    learner = learner_from_records(spec, config, records, rng)
+    x, y = learner.training_set()
+    model = fit_model(spec, config, x, y, final=True, rng=rng, n_trials=len(records))
     kept = {k: v for k, v in metadata.items() if k not in _WRITTEN_BY_SAVE}
-    kept["training"] = {**training, "n_trials": len(records),
+    kept["training"] = {**training, **training_metadata(spec, config),
+                        "n_trials": len(records),
                         "n_valid": sum(bool(r.valid) for r in records),
                         "n_success": sum(r.score > 0 for r in records)}
     kept["refit"] = {

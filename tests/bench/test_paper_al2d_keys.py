@@ -15,3 +15,10 @@ def test_push_jobs_are_keyed_by_hindsight(monkeypatch: pytest.MonkeyPatch) -> No
     assert al2d._job_key_sizes(own, "push") == {**own, "hindsight": True}
     monkeypatch.setattr(al2d, "HINDSIGHT", False)
     assert al2d._job_key_sizes(own, "push") == own
+
+
+def test_lse_push_jobs_name_their_acquisition() -> None:
+    # A job of the earlier default acquisition ("lse/0") must not be resumed as this one.
+    assert al2d.job_key("lse", 0, learns_from_outcome=True) == "lse+outcome-cover/0"
+    assert al2d.job_key("lse", 3, learns_from_outcome=False) == "lse/3"
+    assert al2d.job_key("nn-r", 1, learns_from_outcome=True) == "nn-r/1"

@@ -15,7 +15,7 @@ from ltamp_cli.errors import InputError
 def test_conforms_to_protocol_and_lists_the_three_skills(synthetic):
     assert isinstance(synthetic, SkillBackend)
     specs = synthetic.skills()
-    assert set(specs) == {"toy1d", "moving2d", "skill8d"}
+    assert set(specs) == {"toy1d", "moving2d", "skill8d", "flick2d"}
     assert (specs["toy1d"].control.dim, specs["toy1d"].context.dim) == (1, 0)
     assert (specs["moving2d"].control.dim, specs["moving2d"].context.dim) == (2, 1)
     assert (specs["skill8d"].control.dim, specs["skill8d"].context.dim) == (4, 4)

@@ -11,6 +11,18 @@
   axis-aligned ellipsoid whose centre and size depend on the context
   (``g = 1 − ‖(u − c(α)) / R(α)‖``); controls with
   ``u0 + u1 > 1.2`` fail the hard validity test and score ``−1``.
+* ``flick2d`` — a skill with an *outcome* (issue #21): a cue flicks a puck of radius 0.25
+  resting at the origin towards a goal. Controls ``offset ∈ [−1, 1]`` (the cue's line passes
+  this far beside the puck's centre), ``aim ∈ [0, 2π]`` (the cue's direction), ``power ∈
+  [0, 1]``; contexts ``friction ∈ [0.5, 1.5]`` (not a goal: it sets how far the puck slides)
+  and the goal ``goal_x, goal_y ∈ [−4, 4]``. A cue that misses the puck (``|offset| ≥
+  0.25``: 3/4 of the box) leaves it at the origin; a hit sends it along the line of centres
+  (``aim − asin(offset / 0.25)``) a distance ``4 · (power · cos(deflection))² / friction``.
+  The outcome is the puck's end position, the score ``1 − ‖end − goal‖``; goals are the
+  last two context values. Like the 2D push, most controls do not move the puck and
+  success needs the right direction and distance; unlike it the physics depends on a
+  non-goal context and is analytic (microseconds per trial). Its trials are deterministic
+  (the backend's ``noise`` does not apply to it).
 
 Besides the :class:`~ltamp_cli.backends.protocol.SkillBackend` protocol it exposes
 :meth:`SyntheticBackend.true_score`, the vectorised noise-free score used by metrics.
@@ -25,12 +37,20 @@ from typing import Any
 
 import numpy as np
 
-from ltamp_cli.backends.protocol import ParamSpace, SkillSpec, TrialResult, skill_spec
+from ltamp_cli.backends.protocol import (
+    OutcomeSpec,
+    ParamSpace,
+    SkillSpec,
+    TrialResult,
+    skill_spec,
+)
 from ltamp_cli.errors import InputError
 
 # contexts (n, dα), controls (n, dθ), both physical -> scores (n,)
 ScoreFunction = Callable[[np.ndarray, np.ndarray], np.ndarray]
 ValidityFunction = Callable[[np.ndarray, np.ndarray], np.ndarray]
+# contexts (n, dα), controls (n, dθ), both physical -> outcomes (n, d_outcome)
+OutcomeFunction = Callable[[np.ndarray, np.ndarray], np.ndarray]
 
 
 def _unit(values: np.ndarray, space: ParamSpace) -> np.ndarray:
@@ -43,6 +63,8 @@ class AnalyticSkill:
     spec: SkillSpec
     score: ScoreFunction
     validity: ValidityFunction | None = None
+    #: skills with an ``OutcomeSpec``: the outcome of a trial (its score follows from it)
+    outcome: OutcomeFunction | None = None
 
 
 _TOY1D = SkillSpec(
@@ -97,11 +119,52 @@ def _skill8d_valid(contexts: np.ndarray, controls: np.ndarray) -> np.ndarray:
     return u[:, 0] + u[:, 1] <= 1.2
 
 
+FLICK_RADIUS = 0.25
+
+
+def _flick2d_outcome(contexts: np.ndarray, controls: np.ndarray) -> np.ndarray:
+    """End positions ``(n, 2)`` of the puck (module doc, ``flick2d``)."""
+    offset, aim, power = controls[:, 0], controls[:, 1], controls[:, 2]
+    hit = np.abs(offset) < FLICK_RADIUS
+    deflection = np.arcsin(np.clip(offset / FLICK_RADIUS, -1.0, 1.0))
+    distance = np.where(hit, 4.0 * (power * np.cos(deflection)) ** 2 / contexts[:, 0], 0.0)
+    direction = aim - deflection
+    return np.stack([distance * np.cos(direction), distance * np.sin(direction)], axis=1)
+
+
+def _flick2d_outcome_score(contexts: np.ndarray, controls: np.ndarray,
+                           outcomes: np.ndarray) -> np.ndarray:
+    """``1 − ‖end − goal‖`` for batches (goals: context columns 1, 2)."""
+    del controls
+    return 1.0 - np.linalg.norm(outcomes - contexts[:, 1:3], axis=1)
+
+
+_FLICK2D = SkillSpec(
+    name="flick2d",
+    context=ParamSpace(("friction", "goal_x", "goal_y"), (0.5, -4.0, -4.0), (1.5, 4.0, 4.0)),
+    control=ParamSpace(("offset", "aim", "power"), (-1.0, 0.0, 0.0), (1.0, 2 * math.pi, 1.0)),
+    description="flick a puck to within 1 of a goal; most flicks miss it (outcome: end "
+                "position)",
+    deterministic=True,
+    outcome=OutcomeSpec(
+        space=ParamSpace(("puck_x", "puck_y"), (-8.0, -8.0), (8.0, 8.0)),
+        score=_flick2d_outcome_score,
+        goals=(1, 2),
+        achieved_goal=lambda outcomes: np.asarray(outcomes, dtype=float),
+    ),
+)
+
+
+def _flick2d_score(contexts: np.ndarray, controls: np.ndarray) -> np.ndarray:
+    return _flick2d_outcome_score(contexts, controls, _flick2d_outcome(contexts, controls))
+
+
 def _analytic_skills() -> dict[str, AnalyticSkill]:
     return {
         "toy1d": AnalyticSkill(_TOY1D, _toy1d_score),
         "moving2d": AnalyticSkill(_MOVING2D, _moving2d_score),
         "skill8d": AnalyticSkill(_SKILL8D, _skill8d_score, _skill8d_valid),
+        "flick2d": AnalyticSkill(_FLICK2D, _flick2d_score, outcome=_flick2d_outcome),
     }
 
 
@@ -161,6 +224,13 @@ class SyntheticBackend:
         valid = bool(self.is_valid(skill, context, control)[0])
         if not valid:
             return TrialResult(score=self._skill(skill).spec.invalid_score, valid=False)
+        analytic = self._skill(skill)
+        if analytic.outcome is not None:  # deterministic: noise does not apply
+            contexts, controls = self._batch(skill, context, control)
+            outcome = analytic.outcome(contexts, controls)[0]
+            score = float(analytic.score(contexts, controls)[0])
+            return TrialResult(score=score, valid=True,
+                               outcome=tuple(float(v) for v in outcome))
         score = float(self.true_score(skill, context, control)[0])
         if self.noise > 0.0:
             score += self.noise * float(np.random.default_rng(seed).standard_normal())
