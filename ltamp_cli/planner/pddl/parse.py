@@ -6,6 +6,7 @@ Every error is an :class:`~ltamp_cli.errors.InputError` at ``file:line:column``.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from ltamp_cli.errors import InputError, SourceLocation
@@ -190,10 +191,21 @@ def parse_formula(expr: SExpr, what: str = "a formula") -> Formula:
     return parse_atom(node, what)
 
 
+def _cost_number(symbol: Symbol, what: str) -> float:
+    """A cost written as a number: finite and >= 0 (``ValueError`` if not a number at all).
+    ``float`` also reads ``nan``, ``inf`` and ``-5``, and overflows ``1e400`` to ``inf``:
+    the search then answered "no plan" without a word."""
+    value = float(symbol.text)
+    if not math.isfinite(value) or value < 0:
+        raise InputError(f"{what} must be a finite number >= 0, found {symbol.text[:40]!r}",
+                         symbol.location)
+    return value
+
+
 def _parse_cost_expression(expr: SExpr) -> CostExpression:
     if isinstance(expr, Symbol):
         try:
-            return Number(float(expr.text))
+            return Number(_cost_number(expr, "an action cost"))
         except ValueError:
             raise InputError(
                 f"expected a number or a function term as a cost, found {expr.text!r}",
@@ -338,7 +350,7 @@ def parse_init_item(expr: SExpr) -> Atom | FunctionValue:
         if not isinstance(term, FunctionTerm) or not isinstance(value_expr, Symbol):
             raise InputError("expected (= (FUNCTION args) NUMBER)", node.location)
         try:
-            value = float(value_expr.text)
+            value = _cost_number(value_expr, "a function value (functions give action costs)")
         except ValueError:
             raise InputError(f"expected a number, found {value_expr.text!r}",
                              value_expr.location) from None
