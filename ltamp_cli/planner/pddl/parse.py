@@ -45,6 +45,7 @@ from ltamp_cli.planner.pddl.syntax import (
     WhenEffect,
     is_variable,
 )
+from ltamp_cli.textfile import MAX_PDDL_BYTES, read_limited_text
 
 
 def _expect_list(expr: SExpr, what: str) -> SList:
@@ -534,9 +535,6 @@ def parse_stream_file(text: str, path: str | Path) -> StreamFile:
 
 
 def read_text(path: str | Path, what: str) -> str:
-    try:
-        return Path(path).read_text()
-    except FileNotFoundError:
-        raise InputError(f"{what} not found", SourceLocation(str(path))) from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise InputError(f"cannot read {what}: {error}", SourceLocation(str(path))) from None
+    """A PDDL file's text (at most :data:`~ltamp_cli.textfile.MAX_PDDL_BYTES`: ``/dev/zero``
+    or a FIFO is refused instead of read forever)."""
+    return read_limited_text(path, MAX_PDDL_BYTES, what)
