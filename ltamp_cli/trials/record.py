@@ -152,8 +152,12 @@ class TrialDataset:
             return
         with self.path.open("rb") as handle:
             lines = handle.read().split(b"\n")
-        # After the final newline split() yields b"" — any other last piece is torn.
-        complete, _torn = lines[:-1], lines[-1]
+        # After the final newline split() yields b"". Any other last piece was torn by a
+        # crash while writing, unless it is one whole record (a file written by another
+        # tool, or saved by an editor, without a final newline).
+        complete, tail = lines[:-1], lines[-1]
+        if whole_record(tail) is not None:
+            complete.append(tail)
         for number, raw in enumerate(complete, start=1):
             if not raw.strip():
                 continue
@@ -200,12 +204,30 @@ class TrialDataset:
             if handle.read(1) == b"\n":
                 return
             data = handle.seek(0) or handle.read()
-            handle.truncate(data.rfind(b"\n") + 1)
+            end = data.rfind(b"\n") + 1
+            if whole_record(data[end:]) is not None:
+                handle.seek(0, os.SEEK_END)
+                handle.write(b"\n")  # a whole record: end it, do not cut it
+            else:
+                handle.truncate(end)
             handle.flush()
             os.fsync(handle.fileno())
 
     def done_indices(self) -> set[int]:
         return {record.index for record in self.iter_records() if record.index >= 0}
+
+
+def whole_record(raw: bytes) -> TrialRecord | None:
+    """The record a line holds if it is one whole, valid trial record, else ``None``."""
+    if not raw.strip():
+        return None
+    try:
+        data = json.loads(raw)
+        if not isinstance(data, dict) or any(name not in data for name in _REQUIRED_FIELDS):
+            return None
+        return TrialRecord.from_dict(data)
+    except (ValueError, KeyError, TypeError, RecursionError):
+        return None
 
 
 def without_duplicates(records: Sequence[TrialRecord]) -> tuple[list[TrialRecord], int]:
