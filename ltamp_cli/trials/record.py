@@ -251,8 +251,10 @@ MAX_SCORE_MAGNITUDE = 1e100
 def check_against_spec(records: Sequence[TrialRecord], spec: SkillSpec) -> None:
     """Raise ``ValueError`` naming the first record of ``spec``'s skill whose context or
     control has the wrong length or lies far outside the skill's box (more than one box
-    width beyond a bound), whose outcome has another length than the skill declares, or
-    whose score's magnitude exceeds :data:`MAX_SCORE_MAGNITUDE`:
+    width beyond a bound), whose outcome has another length than the skill declares, lies
+    far outside its range or does not give the record's score through the skill's declared
+    score function (valid records), or whose score's magnitude exceeds
+    :data:`MAX_SCORE_MAGNITUDE`:
     such values make the GP's arithmetic overflow (NaN everywhere). Records of other skills
     are not checked."""
     for record in records:
@@ -274,6 +276,17 @@ def check_against_spec(records: Sequence[TrialRecord], spec: SkillSpec) -> None:
                 and len(record.outcome) != spec.outcome.space.dim):
             raise ValueError(f"{where}: outcome has {len(record.outcome)} value(s), skill "
                              f"{spec.name!r} declares {spec.outcome.space.dim}")
+        if record.valid and record.outcome is not None and spec.outcome is not None:
+            # as a live trial's: within range, and giving the record's score through the
+            # declared function (else the GP learns the score and contradicting relabels)
+            from ltamp_cli.backends.sanity import checked_outcome
+
+            try:
+                checked_outcome(spec, np.asarray(record.context, dtype=float),
+                                np.asarray(record.control, dtype=float), record.score,
+                                record.outcome)
+            except ValueError as error:
+                raise ValueError(f"{where}: {error}") from None
         if math.isfinite(record.score) and abs(record.score) > MAX_SCORE_MAGNITUDE:
             raise ValueError(f"{where}: score {record.score:g} is beyond ±{MAX_SCORE_MAGNITUDE:g}")
 
