@@ -175,3 +175,21 @@ def test_generator_yielding_wrong_arity_is_one_line() -> None:
     with pytest.raises(InputError, match=r"sample-pose.*1 value") as error:
         solve(problem, max_time=5, verbose=False)
     assert "\n" not in str(error.value)
+
+
+@pytest.mark.parametrize("raw", [lambda b: (1.0,), lambda b: 5, lambda b: "ab",
+                                 lambda b: iter([3.0])])
+def test_unwrapped_procedure_is_one_line_with_a_hint(raw: Any) -> None:
+    """A procedure not wrapped by ``from_fn``/``from_gen_fn`` (returning one output tuple, a
+    number, a string, or yielding bare values) used to surface as a ``StreamError`` "'float'
+    object is not iterable"; now one ``InputError`` naming the stream and the wrapper."""
+    problem = place_problem(raw, ("Placed", "a"))
+    with pytest.raises(InputError, match=r"sample-pose.*from_fn") as error:
+        solve(problem, max_time=5, verbose=False)
+    assert "\n" not in str(error.value)
+
+
+def test_raw_procedure_yielding_output_lists_still_works() -> None:
+    """A hand-written list generator (PDDLStream's ``from_list_gen_fn`` shape) is fine."""
+    problem = place_problem(lambda b: iter([[(1.0,)], [], [(2.0,), [3.0]]]), ("Placed", "a"))
+    assert solve(problem, max_time=10, verbose=False).plan is not None
