@@ -8,6 +8,7 @@ from typing import Any
 import yaml
 
 from ltamp_cli.errors import InputError, SourceLocation
+from ltamp_cli.textfile import MAX_YAML_BYTES, read_limited_text
 
 MAX_YAML_DEPTH = 64
 
@@ -47,16 +48,17 @@ class YamlDocument:
     def __init__(self, path: str | Path, text: str | None = None) -> None:
         self.path = str(path)
         if text is None:
-            try:
-                text = Path(path).read_text()
-            except FileNotFoundError:
-                raise InputError("file not found", SourceLocation(self.path)) from None
-            except (OSError, UnicodeDecodeError) as error:
-                raise InputError(f"cannot read file: {error}", SourceLocation(self.path)) from None
+            text = read_limited_text(path, MAX_YAML_BYTES, "file")
         try:
-            self.root = yaml.compose(text, Loader=yaml.SafeLoader)
-            _check_structure(self.root, self.path)
-            self.data = yaml.load(text, Loader=yaml.SafeLoader)
+            # one parse: the data is built from the checked nodes (as yaml.load does)
+            loader = yaml.SafeLoader(text)
+            try:
+                self.root = loader.get_single_node()
+                _check_structure(self.root, self.path)
+                self.data = (loader.construct_document(self.root) if self.root is not None
+                             else None)
+            finally:
+                loader.dispose()
         except RecursionError:
             raise InputError(f"invalid YAML: nested deeper than {MAX_YAML_DEPTH} levels",
                              SourceLocation(self.path)) from None

@@ -33,6 +33,7 @@ is recorded invalid with the reason (:func:`ltamp_cli.backends.sanity.run_trial_
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
@@ -111,9 +112,23 @@ class OutcomeSpec:
     def __post_init__(self) -> None:
         if self.space.dim < 1:
             raise ValueError("an outcome needs at least one value")
+        for name, low, high in zip(self.space.names, self.space.lows, self.space.highs,
+                                   strict=True):
+            # as SkillSpec's context and control: a NaN bound would make every outcome
+            # "far outside its declared range", hence every trial invalid
+            numbers_ok = all(isinstance(v, int | float | np.number) and not isinstance(v, bool)
+                             for v in (low, high))
+            if not (numbers_ok and math.isfinite(low) and math.isfinite(high)
+                    and math.isfinite(high - low) and low <= high):
+                raise ValueError(f"outcome {name!r:.40} has bounds [{low}, {high}]: expected "
+                                 "finite numbers low <= high with a finite width")
+        if any(isinstance(g, bool | np.bool_) or not isinstance(g, numbers.Integral)
+               for g in self.goals):
+            raise ValueError(f"outcome goals must be integer context indices, got {self.goals}")
+        object.__setattr__(self, "goals", tuple(int(g) for g in self.goals))  # np.int64 too
         if not self.goals or len(set(self.goals)) != len(self.goals):
             raise ValueError(f"outcome goals must be distinct context indices, got {self.goals}")
-        if any(not isinstance(g, int) or g < 0 for g in self.goals):
+        if any(g < 0 for g in self.goals):
             raise ValueError(f"outcome goals must be context indices >= 0, got {self.goals}")
 
     def scores(self, contexts: np.ndarray, controls: np.ndarray,

@@ -45,12 +45,16 @@ before and the trials a learner draws at random are the same with or without rel
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 
 from ltamp_cli.backends.protocol import OutcomeSpec, SkillSpec
 from ltamp_cli.learning.acquisition import ValidityTest, evaluate, first_valid, straddle
 from ltamp_cli.learning.model import LevelSetModel
 from ltamp_cli.learning.normalize import BoxNormalizer, join_inputs, joint_space
+
+LOGGER = logging.getLogger("ltamp")
 
 #: Default number of goals drawn from the goal box per trial (besides the achieved goal).
 DEFAULT_GOALS_PER_TRIAL = 4
@@ -89,6 +93,8 @@ class Relabeller:
         self._keys: list[np.ndarray] = []
         #: The trials themselves, physical units: ``(context, control, outcome)`` each.
         self.trials: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        self._warned: set[str] = set()
+        self._achieved_kept = False  # whether the last relabel's first point is the achieved goal
 
     @property
     def size(self) -> int:
@@ -104,10 +110,12 @@ class Relabeller:
         control = np.asarray(control, dtype=float).reshape(self.spec.control.dim)
         outcome = np.asarray(outcome, dtype=float).reshape(self.outcome.space.dim)
         goals = []
+        self._achieved_kept = False
         if self.outcome.achieved_goal is not None:
-            achieved = np.asarray(self.outcome.achieved_goal(outcome[None, :]),
-                                  dtype=float).reshape(len(self._goals))
-            goals.append(np.clip(achieved, self._low, self._high))
+            achieved = self._achieved(outcome)
+            if achieved is not None:
+                goals.append(np.clip(achieved, self._low, self._high))
+                self._achieved_kept = True
         if self.goals_per_trial:
             goals.extend(self.rng.uniform(self._low, self._high,
                                           size=(self.goals_per_trial, len(self._goals))))
@@ -116,9 +124,57 @@ class Relabeller:
             contexts[:, self._goals] = np.asarray(goals)
         controls = np.repeat(control[None, :], len(goals), axis=0)
         outcomes = np.repeat(outcome[None, :], len(goals), axis=0)
-        scores = (self.outcome.scores(contexts, controls, outcomes) if goals
-                  else np.zeros(0))
+        if not goals:
+            return contexts, controls, np.zeros(0)
+        try:
+            scores = self.outcome.scores(contexts, controls, outcomes)
+        except Exception:  # a plugin's function: keep the goals it can score
+            keep, scores = self._scores_one_by_one(contexts, controls, outcomes)
+            self._achieved_kept = self._achieved_kept and bool(keep[0])
+            contexts, controls = contexts[keep], controls[keep]
         return contexts, controls, scores
+
+    def _achieved(self, outcome: np.ndarray) -> np.ndarray | None:
+        """The declared achieved goal of one outcome, ``None`` (and one warning) when the
+        skill's function fails, gives the wrong shape or non-finite values."""
+        assert self.outcome.achieved_goal is not None
+        try:
+            achieved = np.asarray(self.outcome.achieved_goal(outcome[None, :]),
+                                  dtype=float).reshape(len(self._goals))
+            if not np.isfinite(achieved).all():
+                raise ValueError(f"non-finite goal {achieved.tolist()}")
+        except Exception as error:
+            self._warn("achieved_goal", error)
+            return None
+        return achieved
+
+    def _scores_one_by_one(self, contexts: np.ndarray, controls: np.ndarray,
+                           outcomes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The rows the declared score function scores (finite), and their scores."""
+        keep = np.zeros(len(contexts), dtype=bool)
+        scores = []
+        for row in range(len(contexts)):
+            try:
+                value = self.outcome.scores(contexts[row:row + 1], controls[row:row + 1],
+                                            outcomes[row:row + 1])
+            except Exception as error:
+                self._warn("score function", error)
+                continue
+            keep[row] = True
+            scores.append(float(value[0]))
+        return keep, np.asarray(scores, dtype=float)
+
+    def _warn(self, function: str, error: Exception) -> None:
+        """One warning per relabeller and function: those relabelled points are left out
+        (raising would end the training after the trial was saved, and every resume would
+        relabel the same trial and end again)."""
+        if function in self._warned:
+            return
+        self._warned.add(function)
+        message = " ".join(f"{type(error).__name__}: {error}".split())[:200]
+        LOGGER.warning("ltamp: warning: skill %r: the declared outcome %s failed on a "
+                       "relabelled goal (%s); the points it cannot give are left out",
+                       self.spec.name, function, message)
 
     def add(self, context: np.ndarray, control: np.ndarray, outcome: np.ndarray) -> None:
         """Relabel one trial (physical units) and keep its points."""
@@ -126,7 +182,7 @@ class Relabeller:
         self.trials.append((np.asarray(context, dtype=float), np.asarray(control, dtype=float),
                             np.asarray(outcome, dtype=float)))
         keys = self.rng.random(len(scores))
-        if self.outcome.achieved_goal is not None and len(keys):
+        if self._achieved_kept and len(keys):
             keys[0] -= 1.0  # achieved-goal points are kept before drawn ones
         self._x.append(self.normalizer.to_unit(join_inputs(self.spec, contexts, controls)))
         self._y.append(scores)

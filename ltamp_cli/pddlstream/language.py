@@ -137,6 +137,84 @@ def Output(*values: Any) -> tuple[Any, ...]:
     return values
 
 
+# PDDLStream's names for formula heads and plan statuses (its ``language.constants``).
+EQ = "="
+AND = "and"
+OR = "or"
+NOT = "not"
+EXISTS = "exists"
+FORALL = "forall"
+WHEN = "when"
+IMPLY = "imply"
+MINIMIZE = "minimize"
+MAXIMIZE = "maximize"
+INCREASE = "increase"
+PARAMETER = "?"
+TYPE = "-"
+TOTAL_COST = "total-cost"
+TOTAL_TIME = "total-time"
+FAILED = None  # a plan that is not one: no answer ...
+INFEASIBLE = False  # ... or proven infeasible
+
+
+def get_prefix(expression: Sequence[Any]) -> Any:
+    """The head of a fact or formula tuple: ``get_prefix(("On", a, b)) == "On"``."""
+    return expression[0]
+
+
+def get_args(expression: Sequence[Any]) -> tuple[Any, ...]:
+    """The arguments of a fact or formula tuple."""
+    return tuple(expression[1:])
+
+
+def is_plan(plan: Any) -> bool:
+    """Whether ``plan`` is a plan (an empty one included), not ``FAILED`` / ``INFEASIBLE``."""
+    return plan is not FAILED and plan is not INFEASIBLE
+
+
+def get_length(plan: Any) -> float:
+    """The number of steps of a plan; ``inf`` when there is none."""
+    return len(plan) if is_plan(plan) else float("inf")
+
+
+def str_from_plan(plan: Any) -> str:
+    """A plan as ``[name(arg, ...), ...]``, or ``str(plan)`` when there is none."""
+    if not is_plan(plan):
+        return str(plan)
+    return "[" + ", ".join(f"{name}({', '.join(map(str, args))})" for name, args in plan) + "]"
+
+
+def partition_facts(facts: Iterable[Sequence[Any]]
+                    ) -> tuple[list[Any], list[Any], list[Any]]:
+    """``(positive facts, negated facts, function terms)``: ``("not", f)`` puts ``f`` in the
+    second list, ``("=", term, value)`` and ``("minimize", term)`` put ``term`` in the third."""
+    positive: list[Any] = []
+    negated: list[Any] = []
+    functions: list[Any] = []
+    for fact in facts:
+        head = fact[0]
+        if head in (EQ, MINIMIZE):
+            functions.append(fact[1])
+        elif head == NOT:
+            negated.append(fact[1])
+        else:
+            positive.append(fact)
+    return positive, negated, functions
+
+
+def read_pddl_pair(file: str, relative_dir: str = "./") -> list[PDDLText]:
+    """``[domain.pddl, problem.pddl]`` read from the folder of the file ``file`` (a script's
+    ``__file__``), plus ``relative_dir``."""
+    folder = Path(file).resolve().parent / relative_dir
+    return [read(folder / name) for name in ("domain.pddl", "problem.pddl")]
+
+
+def read_pddlstream_pair(file: str, relative_dir: str = "./") -> list[PDDLText]:
+    """``[domain.pddl, stream.pddl]`` read as :func:`read_pddl_pair` does."""
+    folder = Path(file).resolve().parent / relative_dir
+    return [read(folder / name) for name in ("domain.pddl", "stream.pddl")]
+
+
 WILD = "*"
 # ``stream_map=DEBUG``: every stream yields one new placeholder value per input tuple;
 # ``SHARED_DEBUG``: one placeholder per stream and output, whatever the inputs.
@@ -166,7 +244,11 @@ def print_solution(solution: Solution) -> None:
         print(f"{index}) {action.name} {' '.join(map(str, action.args))}")
 
 
-__all__ = ["DEBUG", "SHARED_DEBUG", "WILD", "Action", "And", "Certificate", "Equal", "Exists",
-           "Fact", "ForAll", "Imply", "Not", "Or", "Output", "PDDLProblem", "PDDLText",
-           "PartialInputs", "PlanConstraints",
-           "Solution", "WildOutput", "get_file_path", "print_solution", "read"]
+__all__ = ["AND", "DEBUG", "EQ", "EXISTS", "FAILED", "FORALL", "IMPLY", "INCREASE",
+           "INFEASIBLE", "MAXIMIZE", "MINIMIZE", "NOT", "OR", "PARAMETER", "SHARED_DEBUG",
+           "TOTAL_COST", "TOTAL_TIME", "TYPE", "WHEN", "WILD", "Action", "And", "Certificate",
+           "Equal", "Exists", "Fact", "ForAll", "Imply", "Not", "Or", "Output", "PDDLProblem",
+           "PDDLText", "PartialInputs", "PlanConstraints", "Solution", "WildOutput",
+           "get_args", "get_file_path", "get_length", "get_prefix", "is_plan",
+           "partition_facts", "print_solution", "read", "read_pddl_pair",
+           "read_pddlstream_pair", "str_from_plan"]

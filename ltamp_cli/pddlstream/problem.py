@@ -313,11 +313,13 @@ def _adapt(external: External, procedure: Callable[..., Any]) -> Callable[..., A
             produced = procedure(*inputs, **kwargs)
             if produced is None:
                 return iter(())
+            if not isinstance(produced, Iterable) or isinstance(produced, str | bytes):
+                raise _not_a_list_generator(external, produced)
             if type(produced) in FINITE_ITERATORS:
                 # ``from_fn`` / ``from_list_fn``: a list that the planner can see the end
                 # of, so that the instance is exhausted by its first call (a function).
-                return iter([_batch(batch) for batch in produced])
-            return (_batch(batch) for batch in produced)
+                return iter([_batch(batch, external) for batch in produced])
+            return (_batch(batch, external) for batch in produced)
         return generate
 
     def test(*inputs: Any, **kwargs: Any) -> bool | WildOutput:
@@ -331,12 +333,24 @@ def _adapt(external: External, procedure: Callable[..., Any]) -> Callable[..., A
     return test
 
 
-def _batch(batch: Any) -> list[Any] | WildOutput:
+def _not_a_list_generator(external: External, produced: Any) -> InputError:
+    """A stream procedure that returned something no list generator gives (PDDLStream's
+    procedures are wrapped by ``from_fn``, ``from_gen_fn``, ...)."""
+    return InputError(f"stream {external.name!r}: its procedure gave {produced!r:.60}, not "
+                      "lists of output tuples: wrap a function returning one output tuple "
+                      "with from_fn, a generator function with from_gen_fn",
+                      getattr(external, "location", None))
+
+
+def _batch(batch: Any, external: External) -> list[Any] | WildOutput:
     """One item of a list generator as a list of output tuples (lists become tuples); a
     :class:`WildOutput` stays one."""
     if batch is None:
         return []
     if isinstance(batch, WildOutput):
         return batch
+    if not isinstance(batch, tuple) and (not isinstance(batch, Iterable)
+                                         or isinstance(batch, str | bytes)):
+        raise _not_a_list_generator(external, batch)
     items = [batch] if isinstance(batch, tuple) else list(batch)
     return [tuple(item) if isinstance(item, list) else item for item in items if item is not None]

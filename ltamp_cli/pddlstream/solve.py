@@ -29,32 +29,70 @@ from ltamp_cli.planner.result import PlanResult
 FOCUSED_ALGORITHMS = ("focused", "binding", "adaptive")
 
 
+# PDDLStream's other options of ``solve`` and of its search (``**search_kwargs``): accepted
+# so that scripts run unchanged, without effect. They tune PDDLStream's own search (Fast
+# Downward's ``planner`` and its time, effort weights, skeleton queue, deferral), or limit
+# it (``max_iterations``, ``max_memory``): ltamp's planner has its own, and ``max_time``
+# bounds it. Any other keyword is refused (a misspelt ``max_tme=`` would run unbounded).
+IGNORED_OPTIONS = frozenset({
+    "replan_actions", "max_iterations", "max_memory", "complexity_step", "max_skeletons",
+    "search_sample_ratio", "max_failures", "unit_efforts", "max_effort", "effort_weight",
+    "reorder", "visualize", "debug", "planner", "max_planner_time", "max_cost", "temp_dir",
+    "clean", "hierarchy", "bind", "fail_fast", "subgoal_horizon"})
+
+
 def solve(problem: PDDLProblem, algorithm: str = "adaptive",
           constraints: PlanConstraints | None = None,
           stream_info: Mapping[str, Info] | None = None, max_time: float = math.inf,
           unit_costs: bool = False, success_cost: float = math.inf, verbose: bool = True,
-          seed: int = 0, search: str = "ff", **ignored: Any) -> Solution:
+          seed: int = 0, search: str = "ff", initial_complexity: int = 0,
+          max_complexity: float | None = None, **pddlstream_options: Any) -> Solution:
     """Solve like PDDLStream's ``solve`` and return ``Solution(plan, cost, certificate)``.
 
     ``algorithm``: ``adaptive`` (default), ``binding``, ``focused`` or ``incremental``;
     ``max_time`` in seconds (``inf``: until solved or proven infeasible); ``success_cost``:
-    keep improving the plan until its cost is at most this. Plan steps carry the Python
-    values of their arguments. PDDLStream's other options (``planner``, ``max_skeletons``,
-    ``effort_weight``, ...) are accepted and ignored. Bad input raises
+    keep improving the plan until its cost is at most this. ``initial_complexity`` and
+    ``max_complexity`` (integers >= 0; ``max_complexity=INF``: never give up before
+    ``max_time``; ``None``: ltamp's default, 20) bound the stream complexity as in
+    PDDLStream. Plan steps carry the Python values of their arguments. PDDLStream's other
+    options (:data:`IGNORED_OPTIONS`: ``planner``, ``max_skeletons``, ``effort_weight``, ...)
+    are accepted and have no effect; any other keyword is refused. Bad input raises
     :class:`~ltamp_cli.errors.InputError` (one line, ``file:line:col`` for PDDL).
     """
+    unknown = sorted(set(pddlstream_options) - IGNORED_OPTIONS)
+    if unknown:
+        raise InputError(f"solve(): unknown option {unknown[0]!r} (neither ltamp's nor "
+                         "PDDLStream's; see docs/porting-from-pddlstream.md)")
     if algorithm not in ALGORITHMS:
         raise InputError(f"unknown algorithm {algorithm!r}: expected one of "
                          f"{', '.join(ALGORITHMS)}")
+    complexity = {"initial_complexity": _complexity("initial_complexity", initial_complexity)}
+    if max_complexity is not None:
+        complexity["max_complexity"] = _complexity("max_complexity", max_complexity,
+                                                   infinite=True)
     planning_problem = to_planning_problem(problem, stream_info)
     skeleton = skeleton_patterns(constraints, planning_problem)
     config = PlannerConfig(algorithm=algorithm, max_time=max_time, seed=seed, search=search,
-                           unit_costs=unit_costs, success_cost=success_cost, skeleton=skeleton)
+                           unit_costs=unit_costs, success_cost=success_cost, skeleton=skeleton,
+                           **complexity)
     result = plan(planning_problem, config)
+    solution = to_solution(result, unit_costs or not has_action_costs(planning_problem.domain))
     if verbose:
         print(f"ltamp {algorithm}: {result.status} in {result.time_s:.3f} s"
-              + (f", cost {result.cost:g}" if result.solved else ""))
-    return to_solution(result, unit_costs or not has_action_costs(planning_problem.domain))
+              + (f", cost {solution.cost:g}" if result.solved else ""))
+    return solution
+
+
+def _complexity(option: str, value: Any, infinite: bool = False) -> Any:
+    """A complexity bound: an integer >= 0 (``inf`` too when ``infinite``)."""
+    if infinite and isinstance(value, float) and value == math.inf:
+        return value
+    if isinstance(value, float) and value.is_integer() and value >= 0:
+        return int(value)
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise InputError(f"{option}: expected an integer >= 0"
+                         + (" or INF" if infinite else "") + f", got {value!r:.40}")
+    return value
 
 
 def has_action_costs(domain: Domain) -> bool:
@@ -111,10 +149,14 @@ def skeleton_patterns(constraints: PlanConstraints | None, problem: PlanningProb
 
 
 def solve_from_pddl(domain_pddl: str, problem_pddl: str, unit_costs: bool = False,
-                    max_time: float = math.inf, **ignored: Any) -> tuple[list[Action] | None,
-                                                                          float]:
+                    max_time: float = math.inf, **pddlstream_options: Any
+                    ) -> tuple[list[Action] | None, float]:
     """Plan for a PDDL domain and problem (no streams): ``(plan, cost)`` as PDDLStream's
-    ``solve_from_pddl``; arguments are object names."""
+    ``solve_from_pddl``; arguments are object names. PDDLStream's search options
+    (:data:`IGNORED_OPTIONS`) have no effect; any other keyword is refused."""
+    unknown = sorted(set(pddlstream_options) - IGNORED_OPTIONS)
+    if unknown:
+        raise InputError(f"solve_from_pddl(): unknown option {unknown[0]!r}")
     domain = parse_domain(domain_pddl, getattr(domain_pddl, "path", "domain.pddl"))
     check_domain(domain)
     parsed = parse_problem(problem_pddl, getattr(problem_pddl, "path", "problem.pddl"))

@@ -7,6 +7,7 @@ Each :class:`ObjectTable` is private to one planner run.
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Hashable
 from typing import Any
 
@@ -14,15 +15,24 @@ import numpy as np
 
 
 def value_key(value: Any) -> Hashable:
-    """What identifies a value as an object: contents for arrays and containers, identity
-    for other unhashable values."""
+    """What identifies a value as an object: contents for arrays and containers, the value
+    for numbers (any type: ``1 == 1.0 == np.int64(1)`` is one object, as in PDDLStream),
+    identity for other unhashable values."""
     if isinstance(value, np.ndarray):
         return ("ndarray", value.dtype.str, value.shape, value.tobytes())
     if isinstance(value, list | tuple):
         return (type(value).__name__, tuple(value_key(v) for v in value))
     if isinstance(value, dict):
         return ("dict", tuple(sorted((str(k), value_key(v)) for k, v in value.items())))
-    if isinstance(value, float | int | str | bool | type(None)):
+    if isinstance(value, numbers.Number | np.bool_):
+        # as PDDLStream (objects keyed by hash and ==): np.float64(2.0), 2.0, 2 are one
+        # object; a stream's numpy output then matches the goal's Python literal
+        try:
+            hash(value)
+        except TypeError:
+            return ("id", id(value))
+        return ("number", value)
+    if isinstance(value, str | type(None)):
         return (type(value).__name__, value)
     try:
         hash(value)

@@ -281,6 +281,13 @@ def _parallel(job: CollectJob, indices: list[int], workers: int) -> Iterator[Tri
                 process.terminate()
         for process in processes:
             process.join(timeout=5)
+        # Indices not yet taken may still sit in the feeder thread, blocked writing to a
+        # full pipe that no worker reads any more: without this, the interpreter waits for
+        # that thread at exit and an interrupted ``collect`` never ends. They are not data
+        # (a resume queues them again).
+        for channel in (tasks, results):
+            channel.cancel_join_thread()
+            channel.close()
 
 
 def collect(

@@ -152,8 +152,12 @@ class TrialDataset:
             return
         with self.path.open("rb") as handle:
             lines = handle.read().split(b"\n")
-        # After the final newline split() yields b"" — any other last piece is torn.
-        complete, _torn = lines[:-1], lines[-1]
+        # After the final newline split() yields b"". Any other last piece was torn by a
+        # crash while writing, unless it is one whole record (a file written by another
+        # tool, or saved by an editor, without a final newline).
+        complete, tail = lines[:-1], lines[-1]
+        if whole_record(tail) is not None:
+            complete.append(tail)
         for number, raw in enumerate(complete, start=1):
             if not raw.strip():
                 continue
@@ -200,12 +204,30 @@ class TrialDataset:
             if handle.read(1) == b"\n":
                 return
             data = handle.seek(0) or handle.read()
-            handle.truncate(data.rfind(b"\n") + 1)
+            end = data.rfind(b"\n") + 1
+            if whole_record(data[end:]) is not None:
+                handle.seek(0, os.SEEK_END)
+                handle.write(b"\n")  # a whole record: end it, do not cut it
+            else:
+                handle.truncate(end)
             handle.flush()
             os.fsync(handle.fileno())
 
     def done_indices(self) -> set[int]:
         return {record.index for record in self.iter_records() if record.index >= 0}
+
+
+def whole_record(raw: bytes) -> TrialRecord | None:
+    """The record a line holds if it is one whole, valid trial record, else ``None``."""
+    if not raw.strip():
+        return None
+    try:
+        data = json.loads(raw)
+        if not isinstance(data, dict) or any(name not in data for name in _REQUIRED_FIELDS):
+            return None
+        return TrialRecord.from_dict(data)
+    except (ValueError, KeyError, TypeError, RecursionError):
+        return None
 
 
 def without_duplicates(records: Sequence[TrialRecord]) -> tuple[list[TrialRecord], int]:
@@ -229,8 +251,10 @@ MAX_SCORE_MAGNITUDE = 1e100
 def check_against_spec(records: Sequence[TrialRecord], spec: SkillSpec) -> None:
     """Raise ``ValueError`` naming the first record of ``spec``'s skill whose context or
     control has the wrong length or lies far outside the skill's box (more than one box
-    width beyond a bound), whose outcome has another length than the skill declares, or
-    whose score's magnitude exceeds :data:`MAX_SCORE_MAGNITUDE`:
+    width beyond a bound), whose outcome has another length than the skill declares, lies
+    far outside its range or does not give the record's score through the skill's declared
+    score function (valid records), or whose score's magnitude exceeds
+    :data:`MAX_SCORE_MAGNITUDE`:
     such values make the GP's arithmetic overflow (NaN everywhere). Records of other skills
     are not checked."""
     for record in records:
@@ -252,6 +276,17 @@ def check_against_spec(records: Sequence[TrialRecord], spec: SkillSpec) -> None:
                 and len(record.outcome) != spec.outcome.space.dim):
             raise ValueError(f"{where}: outcome has {len(record.outcome)} value(s), skill "
                              f"{spec.name!r} declares {spec.outcome.space.dim}")
+        if record.valid and record.outcome is not None and spec.outcome is not None:
+            # as a live trial's: within range, and giving the record's score through the
+            # declared function (else the GP learns the score and contradicting relabels)
+            from ltamp_cli.backends.sanity import checked_outcome
+
+            try:
+                checked_outcome(spec, np.asarray(record.context, dtype=float),
+                                np.asarray(record.control, dtype=float), record.score,
+                                record.outcome)
+            except ValueError as error:
+                raise ValueError(f"{where}: {error}") from None
         if math.isfinite(record.score) and abs(record.score) > MAX_SCORE_MAGNITUDE:
             raise ValueError(f"{where}: score {record.score:g} is beyond ±{MAX_SCORE_MAGNITUDE:g}")
 

@@ -6,6 +6,7 @@ Every error is an :class:`~ltamp_cli.errors.InputError` at ``file:line:column``.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from ltamp_cli.errors import InputError, SourceLocation
@@ -44,6 +45,7 @@ from ltamp_cli.planner.pddl.syntax import (
     WhenEffect,
     is_variable,
 )
+from ltamp_cli.textfile import MAX_PDDL_BYTES, read_limited_text
 
 
 def _expect_list(expr: SExpr, what: str) -> SList:
@@ -190,10 +192,21 @@ def parse_formula(expr: SExpr, what: str = "a formula") -> Formula:
     return parse_atom(node, what)
 
 
+def _cost_number(symbol: Symbol, what: str) -> float:
+    """A cost written as a number: finite and >= 0 (``ValueError`` if not a number at all).
+    ``float`` also reads ``nan``, ``inf`` and ``-5``, and overflows ``1e400`` to ``inf``:
+    the search then answered "no plan" without a word."""
+    value = float(symbol.text)
+    if not math.isfinite(value) or value < 0:
+        raise InputError(f"{what} must be a finite number >= 0, found {symbol.text[:40]!r}",
+                         symbol.location)
+    return value
+
+
 def _parse_cost_expression(expr: SExpr) -> CostExpression:
     if isinstance(expr, Symbol):
         try:
-            return Number(float(expr.text))
+            return Number(_cost_number(expr, "an action cost"))
         except ValueError:
             raise InputError(
                 f"expected a number or a function term as a cost, found {expr.text!r}",
@@ -338,7 +351,7 @@ def parse_init_item(expr: SExpr) -> Atom | FunctionValue:
         if not isinstance(term, FunctionTerm) or not isinstance(value_expr, Symbol):
             raise InputError("expected (= (FUNCTION args) NUMBER)", node.location)
         try:
-            value = float(value_expr.text)
+            value = _cost_number(value_expr, "a function value (functions give action costs)")
         except ValueError:
             raise InputError(f"expected a number, found {value_expr.text!r}",
                              value_expr.location) from None
@@ -522,9 +535,6 @@ def parse_stream_file(text: str, path: str | Path) -> StreamFile:
 
 
 def read_text(path: str | Path, what: str) -> str:
-    try:
-        return Path(path).read_text()
-    except FileNotFoundError:
-        raise InputError(f"{what} not found", SourceLocation(str(path))) from None
-    except (OSError, UnicodeDecodeError) as error:
-        raise InputError(f"cannot read {what}: {error}", SourceLocation(str(path))) from None
+    """A PDDL file's text (at most :data:`~ltamp_cli.textfile.MAX_PDDL_BYTES`: ``/dev/zero``
+    or a FIFO is refused instead of read forever)."""
+    return read_limited_text(path, MAX_PDDL_BYTES, what)
