@@ -92,9 +92,11 @@ def lock_problem(folder: Path, seed: int) -> PDDLProblem:
 @pytest.mark.parametrize("seed", [0, 1])
 def test_adaptive_reaches_the_deep_plan(tmp_path: Path, seed: int) -> None:
     """The plan shifts through three sampled states whose positions all pass the threshold
-    (checked on the returned values, not on names)."""
+    (checked on the returned values, not on names). It solves in 0.1-0.3 s CPU; the wall
+    limit is generous because adaptive's search/sample balance compares measured CPU times,
+    so a loaded machine can lengthen its course (a 10 s limit failed once at load ~20)."""
     start = time.process_time()
-    solution = solve(lock_problem(tmp_path, seed), algorithm="adaptive", max_time=10.0,
+    solution = solve(lock_problem(tmp_path, seed), algorithm="adaptive", max_time=60.0,
                      verbose=False)
     assert solution.plan is not None, f"no plan after {time.process_time() - start:.1f} s CPU"
     shifts = [step for step in solution.plan if step.name == "shift"]
