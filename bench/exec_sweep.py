@@ -68,17 +68,16 @@ class Cell:
         return directory / f"{self.suite}_{self.problem}_{self.engine}.jsonl"
 
 
-#: Cheapest first: all 2D, then the 3D problems on SAPIEN (seconds per execution) and the
-#: PyBullet rows not yet measured on the current code, 3D coffee last.
+#: Cheapest first: all 2D, then the 3D problems on SAPIEN (seconds per execution, coffee
+#: ~40 s), then PyBullet (its seeds mostly reused: ``REUSE``; unclog seeds 0-4 re-run at
+#: ~60 s CPU each, coffee ~250 s CPU per seed).
 CELLS: tuple[Cell, ...] = (
     *(Cell("kitchen2d", name, "box2d") for name in (
         "task1_push_off", "task2_pour_wall", "task3_holder_pour", "fill_and_serve", "coffee")),
     *(Cell("kitchen3d", name, "sapien") for name in (
-        "pour_blocked", "wash", "unclog", "push_to_reach")),
+        "pour_blocked", "wash", "unclog", "push_to_reach", "coffee")),
     *(Cell("kitchen3d", name, "pybullet") for name in (
-        "wash", "pour_blocked", "unclog", "push_to_reach")),
-    Cell("kitchen3d", "coffee", "sapien"),
-    Cell("kitchen3d", "coffee", "pybullet"),
+        "wash", "pour_blocked", "push_to_reach", "unclog", "coffee")),
 )
 
 #: Earlier runs (files in ``docs/results/exec3d``) whose rows stand for the current code:
