@@ -267,6 +267,12 @@ def cell_summary(cell: Cell, rows: dict[int, dict], seeds: tuple[int, ...]) -> d
     }
 
 
+def _seconds(value: float | None) -> str:
+    if value is None:
+        return "-"
+    return f"{value:.2f} s" if value < 1.0 else f"{value:.1f} s"
+
+
 def print_table(summaries: list[dict]) -> None:
     print("| problem | engine | planned | goal holds (Wilson 95 %) | plan CPU median | "
           "exec CPU median | failures |")
@@ -274,8 +280,7 @@ def print_table(summaries: list[dict]) -> None:
     for s in summaries:
         n = len(s["seeds"])
         low, high = s["goal_holds_wilson95"]
-        plan = "-" if s["plan_cpu_median_s"] is None else f"{s['plan_cpu_median_s']:.1f} s"
-        run = "-" if s["exec_cpu_median_s"] is None else f"{s['exec_cpu_median_s']:.1f} s"
+        plan, run = (_seconds(s["plan_cpu_median_s"]), _seconds(s["exec_cpu_median_s"]))
         fails = "; ".join(f"seed {f['seed']}: {f['why']}" for f in s["failures"]) or "none"
         print(f"| {s['suite'][-2:]} {s['problem']} | {s['engine']} | {s['planned']}/{n} | "
               f"{s['goal_holds']}/{n} ({low:.2f}-{high:.2f}) | {plan} | {run} | {fails} |")
