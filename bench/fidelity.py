@@ -35,8 +35,9 @@ arguments reuses the trials already there, so a long run can be stopped and resu
 key of a 3D engine's trial carries that engine's physics version for the skill
 (:func:`setting_version`: PyBullet's per-skill :func:`physics_version`, e.g. ``pybullet@v1``
 for pour and scoop and ``pybullet@v1.1`` for the push since its world's 2 cm contact breaking
-threshold; SAPIEN's ``sapien@v2``), so trials simulated before an engine change are never
-reused, and a change to one skill's world leaves the other skills' cached trials valid.
+threshold; SAPIEN's per-skill version, ``sapien@v3``, and ``sapien@v3.1`` for the scoop since
+its placed spoon), so trials simulated before an engine change are never reused, and a
+change to one skill's world leaves the other skills' cached trials valid.
 ``--settings`` runs only the named settings' trials (the others are read from the cache
 when present): a slow engine's side of a row can start before the other engine is final.
 The summary is written to ``--out`` (default ``bench/results/fidelity.json``).
@@ -90,7 +91,7 @@ from ltamp_cli.backends.box2d.skills.pour import REFERENCE, PourConfig
 from ltamp_cli.backends.box2d.skills.scoop import reference_config as reference_scoop
 from ltamp_cli.backends.pybullet.skills.robot import ROBOT_SETUP_VERSIONS
 from ltamp_cli.backends.pybullet.world import physics_version as pybullet_physics_version
-from ltamp_cli.backends.sapien.world import PHYSICS_VERSION as SAPIEN_PHYSICS_VERSION
+from ltamp_cli.backends.sapien.world import physics_version as sapien_physics_version
 
 RESULTS_DIR = Path(__file__).resolve().parent / "results"
 SKILLS_3D = ("pour", "scoop", "push", "stir")
@@ -147,13 +148,13 @@ SETTING_ENGINES: dict[str, str] = {
 
 def setting_version(setting: str, skill: str) -> str | None:
     """The physics version of ``setting``'s ``skill`` trials (part of their cache keys):
-    PyBullet's per-skill version (``"1"``; the push ``"1.1"``), SAPIEN's, or ``None`` for
-    an unversioned (Box2D) setting."""
+    PyBullet's per-skill version (``"1"``; the push ``"1.1"``), SAPIEN's per-skill version
+    (``"3"``; the scoop ``"3.1"``), or ``None`` for an unversioned (Box2D) setting."""
     engine = SETTING_ENGINES.get(setting)
     if engine == "pybullet":
         return pybullet_physics_version(skill)
     if engine == "sapien":
-        return str(SAPIEN_PHYSICS_VERSION)
+        return sapien_physics_version(skill)
     return None
 
 
@@ -206,6 +207,34 @@ def draw_inputs(fast: SkillBackend, reference: SkillBackend, skill: str, n: int,
                     and reference.is_valid(skill, context, control[None])[0]):
                 inputs.append((context, control))
                 break
+    return inputs
+
+
+def stored_inputs(path: Path | None, fast: SkillBackend, reference: SkillBackend, skill: str,
+                  n: int, seed: int, fast_name: str, reference_name: str
+                  ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """:func:`draw_inputs`, kept in the JSON file ``path`` (``None``: always drawn).
+
+    Drawing costs a pre-check per candidate control (~40 ms on PyBullet; ~0.3 s per input),
+    so several shards of a long row would each redraw for a minute or more. The file holds
+    the skill, seed, both settings and the inputs ``[context..., control...]``; the first
+    ``n`` of a longer list are the same as ``n`` drawn (the draws are sequential), so a file
+    with at least ``n`` inputs is reused, any other is redrawn and rewritten."""
+    if path is not None and path.exists():
+        stored = json.loads(path.read_text())
+        if (stored["skill"] == skill and stored["seed"] == seed
+                and stored["settings"] == [fast_name, reference_name]
+                and len(stored["inputs"]) >= n):
+            spec = fast.skills()[skill]
+            rows = np.asarray(stored["inputs"][:n], dtype=float)
+            return [(row[:spec.context.dim], row[spec.context.dim:]) for row in rows]
+    inputs = draw_inputs(fast, reference, skill, n, seed)
+    if path is not None:
+        partial = path.with_suffix(".tmp")
+        partial.write_text(json.dumps({
+            "skill": skill, "seed": seed, "settings": [fast_name, reference_name],
+            "inputs": [[*context.tolist(), *control.tolist()] for context, control in inputs]}))
+        partial.replace(path)
     return inputs
 
 
@@ -275,17 +304,26 @@ def backends(names: tuple[str, ...]) -> Iterator[dict[str, SkillBackend]]:
 
 def run_row(row: Row, n: int, seed: int, cache_path: Path, cache: dict[str, dict],
             progress: bool, shard: tuple[int, int] = (0, 1),
-            only: frozenset[str] | None = None) -> dict:
+            only: frozenset[str] | None = None, first: int = 0,
+            inputs_path: Path | None = None) -> dict:
     """Run (or reuse from the cache) the row's trials and summarise the agreement.
+
+    ``first``: only inputs ``i >= first`` of the ``n`` drawn are run and summarised (the
+    inputs and trial seeds are the same as in a run from 0, so ``--trials 400
+    --first-input 200`` validates on the 200 inputs after a 200-input row's). ``inputs_path``:
+    keep the drawn inputs there (:func:`stored_inputs`).
 
     ``shard = (k, m)`` runs only inputs ``i`` with ``i % m == k`` (several processes can
     share a long row through one cache); the others count only once cached. ``only``: run
     the trials of these settings only (``None``: all); the others count only once cached."""
     with backends((row.fast, row.reference)) as built:
         fast, reference = built[row.fast], built[row.reference]
-        inputs = draw_inputs(fast, reference, row.skill, n, seed)
+        inputs = stored_inputs(inputs_path, fast, reference, row.skill, n, seed, row.fast,
+                               row.reference)
         pairs = []
         for index, (context, control) in enumerate(inputs):
+            if index < first:
+                continue
             trial_seed = seed * 100_000 + index
             pair = []
             for setting, backend in ((row.fast, fast), (row.reference, reference)):
@@ -392,6 +430,12 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--cache", type=Path, default=RESULTS_DIR / "fidelity_trials.jsonl")
     parser.add_argument("--out", type=Path, default=RESULTS_DIR / "fidelity.json")
     parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    parser.add_argument("--first-input", type=int, default=0, metavar="I",
+                        help="run and summarise only inputs I..trials-1 (same draws and "
+                             "trial seeds as from 0: fresh inputs after an earlier row's)")
+    parser.add_argument("--inputs", type=Path, default=None, metavar="JSON",
+                        help="keep the drawn inputs in this file (one row only) and reuse "
+                             "them: shards of a long row then draw once")
     parser.add_argument("--shard", default="0/1", metavar="K/M",
                         help="run only inputs i with i %% M == K (others: from the cache)")
     parser.add_argument("--settings", nargs="*", choices=sorted(SETTINGS), metavar="SETTING",
@@ -400,6 +444,10 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     args = parser.parse_args(argv)
     if args.trials < 1:
         parser.error("--trials must be at least 1")
+    if not 0 <= args.first_input < args.trials:
+        parser.error("--first-input must be in [0, --trials)")
+    if args.inputs is not None and len(args.rows) != 1:
+        parser.error("--inputs keeps one row's inputs: name exactly one --rows")
     if not 0.0 < args.target <= 1.0:
         parser.error("--target must be in (0, 1]")
     return args
@@ -415,10 +463,11 @@ def main(argv: list[str] | None = None) -> int:
     k, m = (int(v) for v in args.shard.split("/"))
     only = frozenset(args.settings) if args.settings is not None else None
     summaries = [run_row(row, args.trials, args.seed, args.cache, cache, not args.quiet, (k, m),
-                         only)
+                         only, args.first_input, args.inputs)
                  for row in chosen]
     print_table(summaries, args.target)
-    report = {"trials": args.trials, "seed": args.seed, "target": args.target,
+    report = {"trials": args.trials, "first_input": args.first_input, "seed": args.seed,
+              "target": args.target,
               "machine": platform.platform(), "rows": summaries}
     partial = args.out.with_suffix(".json.tmp")
     partial.write_text(json.dumps(report, indent=1))

@@ -107,17 +107,17 @@ def engine_agrees(row: Mapping[str, Any], bound: float = AGREEMENT_LOWER_BOUND) 
 
 
 def physics_version(backend: str, skill: str) -> str:
-    """``<engine>@v<version>`` of ``skill``'s trials on ``backend`` (PyBullet's per-skill
-    physics version, SAPIEN's world version); ``<backend>@<ltamp version>`` for an engine
-    without one (Box2D, synthetic)."""
+    """``<engine>@v<version>`` of ``skill``'s trials on ``backend`` (PyBullet's or SAPIEN's
+    per-skill physics version); ``<backend>@<ltamp version>`` for an engine without one
+    (Box2D, synthetic)."""
     if backend == "pybullet":
         from ltamp_cli.backends.pybullet.world import physics_version as pybullet_version
 
         return f"pybullet@v{pybullet_version(skill)}"
     if backend == "sapien":
-        from ltamp_cli.backends.sapien.world import PHYSICS_VERSION
+        from ltamp_cli.backends.sapien.world import physics_version as sapien_version
 
-        return f"sapien@v{PHYSICS_VERSION}"
+        return f"sapien@v{sapien_version(skill)}"
     return f"{backend}@{importlib.metadata.version('ltamp')}"
 
 

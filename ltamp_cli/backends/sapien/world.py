@@ -14,10 +14,10 @@ in ``(x, y, z, w)`` order; SAPIEN's :class:`sapien.Pose` stores ``(w, x, y, z)``
 from __future__ import annotations
 
 import warnings
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
-from types import TracebackType
+from types import MappingProxyType, TracebackType
 from typing import Any
 
 import numpy as np
@@ -34,6 +34,19 @@ GRAVITY_M_S2 = 9.81
 #: 1: as first shipped; 2: beads' rolling-resistance emulation, bead friction scale 0.7;
 #: 3: the scoop's spoon lets beads rest ``spoon_rest_offset`` inside it (as in PyBullet).
 PHYSICS_VERSION = 3
+#: Per-skill revisions on top of :data:`PHYSICS_VERSION`, bumped when a change touches one
+#: skill's world only (so the other skills' cached trials and pools stay valid). ``scoop``
+#: 1: the scoop's spoon is a placed body (``SapienWorldConfig.spoon_tool``), issue #21.
+SKILL_PHYSICS_REVISIONS: Mapping[str, int] = MappingProxyType({"scoop": 1})
+
+
+def physics_version(skill: str) -> str:
+    """The physics version of ``skill``'s SAPIEN trials, as cache keys and pool records
+    carry it: ``"<PHYSICS_VERSION>"``, or ``"<PHYSICS_VERSION>.<revision>"`` for a skill with
+    a revision in :data:`SKILL_PHYSICS_REVISIONS` (scoop: ``"3.1"``; pour, push, stir:
+    ``"3"``, so their cached trials and the pour pool stay valid)."""
+    revision = SKILL_PHYSICS_REVISIONS.get(skill, 0)
+    return f"{PHYSICS_VERSION}" if revision == 0 else f"{PHYSICS_VERSION}.{revision}"
 
 
 @dataclass(frozen=True)
@@ -91,6 +104,8 @@ class SapienWorldConfig:
     bead_friction_scale: float = 0.7
     rolling_match_speed: float | None = 0.05
     spoon_rest_offset: float = -0.002
+    spoon_tool: str = "placed"
+    placed_spoon_rest_offset: float = -0.0025
 
     def __post_init__(self) -> None:
         if not self.time_step > 0:
@@ -103,6 +118,10 @@ class SapienWorldConfig:
             raise ValueError("bead_friction_scale must be positive")
         if not -0.01 < self.spoon_rest_offset <= 0:
             raise ValueError("spoon_rest_offset must be in (-0.01, 0] m")
+        if self.spoon_tool not in ("kinematic", "placed"):
+            raise ValueError("spoon_tool must be 'kinematic' or 'placed'")
+        if not -0.01 < self.placed_spoon_rest_offset <= 0:
+            raise ValueError("placed_spoon_rest_offset must be in (-0.01, 0] m")
         if self.rolling_match_speed is not None and not self.rolling_match_speed > 0:
             raise ValueError("rolling_match_speed must be positive (or None: no emulation)")
 
