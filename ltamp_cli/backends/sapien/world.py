@@ -33,6 +33,7 @@ GRAVITY_M_S2 = 9.81
 #: change a trial's outcome; benchmark caches key their trials by it (``bench/fidelity.py``).
 #: 1: as first shipped; 2: beads' rolling-resistance emulation, bead friction scale 0.7;
 #: 3: the scoop's spoon lets beads rest ``spoon_rest_offset`` inside it (as in PyBullet).
+#: Later changes to one skill only are per-skill revisions (:func:`physics_version`).
 PHYSICS_VERSION = 3
 #: Per-skill revisions on top of :data:`PHYSICS_VERSION`, bumped when a change touches one
 #: skill's world only (so the other skills' cached trials and pools stay valid). ``scoop``
@@ -93,6 +94,27 @@ class SapienWorldConfig:
     -2 mm, also the scooped spoonful's measured sinking, is kept (capacity ratio 0.83).
     Inputs 60-199 are held out. A constant offset cannot follow Bullet's load-dependent
     sinking (deeper under a heavier pile), so capacities stay ~17 % below PyBullet's.
+    That offset now applies to a kinematic spoon only (the planner's executor carries its
+    tools kinematically); the scoop trials use ``spoon_tool`` (physics version 3.1).
+
+    ``spoon_tool`` (``"placed"`` or ``"kinematic"``) is how a scoop trial moves its spoon.
+    ``"placed"`` (issue #21) is PyBullet's own mechanism: a dynamic body with the spoon's
+    mass, put at its path pose with the path's velocity before every step
+    (:meth:`~.bodies.SapienBody.place`), so the solver's push-out of a load goes partly into
+    the spoon and is discarded by the next placement. Beads then sink under load as in
+    Bullet: a single bead 0.2 mm, the lowest bead of a 50-bead pile ~6 mm
+    (``tests/sapien/test_sapien_world.py``), where the kinematic spoon holds both at its
+    surface. ``placed_spoon_rest_offset`` (m, ≤ 0) adds a constant rest offset to the placed
+    spoon's shapes. Diagnosis (``bench/scoop_engine_diag.py`` on the 9 disagreements of the
+    c6ce341-bed engine row, all SAPIEN-only successes): the spoonful lifted out was about
+    the same in both engines (SAPIEN − PyBullet beads: +2, 0, +5, −1, +4, +2, 0), the
+    measured capacity was not (SAPIEN 15/18, 19/25, 14/15, 27/42, 10/12, 26/33, 17/20 of
+    PyBullet's), so SAPIEN's fraction of capacity crossed τ = 0.7 where PyBullet's did not.
+    Fitted on inputs 0-59 only, target: the capacity (``bench/scoop_engine_diag.py
+    --capacity``, ``docs/results/fidelity/scoop_capacity_fit.jsonl``), mean SAPIEN/PyBullet
+    ratio: kinematic −2 mm (v3) 0.827; placed 0, −1, −1.5, −2, −2.5 mm: 0.735, 0.859,
+    0.908, 0.946, 0.981 (bigger spoons, heavier columns, still a few % low). −2.5 mm, the
+    closest to 1, is kept. Inputs 60-199 and the fresh inputs 200-399 are held out.
     """
 
     time_step: float = 1.0 / 240.0
