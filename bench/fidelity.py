@@ -334,6 +334,10 @@ def run_row(row: Row, n: int, seed: int, cache_path: Path, cache: dict[str, dict
                     if key not in cache:
                         continue  # the other setting may still run
                 if key not in cache:
+                    # Another process on the same cache (an overlapping shard) may have run
+                    # it since: reading the cache costs milliseconds, a trial seconds.
+                    cache.update(load_cache(cache_path))
+                if key not in cache:
                     record = {"key": key, "setting": setting, "skill": row.skill,
                               "seed": trial_seed, "context": context.tolist(),
                               "control": control.tolist(),

@@ -106,10 +106,13 @@ class SapienWorldConfig:
     (``tests/sapien/test_sapien_world.py``), where the kinematic spoon holds both at its
     surface. ``placed_spoon_rest_offset`` (m, ≤ 0) adds a constant rest offset to the placed
     spoon's shapes. Diagnosis (``bench/scoop_engine_diag.py`` on the 9 disagreements of the
-    c6ce341-bed engine row, all SAPIEN-only successes): the spoonful lifted out was about
-    the same in both engines (SAPIEN − PyBullet beads: +2, 0, +5, −1, +4, +2, 0), the
-    measured capacity was not (SAPIEN 15/18, 19/25, 14/15, 27/42, 10/12, 26/33, 17/20 of
-    PyBullet's), so SAPIEN's fraction of capacity crossed τ = 0.7 where PyBullet's did not.
+    c6ce341-bed engine row, all SAPIEN-only successes, ``docs/results/fidelity/
+    scoop_diag_v3.jsonl``): no bead was lost in either engine; SAPIEN's measured capacity
+    was lower on all 9 (15/18, 19/25, 14/15, 27/42, 10/12, 6/11, 13/17, 26/33, 17/20 of
+    PyBullet's), the spoonful lifted out about the same or a little larger (SAPIEN −
+    PyBullet beads +2, 0, +5, −1, +4, +3, +4, +2, 0: PyBullet spills a little more during
+    the lift), so SAPIEN's fraction of capacity crossed τ = 0.7 where PyBullet's did not.
+    With PyBullet's capacity, SAPIEN's spoonfuls would have agreed on 8 of the 9 (not 39).
     Fitted on inputs 0-59 only, target: the capacity (``bench/scoop_engine_diag.py
     --capacity``, ``docs/results/fidelity/scoop_capacity_fit.jsonl``), mean SAPIEN/PyBullet
     ratio: kinematic −2 mm (v3) 0.827; placed 0, −1, −1.5, −2, −2.5 mm: 0.735, 0.859,
