@@ -19,6 +19,8 @@ Rows (``--rows``, default all):
 * ``2d-scoop-reference``: Box2D scoop as shipped (grains of radius 0.1) vs the reference
   implementation's grains (radius 0.05, four times as many for the same bed).
 * ``3d-<skill>-engine`` (pour, scoop, push, stir): PyBullet vs SAPIEN, both as shipped.
+* ``3d-scoop-placed-spoon``: PyBullet vs SAPIEN with the scoop's spoon as a placed dynamic
+  body (``SapienWorldConfig.spoon_tool = "placed"``, issue #21; not shipped).
 * ``3d-<skill>-solver``: PyBullet with 5 solver iterations (shipped) vs 50 (the reference
   implementation's).
 * ``3d-<skill>-robot`` (pour, scoop, push, stir): PyBullet with the free-floating tool
@@ -35,9 +37,9 @@ arguments reuses the trials already there, so a long run can be stopped and resu
 key of a 3D engine's trial carries that engine's physics version for the skill
 (:func:`setting_version`: PyBullet's per-skill :func:`physics_version`, e.g. ``pybullet@v1``
 for pour and scoop and ``pybullet@v1.1`` for the push since its world's 2 cm contact breaking
-threshold; SAPIEN's per-skill version, ``sapien@v3``, and ``sapien@v3.1`` for the scoop since
-its placed spoon), so trials simulated before an engine change are never reused, and a
-change to one skill's world leaves the other skills' cached trials valid.
+threshold; SAPIEN's per-skill version, ``sapien@v3``), so trials simulated before an engine
+change are never reused, and a change to one skill's world leaves the other skills' cached
+trials valid.
 ``--settings`` runs only the named settings' trials (the others are read from the cache
 when present): a slow engine's side of a row can start before the other engine is final.
 The summary is written to ``--out`` (default ``bench/results/fidelity.json``).
@@ -111,6 +113,14 @@ def _box2d(**pour_changes: float) -> SkillBackend:
     return backend
 
 
+def _sapien_placed_spoon() -> SkillBackend:
+    """The SAPIEN backend whose scoop spoon is a placed dynamic body (issue #21's option,
+    ``SapienWorldConfig.spoon_tool = "placed"``, rest offset as fitted)."""
+    backend = load_backend("sapien")
+    backend.config = replace(backend.config, spoon_tool="placed")  # type: ignore[attr-defined]
+    return backend
+
+
 def _box2d_reference_scoop() -> SkillBackend:
     """The Box2D backend with the reference implementation's scoop grains."""
     backend = Kitchen2DBackend()
@@ -131,6 +141,7 @@ SETTINGS: dict[str, Callable[[], SkillBackend]] = {
         "pybullet", solver_iterations=REFERENCE_SOLVER_ITERATIONS
     ),
     "sapien": lambda: load_backend("sapien"),
+    "sapien-placed-spoon": _sapien_placed_spoon,
     "pybullet-panda": lambda: load_backend("pybullet", robot="panda"),
 }
 
@@ -143,13 +154,14 @@ SETTING_ENGINES: dict[str, str] = {
     "pybullet-solver-50": "pybullet",
     "pybullet-panda": "pybullet",
     "sapien": "sapien",
+    "sapien-placed-spoon": "sapien",
 }
 
 
 def setting_version(setting: str, skill: str) -> str | None:
     """The physics version of ``setting``'s ``skill`` trials (part of their cache keys):
     PyBullet's per-skill version (``"1"``; the push ``"1.1"``), SAPIEN's per-skill version
-    (``"3"``; the scoop ``"3.1"``), or ``None`` for an unversioned (Box2D) setting."""
+    (``"3"``), or ``None`` for an unversioned (Box2D) setting."""
     engine = SETTING_ENGINES.get(setting)
     if engine == "pybullet":
         return pybullet_physics_version(skill)
@@ -176,6 +188,7 @@ ROWS: tuple[Row, ...] = (
     *(Row(f"3d-{skill}-engine", skill, "pybullet", "sapien") for skill in SKILLS_3D),
     *(Row(f"3d-{skill}-solver", skill, "pybullet", "pybullet-solver-50") for skill in SKILLS_3D),
     *(Row(f"3d-{skill}-robot", skill, "pybullet", "pybullet-panda") for skill in SKILLS_3D),
+    Row("3d-scoop-placed-spoon", "scoop", "pybullet", "sapien-placed-spoon"),
 )
 
 

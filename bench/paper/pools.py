@@ -58,7 +58,8 @@ ENGINE_PACKAGES = {"pybullet": "pybullet", "sapien": "sapien"}
 #: experiments' default, ``"backend"``, is PyBullet). SAPIEN where :func:`engine_agrees` on the
 #: committed engine row (``docs/results/fidelity/engine.json``; ``tests/bench`` checks that
 #: this table follows the rule): pour 197/200 agree, Wilson 0.957-0.995, at 0.21 vs 1.13 s
-#: CPU per trial. Scoop stays on PyBullet: see ``docs/results/full/README.md``.
+#: CPU per trial. Scoop stays on PyBullet: its row (SAPIEN scoop physics v3.1, validated on
+#: fresh inputs 200-399) has not reached the rule; see ``docs/results/full/README.md``.
 FULL_SKILL_BACKENDS: dict[str, str] = {"pour": "sapien", "scoop": "pybullet"}
 
 
