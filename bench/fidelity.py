@@ -223,6 +223,12 @@ def draw_inputs(fast: SkillBackend, reference: SkillBackend, skill: str, n: int,
     return inputs
 
 
+def _same_precheck(a: str, b: str) -> bool:
+    """Whether settings ``a`` and ``b`` accept the same controls: the same setting, or two
+    SAPIEN settings (every SAPIEN setting pre-checks with the shared Kitchen3D kinematics)."""
+    return a == b or SETTING_ENGINES.get(a) == SETTING_ENGINES.get(b) == "sapien"
+
+
 def stored_inputs(path: Path | None, fast: SkillBackend, reference: SkillBackend, skill: str,
                   n: int, seed: int, fast_name: str, reference_name: str
                   ) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -232,11 +238,13 @@ def stored_inputs(path: Path | None, fast: SkillBackend, reference: SkillBackend
     so several shards of a long row would each redraw for a minute or more. The file holds
     the skill, seed, both settings and the inputs ``[context..., control...]``; the first
     ``n`` of a longer list are the same as ``n`` drawn (the draws are sequential), so a file
-    with at least ``n`` inputs is reused, any other is redrawn and rewritten."""
+    with at least ``n`` inputs drawn with the same pre-checks (:func:`_same_precheck`) is
+    reused, any other is redrawn and rewritten."""
     if path is not None and path.exists():
         stored = json.loads(path.read_text())
         if (stored["skill"] == skill and stored["seed"] == seed
-                and stored["settings"] == [fast_name, reference_name]
+                and all(_same_precheck(a, b) for a, b in
+                        zip(stored["settings"], (fast_name, reference_name), strict=True))
                 and len(stored["inputs"]) >= n):
             spec = fast.skills()[skill]
             rows = np.asarray(stored["inputs"][:n], dtype=float)

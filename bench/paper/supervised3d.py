@@ -62,11 +62,12 @@ SIZES: dict[str, dict[str, Any]] = {
     "quick": {"backend": "pybullet", "skills": ["pour", "scoop"], "n_train": 70,
               "n_test": 30, "budget": 60, "eval_every": 20, "seeds": 1, "contexts": 3,
               "success_at": [60], "candidates": 1000},
-    # full: the paper's sizes (section 6.1, ltamp-paper.tex lines 1257-1258, 1271). F1: 10 shuffles of 400 training trials, 1,000
-    # test trials ("10 randomly shuffled train and test splits, each consisting of 400
-    # training examples and 1000 test examples"); success rate: the first 5 shuffles only,
-    # every 10 trials up to 200, on 45 contexts ("5 randomly shuffled sequences of 200
-    # training examples ... after every 10 examples by sampling 45 contexts").
+    # full: the paper's sizes (section 6.1, ltamp-paper.tex lines 1257-1258, 1271). F1: 10
+    # shuffles of 400 training and 1,000 test trials ("10 randomly shuffled train and test
+    # splits, each consisting of 400 training examples and 1000 test examples"); success
+    # rate: the first 5 shuffles only, every 10 trials up to 200, on 45 contexts ("5 randomly
+    # shuffled sequences of 200 training examples ... after every 10 examples by sampling 45
+    # contexts").
     "full": {"backend": "pybullet", "skill_backends": FULL_SKILL_BACKENDS,
              "skills": ["pour", "scoop"], "n_train": 9000,
              "n_test": 1000, "budget": 400, "eval_every": 10, "seeds": 10, "contexts": 45,

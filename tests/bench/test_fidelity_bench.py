@@ -107,3 +107,22 @@ def test_fresh_inputs_continue_the_same_draws_and_stored_inputs_are_reused(
     assert json.loads(out.read_text())["rows"][0]["trials"] == 2
     with pytest.raises(SystemExit):
         fidelity.main([*base, "--trials", "3", "--first-input", "3"])
+
+
+def test_the_placed_spoon_row_is_its_own_setting_with_its_own_keys() -> None:
+    pytest.importorskip("sapien")
+    backend = fidelity.SETTINGS["sapien-placed-spoon"]()
+    try:
+        assert backend.config.spoon_tool == "placed"  # type: ignore[attr-defined]
+    finally:
+        backend.close()
+    shipped = fidelity.SETTINGS["sapien"]()
+    try:
+        assert shipped.config.spoon_tool == "kinematic"  # type: ignore[attr-defined]
+    finally:
+        shipped.close()
+    rows = {row.name: row for row in fidelity.ROWS}
+    assert rows["3d-scoop-placed-spoon"].reference == "sapien-placed-spoon"
+    key = fidelity.trial_key("sapien-placed-spoon", "scoop", [0.2] * 4, [0.0] * 5, 7)
+    assert key.startswith("sapien-placed-spoon@v3|scoop|7|")
+    assert key != fidelity.trial_key("sapien", "scoop", [0.2] * 4, [0.0] * 5, 7)

@@ -274,8 +274,8 @@ def test_a_placed_body_is_placed_with_its_velocity_and_others_are_not() -> None:
 def test_the_placed_spoon_is_an_option_and_the_shipped_physics_is_unchanged() -> None:
     from ltamp_cli.backends.sapien.world import PHYSICS_VERSION, physics_version
 
-    # Issue #21's placed spoon agreed worse with PyBullet on fresh inputs: not shipped, so
-    # every skill's trials (and the committed SAPIEN pour pool) keep physics version 3.
+    # Issue #21's placed spoon agreed not clearly better with PyBullet on fresh inputs: not
+    # shipped, so every skill's trials (and the committed SAPIEN pour pool) keep physics version 3.
     assert SapienWorldConfig().spoon_tool == "kinematic"
     assert {physics_version(s) for s in ("pour", "scoop", "push", "stir")} == {
         f"{PHYSICS_VERSION}"}
