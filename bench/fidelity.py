@@ -19,6 +19,8 @@ Rows (``--rows``, default all):
 * ``2d-scoop-reference``: Box2D scoop as shipped (grains of radius 0.1) vs the reference
   implementation's grains (radius 0.05, four times as many for the same bed).
 * ``3d-<skill>-engine`` (pour, scoop, push, stir): PyBullet vs SAPIEN, both as shipped.
+* ``3d-scoop-placed-spoon``: PyBullet vs SAPIEN with the scoop's spoon as a placed dynamic
+  body (``SapienWorldConfig.spoon_tool = "placed"``, issue #21; not shipped).
 * ``3d-<skill>-solver``: PyBullet with 5 solver iterations (shipped) vs 50 (the reference
   implementation's).
 * ``3d-<skill>-robot`` (pour, scoop, push, stir): PyBullet with the free-floating tool
@@ -35,8 +37,9 @@ arguments reuses the trials already there, so a long run can be stopped and resu
 key of a 3D engine's trial carries that engine's physics version for the skill
 (:func:`setting_version`: PyBullet's per-skill :func:`physics_version`, e.g. ``pybullet@v1``
 for pour and scoop and ``pybullet@v1.1`` for the push since its world's 2 cm contact breaking
-threshold; SAPIEN's ``sapien@v2``), so trials simulated before an engine change are never
-reused, and a change to one skill's world leaves the other skills' cached trials valid.
+threshold; SAPIEN's per-skill version, ``sapien@v3``), so trials simulated before an engine
+change are never reused, and a change to one skill's world leaves the other skills' cached
+trials valid.
 ``--settings`` runs only the named settings' trials (the others are read from the cache
 when present): a slow engine's side of a row can start before the other engine is final.
 The summary is written to ``--out`` (default ``bench/results/fidelity.json``).
@@ -90,7 +93,7 @@ from ltamp_cli.backends.box2d.skills.pour import REFERENCE, PourConfig
 from ltamp_cli.backends.box2d.skills.scoop import reference_config as reference_scoop
 from ltamp_cli.backends.pybullet.skills.robot import ROBOT_SETUP_VERSIONS
 from ltamp_cli.backends.pybullet.world import physics_version as pybullet_physics_version
-from ltamp_cli.backends.sapien.world import PHYSICS_VERSION as SAPIEN_PHYSICS_VERSION
+from ltamp_cli.backends.sapien.world import physics_version as sapien_physics_version
 
 RESULTS_DIR = Path(__file__).resolve().parent / "results"
 SKILLS_3D = ("pour", "scoop", "push", "stir")
@@ -107,6 +110,14 @@ def _box2d(**pour_changes: float) -> SkillBackend:
     """The Box2D backend with its pour settings changed (none: as shipped)."""
     backend = Kitchen2DBackend()
     backend.config = replace(backend.config, pour=replace(PourConfig(), **pour_changes))
+    return backend
+
+
+def _sapien_placed_spoon() -> SkillBackend:
+    """The SAPIEN backend whose scoop spoon is a placed dynamic body (issue #21's option,
+    ``SapienWorldConfig.spoon_tool = "placed"``, rest offset as fitted)."""
+    backend = load_backend("sapien")
+    backend.config = replace(backend.config, spoon_tool="placed")  # type: ignore[attr-defined]
     return backend
 
 
@@ -130,6 +141,7 @@ SETTINGS: dict[str, Callable[[], SkillBackend]] = {
         "pybullet", solver_iterations=REFERENCE_SOLVER_ITERATIONS
     ),
     "sapien": lambda: load_backend("sapien"),
+    "sapien-placed-spoon": _sapien_placed_spoon,
     "pybullet-panda": lambda: load_backend("pybullet", robot="panda"),
 }
 
@@ -142,18 +154,19 @@ SETTING_ENGINES: dict[str, str] = {
     "pybullet-solver-50": "pybullet",
     "pybullet-panda": "pybullet",
     "sapien": "sapien",
+    "sapien-placed-spoon": "sapien",
 }
 
 
 def setting_version(setting: str, skill: str) -> str | None:
     """The physics version of ``setting``'s ``skill`` trials (part of their cache keys):
-    PyBullet's per-skill version (``"1"``; the push ``"1.1"``), SAPIEN's, or ``None`` for
-    an unversioned (Box2D) setting."""
+    PyBullet's per-skill version (``"1"``; the push ``"1.1"``), SAPIEN's per-skill version
+    (``"3"``), or ``None`` for an unversioned (Box2D) setting."""
     engine = SETTING_ENGINES.get(setting)
     if engine == "pybullet":
         return pybullet_physics_version(skill)
     if engine == "sapien":
-        return str(SAPIEN_PHYSICS_VERSION)
+        return sapien_physics_version(skill)
     return None
 
 
@@ -175,6 +188,7 @@ ROWS: tuple[Row, ...] = (
     *(Row(f"3d-{skill}-engine", skill, "pybullet", "sapien") for skill in SKILLS_3D),
     *(Row(f"3d-{skill}-solver", skill, "pybullet", "pybullet-solver-50") for skill in SKILLS_3D),
     *(Row(f"3d-{skill}-robot", skill, "pybullet", "pybullet-panda") for skill in SKILLS_3D),
+    Row("3d-scoop-placed-spoon", "scoop", "pybullet", "sapien-placed-spoon"),
 )
 
 
@@ -206,6 +220,42 @@ def draw_inputs(fast: SkillBackend, reference: SkillBackend, skill: str, n: int,
                     and reference.is_valid(skill, context, control[None])[0]):
                 inputs.append((context, control))
                 break
+    return inputs
+
+
+def _same_precheck(a: str, b: str) -> bool:
+    """Whether settings ``a`` and ``b`` accept the same controls: the same setting, or two
+    SAPIEN settings (every SAPIEN setting pre-checks with the shared Kitchen3D kinematics)."""
+    return a == b or SETTING_ENGINES.get(a) == SETTING_ENGINES.get(b) == "sapien"
+
+
+def stored_inputs(path: Path | None, fast: SkillBackend, reference: SkillBackend, skill: str,
+                  n: int, seed: int, fast_name: str, reference_name: str
+                  ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """:func:`draw_inputs`, kept in the JSON file ``path`` (``None``: always drawn).
+
+    Drawing costs a pre-check per candidate control (~40 ms on PyBullet; ~0.3 s per input),
+    so several shards of a long row would each redraw for a minute or more. The file holds
+    the skill, seed, both settings and the inputs ``[context..., control...]``; the first
+    ``n`` of a longer list are the same as ``n`` drawn (the draws are sequential), so a file
+    with at least ``n`` inputs drawn with the same pre-checks (:func:`_same_precheck`) is
+    reused, any other is redrawn and rewritten."""
+    if path is not None and path.exists():
+        stored = json.loads(path.read_text())
+        if (stored["skill"] == skill and stored["seed"] == seed
+                and all(_same_precheck(a, b) for a, b in
+                        zip(stored["settings"], (fast_name, reference_name), strict=True))
+                and len(stored["inputs"]) >= n):
+            spec = fast.skills()[skill]
+            rows = np.asarray(stored["inputs"][:n], dtype=float)
+            return [(row[:spec.context.dim], row[spec.context.dim:]) for row in rows]
+    inputs = draw_inputs(fast, reference, skill, n, seed)
+    if path is not None:
+        partial = path.with_suffix(".tmp")
+        partial.write_text(json.dumps({
+            "skill": skill, "seed": seed, "settings": [fast_name, reference_name],
+            "inputs": [[*context.tolist(), *control.tolist()] for context, control in inputs]}))
+        partial.replace(path)
     return inputs
 
 
@@ -275,17 +325,26 @@ def backends(names: tuple[str, ...]) -> Iterator[dict[str, SkillBackend]]:
 
 def run_row(row: Row, n: int, seed: int, cache_path: Path, cache: dict[str, dict],
             progress: bool, shard: tuple[int, int] = (0, 1),
-            only: frozenset[str] | None = None) -> dict:
+            only: frozenset[str] | None = None, first: int = 0,
+            inputs_path: Path | None = None) -> dict:
     """Run (or reuse from the cache) the row's trials and summarise the agreement.
+
+    ``first``: only inputs ``i >= first`` of the ``n`` drawn are run and summarised (the
+    inputs and trial seeds are the same as in a run from 0, so ``--trials 400
+    --first-input 200`` validates on the 200 inputs after a 200-input row's). ``inputs_path``:
+    keep the drawn inputs there (:func:`stored_inputs`).
 
     ``shard = (k, m)`` runs only inputs ``i`` with ``i % m == k`` (several processes can
     share a long row through one cache); the others count only once cached. ``only``: run
     the trials of these settings only (``None``: all); the others count only once cached."""
     with backends((row.fast, row.reference)) as built:
         fast, reference = built[row.fast], built[row.reference]
-        inputs = draw_inputs(fast, reference, row.skill, n, seed)
+        inputs = stored_inputs(inputs_path, fast, reference, row.skill, n, seed, row.fast,
+                               row.reference)
         pairs = []
         for index, (context, control) in enumerate(inputs):
+            if index < first:
+                continue
             trial_seed = seed * 100_000 + index
             pair = []
             for setting, backend in ((row.fast, fast), (row.reference, reference)):
@@ -295,6 +354,10 @@ def run_row(row: Row, n: int, seed: int, cache_path: Path, cache: dict[str, dict
                     cache.update(load_cache(cache_path))  # another shard may have run it
                     if key not in cache:
                         continue  # the other setting may still run
+                if key not in cache:
+                    # Another process on the same cache (an overlapping shard) may have run
+                    # it since: reading the cache costs milliseconds, a trial seconds.
+                    cache.update(load_cache(cache_path))
                 if key not in cache:
                     record = {"key": key, "setting": setting, "skill": row.skill,
                               "seed": trial_seed, "context": context.tolist(),
@@ -392,6 +455,12 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--cache", type=Path, default=RESULTS_DIR / "fidelity_trials.jsonl")
     parser.add_argument("--out", type=Path, default=RESULTS_DIR / "fidelity.json")
     parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    parser.add_argument("--first-input", type=int, default=0, metavar="I",
+                        help="run and summarise only inputs I..trials-1 (same draws and "
+                             "trial seeds as from 0: fresh inputs after an earlier row's)")
+    parser.add_argument("--inputs", type=Path, default=None, metavar="JSON",
+                        help="keep the drawn inputs in this file (one row only) and reuse "
+                             "them: shards of a long row then draw once")
     parser.add_argument("--shard", default="0/1", metavar="K/M",
                         help="run only inputs i with i %% M == K (others: from the cache)")
     parser.add_argument("--settings", nargs="*", choices=sorted(SETTINGS), metavar="SETTING",
@@ -400,6 +469,10 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     args = parser.parse_args(argv)
     if args.trials < 1:
         parser.error("--trials must be at least 1")
+    if not 0 <= args.first_input < args.trials:
+        parser.error("--first-input must be in [0, --trials)")
+    if args.inputs is not None and len(args.rows) != 1:
+        parser.error("--inputs keeps one row's inputs: name exactly one --rows")
     if not 0.0 < args.target <= 1.0:
         parser.error("--target must be in (0, 1]")
     return args
@@ -415,10 +488,11 @@ def main(argv: list[str] | None = None) -> int:
     k, m = (int(v) for v in args.shard.split("/"))
     only = frozenset(args.settings) if args.settings is not None else None
     summaries = [run_row(row, args.trials, args.seed, args.cache, cache, not args.quiet, (k, m),
-                         only)
+                         only, args.first_input, args.inputs)
                  for row in chosen]
     print_table(summaries, args.target)
-    report = {"trials": args.trials, "seed": args.seed, "target": args.target,
+    report = {"trials": args.trials, "first_input": args.first_input, "seed": args.seed,
+              "target": args.target,
               "machine": platform.platform(), "rows": summaries}
     partial = args.out.with_suffix(".json.tmp")
     partial.write_text(json.dumps(report, indent=1))

@@ -8,6 +8,17 @@ physics wrapper and writes one JSON line per (input, engine) to ``--out``.
     OMP_NUM_THREADS=1 .venv/bin/python bench/scoop_engine_diag.py \
         --cache docs/results/fidelity/engine_trials_v2.jsonl \
         --out docs/results/fidelity/scoop_diag.jsonl
+
+``--capacity`` measures only the spoon's capacity (:func:`measure_spoon_capacity`, the same
+draws as the trial's) of inputs ``--first``..``--last - 1`` of the cache, on one engine
+(``--engines``, one name) with SAPIEN settings ``--config`` (JSON of
+:class:`SapienWorldConfig` fields): one JSON line per input, a fraction of a second each.
+This is how SAPIEN physics version 3.1's spoon was fitted (issue #21, inputs 0-59):
+
+    OMP_NUM_THREADS=1 .venv/bin/python bench/scoop_engine_diag.py --capacity \
+        --cache docs/results/fidelity/engine_scoop_bed_trials.jsonl --first 0 --last 60 \
+        --engines sapien --config '{"spoon_tool": "placed"}' \
+        --out docs/results/fidelity/scoop_capacity_fit.jsonl
 """
 
 from __future__ import annotations
@@ -22,12 +33,19 @@ from typing import Any
 
 import numpy as np
 
+from bench.fidelity import setting_version
 from ltamp_cli.backends.pybullet.skills.physics import BulletTrialPhysics
 from ltamp_cli.backends.pybullet.world import PhysicsWorld
 from ltamp_cli.backends.sapien.skills import SapienTrialPhysics
 from ltamp_cli.backends.sapien.world import SapienWorld, SapienWorldConfig
 from ltamp_cli.backends.skills3d.physics import contained_mask
-from ltamp_cli.backends.skills3d.scoop import run_scoop
+from ltamp_cli.backends.skills3d.scoop import (
+    ScoopSettings,
+    measure_spoon_capacity,
+    prepare_scoop,
+    run_scoop,
+    sample_scoop_latents,
+)
 
 
 @dataclass
@@ -81,12 +99,23 @@ def engine_physics(name: str, **config: Any) -> Any:
     return SapienTrialPhysics(SapienWorld(SapienWorldConfig(**config)))
 
 
-def disagreeing(cache: Path) -> list[dict]:
+def disagreeing(cache: Path, versions: dict[str, str] | None = None) -> list[dict]:
+    """The cache's scoop pairs (PyBullet, SAPIEN) by input index, with their scores and
+    whether the labels agree. ``versions``: the physics version of each engine's trials to
+    pair (default: the current ones, :func:`bench.fidelity.setting_version`); a cache keeps
+    the trials of older versions too (e.g. ``sapien@v3`` and ``sapien@v3.1``)."""
+    versions = versions or {name: str(setting_version(name, "scoop"))
+                            for name in ("pybullet", "sapien")}
     rows: dict[int, dict[str, dict]] = {}
     for line in cache.open():
-        record = json.loads(line)
-        if record["skill"] == "scoop" and record["setting"] in ("pybullet", "sapien"):
-            rows.setdefault(record["seed"], {})[record["setting"]] = record
+        try:
+            record = json.loads(line)
+        except json.JSONDecodeError:
+            continue  # a torn last line of a running benchmark
+        setting = record.get("setting")
+        if (record["skill"] == "scoop" and setting in versions
+                and record["key"].startswith(f"{setting}@v{versions[setting]}|")):
+            rows.setdefault(record["seed"], {})[setting] = record
     out = []
     for seed, pair in sorted(rows.items()):
         if len(pair) == 2:
@@ -98,14 +127,64 @@ def disagreeing(cache: Path) -> list[dict]:
     return out
 
 
+def capacity_rows(cache: Path, first: int, last: int, engine: str, config: dict[str, Any]
+                  ) -> list[dict[str, Any]]:
+    """The spoon capacity (beads) of inputs ``first..last-1`` of ``cache``'s scoop pairs
+    (indices = trial seeds of seed 0) on ``engine``, measured as in the trial (same latents
+    and draws), with the spoon and bead masses (kg) and the bead radius (m)."""
+    prefix = f"pybullet@v{setting_version('pybullet', 'scoop')}|"
+    by_index = {}
+    for line in cache.open():
+        try:
+            record = json.loads(line)
+        except json.JSONDecodeError:
+            continue
+        if record["skill"] == "scoop" and record["key"].startswith(prefix):
+            by_index[record["seed"]] = record
+    physics = engine_physics(engine, **config)
+    settings = ScoopSettings()
+    rows = []
+    for index in range(first, last):
+        item = by_index[index]
+        trial = prepare_scoop(np.array(item["context"]), np.array(item["control"]), False)
+        rng = np.random.default_rng(index)
+        latents = sample_scoop_latents(rng, settings, trial.scene.bowl)
+        capacity = measure_spoon_capacity(physics, trial.tool, latents.beads,
+                                          latents.spoon_material, rng, settings.settle_s)
+        rows.append({"index": index, "engine": engine, "cfg": config, "capacity": capacity,
+                     "spoon_mass": latents.spoon_material.mass,
+                     "bead_mass": latents.beads.mass, "radius": latents.beads.radius})
+    return rows
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cache", type=Path, required=True)
     parser.add_argument("--out", type=Path, required=True)
     parser.add_argument("--indices", type=int, nargs="*", default=None)
     parser.add_argument("--engines", nargs="*", default=["pybullet", "sapien"])
+    parser.add_argument("--capacity", action="store_true",
+                        help="measure only the spoon capacity of inputs --first..--last-1")
+    parser.add_argument("--first", type=int, default=0)
+    parser.add_argument("--last", type=int, default=60)
+    parser.add_argument("--config", default="{}", help="SAPIEN settings (JSON)")
+    parser.add_argument("--sapien-version", default=None,
+                        help="pair the cache's SAPIEN trials of this physics version "
+                             "(default: the current one), e.g. 3 for the v3 row")
     args = parser.parse_args(argv)
-    inputs = disagreeing(args.cache)
+    if args.capacity:
+        config = json.loads(args.config)
+        with args.out.open("a") as out:
+            for engine in args.engines:
+                for row in capacity_rows(args.cache, args.first, args.last, engine,
+                                         config if engine == "sapien" else {}):
+                    out.write(json.dumps(row) + "\n")
+        return 0
+    versions = None
+    if args.sapien_version is not None:
+        versions = {"pybullet": str(setting_version("pybullet", "scoop")),
+                    "sapien": args.sapien_version}
+    inputs = disagreeing(args.cache, versions)
     chosen = ([i for i in inputs if i["index"] in set(args.indices)] if args.indices
               else [i for i in inputs if not i["agree"]])
     engines = {name: engine_physics(name) for name in args.engines}

@@ -3,7 +3,7 @@ success rate of the most confident control (simulated) at the chosen ones."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -27,6 +27,16 @@ class CheckpointEvaluator(SkillEvaluator):
 
     def evaluate(self, model: SkillModel, n_trials: int, success: bool = True) -> Evaluation:
         return super().evaluate(model, n_trials, success and n_trials in self.success_at)
+
+
+def success_checkpoints(sizes: Mapping[str, Any], seed: int) -> set[int]:
+    """The checkpoints (trials) at which seed ``seed`` simulates the success rate:
+    ``sizes["success_at"]`` for the first ``sizes["success_seeds"]`` seeds (default: all
+    ``sizes["seeds"]``), none for the others, which measure only F1. The paper evaluates
+    the success rate on 5 shuffles and F1 on 10 (section 6.1.1-6.1.2)."""
+    if seed < int(sizes.get("success_seeds", sizes["seeds"])):
+        return set(sizes["success_at"])
+    return set()
 
 
 def held_out_contexts(backend: SkillBackend, skill: str, n: int, seed: int) -> np.ndarray:

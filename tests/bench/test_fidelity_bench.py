@@ -74,3 +74,55 @@ def test_a_row_runs_real_trials_and_a_rerun_reuses_them(
     assert json.loads(out.read_text())["rows"][0] == first
     fidelity.append_record(cache, {"key": "next"})  # starts on a line of its own
     assert set(fidelity.load_cache(cache)) == {r["key"] for r in records} | {"next"}
+
+
+def test_fresh_inputs_continue_the_same_draws_and_stored_inputs_are_reused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    pytest.importorskip("sapien")
+    cache, out, stored = (tmp_path / "trials.jsonl", tmp_path / "fidelity.json",
+                          tmp_path / "inputs.json")
+    base = ["--rows", "3d-push-engine", "--cache", str(cache), "--out", str(out), "--quiet"]
+    assert fidelity.main([*base, "--trials", "3"]) == 0
+    first_three = {r["seed"]: r for r in map(json.loads, cache.read_text().splitlines())}
+    # Inputs 3-5 of a 6-input row: only they run, with trial seeds 3-5.
+    assert fidelity.main([*base, "--trials", "6", "--first-input", "3",
+                          "--inputs", str(stored)]) == 0
+    records = [json.loads(line) for line in cache.read_text().splitlines()]
+    assert sorted({r["seed"] for r in records}) == list(range(6))
+    report = json.loads(out.read_text())
+    assert report["first_input"] == 3 and report["rows"][0]["trials"] == 3
+    kept = json.loads(stored.read_text())
+    assert len(kept["inputs"]) == 6 and kept["settings"] == ["pybullet", "sapien"]
+    for seed, record in first_three.items():  # the stored draws extend the 3-input row's
+        assert kept["inputs"][seed] == pytest.approx(record["context"] + record["control"])
+
+    def no_draws(*_args: object) -> None:
+        raise AssertionError("the stored inputs were drawn again")
+
+    monkeypatch.setattr(fidelity, "draw_inputs", no_draws)
+    assert fidelity.main([*base, "--trials", "5", "--first-input", "3",
+                          "--inputs", str(stored)]) == 0  # a prefix of the stored ones
+    assert len(cache.read_text().splitlines()) == len(records)  # nothing simulated again
+    assert json.loads(out.read_text())["rows"][0]["trials"] == 2
+    with pytest.raises(SystemExit):
+        fidelity.main([*base, "--trials", "3", "--first-input", "3"])
+
+
+def test_the_placed_spoon_row_is_its_own_setting_with_its_own_keys() -> None:
+    pytest.importorskip("sapien")
+    backend = fidelity.SETTINGS["sapien-placed-spoon"]()
+    try:
+        assert backend.config.spoon_tool == "placed"  # type: ignore[attr-defined]
+    finally:
+        backend.close()
+    shipped = fidelity.SETTINGS["sapien"]()
+    try:
+        assert shipped.config.spoon_tool == "kinematic"  # type: ignore[attr-defined]
+    finally:
+        shipped.close()
+    rows = {row.name: row for row in fidelity.ROWS}
+    assert rows["3d-scoop-placed-spoon"].reference == "sapien-placed-spoon"
+    key = fidelity.trial_key("sapien-placed-spoon", "scoop", [0.2] * 4, [0.0] * 5, 7)
+    assert key.startswith("sapien-placed-spoon@v3|scoop|7|")
+    assert key != fidelity.trial_key("sapien", "scoop", [0.2] * 4, [0.0] * 5, 7)

@@ -107,3 +107,22 @@ def test_snapshot_archives_what_is_collected_so_far(tmp_path: Path) -> None:
     assert snapshot(tmp_path) == {"synthetic_skill8d_s10000_valid": 9}
     with gzip.open(archive, "rt") as handle:
         assert [json.loads(line)["index"] for line in handle] == list(range(9))
+
+
+def test_full_sizes_are_the_papers_and_only_five_seeds_simulate_the_success_rate() -> None:
+    from bench.paper.poollearn import success_checkpoints
+
+    # ltamp-paper.tex section 6.1-6.2: F1 on 10 shuffles of 400 training / 1,000 test trials;
+    # success rate on 5 shuffles, every 10 trials up to 200, 45 contexts; 200 repetitions.
+    for name in POOLED:
+        sizes = importlib.import_module(f"bench.paper.{name}").SIZES["full"]
+        if "success_at" not in sizes:
+            continue
+        assert (sizes["seeds"], sizes["budget"], sizes["n_test"]) == (10, 400, 1000), name
+        assert (sizes["success_seeds"], sizes["contexts"]) == (5, 45), name
+        assert sizes["success_at"] == list(range(10, 201, 10)), name
+        assert [len(success_checkpoints(sizes, seed)) for seed in range(10)] == [20] * 5 + [0] * 5
+        if "reps" in sizes:
+            assert sizes["reps"] == 200
+    quick = importlib.import_module("bench.paper.supervised3d").SIZES["quick"]
+    assert success_checkpoints(quick, quick["seeds"] - 1) == set(quick["success_at"])

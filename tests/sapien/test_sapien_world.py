@@ -207,3 +207,75 @@ def test_beads_rest_sunk_in_a_kinematic_spoon_only() -> None:
     assert height == pytest.approx(radius, abs=3e-4)
     with pytest.raises(ValueError, match="spoon_rest_offset"):
         SapienWorldConfig(spoon_rest_offset=0.001)
+
+
+def _lowest_bead_depth_in_spoon(body_type: str, beads: int) -> tuple[float, int]:
+    """A spoon (head 0.24 m spoon, 50 g) held still at 5 cm for 1 s with no rest offset, with
+    one bead on its floor (``beads == 1``) or a column of ``beads`` poured in: how deep (m,
+    negative: below the surface) the lowest bead in the head sits, and beads still held."""
+    world = SapienWorld(SapienWorldConfig(spoon_rest_offset=0.0, placed_spoon_rest_offset=0.0))
+    position, quaternion = (0.0, 0.0, 0.05), (0.0, 0.0, 0.0, 1.0)
+    spoon = create_kitchenware(world, spoon_geometry(SpoonDims(0.24)), position,
+                               material=BodyMaterial(mass=0.05), body_type=body_type)
+    head = spoon.geometry.vessel
+    assert head is not None
+    spec = BeadSpec(count=beads, radius=0.006, restitution=0.0)
+    floor = position[2] + head.thickness
+    placed = (spawn_beads(world, spec, np.array([[0.0, 0.0, floor + 0.008]])) if beads == 1
+              else spawn_beads_in(world, spoon, spec, np.random.default_rng(0)))
+    for _ in range(world.steps_for(1.0)):
+        if body_type == "placed":
+            spoon.place(position, quaternion)  # as the trial physics does before every step
+        world.step()
+    if body_type == "placed":
+        spoon.place(position, quaternion)
+    z = placed.positions()[:, 2]
+    held = z > position[2] - 0.01
+    return float(z[held].min()) - floor - spec.radius, int(held.sum())
+
+
+def test_a_placed_spoon_sinks_under_load_like_pybullets_tool() -> None:
+    # PyBullet's tool is a light dynamic body re-placed before every step: the solver's
+    # push-out of a load goes partly into the tool and is discarded, so a heavy pile sinks
+    # millimetres into it while a single bead barely does (SapienWorldConfig.spoon_tool).
+    single, _ = _lowest_bead_depth_in_spoon("placed", 1)
+    piled, held = _lowest_bead_depth_in_spoon("placed", 60)
+    assert held >= 30
+    assert -0.0005 < single <= 0.0
+    assert piled < -0.002
+    # A kinematic spoon resolves the same pile at its surface: no load-dependent sinking.
+    for beads in (1, 60):
+        depth, _ = _lowest_bead_depth_in_spoon("kinematic", beads)
+        assert abs(depth) < 0.0005
+
+
+def test_a_placed_body_is_placed_with_its_velocity_and_others_are_not() -> None:
+    world = SapienWorld()
+    spoon = create_kitchenware(world, spoon_geometry(SpoonDims(0.2)), (0.0, 0.0, 0.1),
+                               material=BodyMaterial(mass=0.05), body_type="placed")
+    turn = Rotation.from_euler("x", 0.3).as_quat()
+    spoon.place((0.1, 0.0, 0.2), turn, (0.0, 0.5, 0.0), (0.0, 0.0, 0.0))
+    position, quaternion = spoon.pose()
+    assert position == pytest.approx([0.1, 0.0, 0.2], abs=1e-6)
+    assert abs(float(np.dot(quaternion, turn))) == pytest.approx(1.0, abs=1e-6)
+    world.step()  # moving at 0.5 m/s along y (gravity adds < 0.2 mm in one step)
+    moved, _ = spoon.pose()
+    assert moved[1] == pytest.approx(0.5 * world.config.time_step, rel=0.05)
+    kinematic = create_kitchenware(world, spoon_geometry(SpoonDims(0.2)), (0.3, 0.0, 0.1),
+                                   body_type="kinematic")
+    with pytest.raises(ValueError, match="placed"):
+        kinematic.place((0.3, 0.0, 0.1), (0.0, 0.0, 0.0, 1.0))
+    with pytest.raises(ValueError, match="spoon_tool"):
+        SapienWorldConfig(spoon_tool="floating")
+    with pytest.raises(ValueError, match="placed_spoon_rest_offset"):
+        SapienWorldConfig(placed_spoon_rest_offset=0.001)
+
+
+def test_the_placed_spoon_is_an_option_and_the_shipped_physics_is_unchanged() -> None:
+    from ltamp_cli.backends.sapien.world import PHYSICS_VERSION, physics_version
+
+    # Issue #21's placed spoon agreed not clearly better with PyBullet on fresh inputs: not
+    # shipped, so every skill's trials (and the committed SAPIEN pour pool) keep physics version 3.
+    assert SapienWorldConfig().spoon_tool == "kinematic"
+    assert {physics_version(s) for s in ("pour", "scoop", "push", "stir")} == {
+        f"{PHYSICS_VERSION}"}

@@ -7,8 +7,11 @@ union of its convex parts, exactly as in the PyBullet backend. Visual shapes are
 when the world has a render system. No files are written.
 
 Bodies are ``"static"`` (fixed kitchenware), ``"kinematic"`` (a tool moved along a path:
-PhysX derives its velocity from successive targets, so contacts push beads) or
-``"dynamic"``.
+PhysX derives its velocity from successive targets, so contacts push beads),
+``"dynamic"``, or ``"placed"``: a dynamic body with its material's mass that its owner puts
+at a pose, with a velocity, before every step (:meth:`SapienBody.place`), as PyBullet moves
+every tool. What the solver does to a placed body during a step (beads pushing it) is
+discarded by the next placement, so loads sink into it as into PyBullet's tools.
 """
 
 from __future__ import annotations
@@ -32,7 +35,7 @@ from ltamp_cli.backends.sapien.world import (
     to_sapien_pose,
 )
 
-BodyType = Literal["static", "kinematic", "dynamic"]
+BodyType = Literal["static", "kinematic", "dynamic", "placed"]
 IDENTITY_QUAT = (0.0, 0.0, 0.0, 1.0)
 
 
@@ -58,6 +61,26 @@ class SapienBody:
         if self.is_kinematic:
             # Otherwise a stale target would drag the body back on the next step.
             self.component.set_kinematic_target(pose)  # type: ignore[attr-defined]
+
+    def place(
+        self, position: Sequence[float] | np.ndarray, orientation: Sequence[float] | np.ndarray,
+        linear_velocity: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0),
+        angular_velocity: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0),
+    ) -> None:
+        """Put a placed body's object frame at ``position`` ``(3,)`` m with ``orientation``
+        ``(4,)`` xyzw, moving with ``linear_velocity`` ``(3,)`` m/s (of the object-frame
+        origin) and ``angular_velocity`` ``(3,)`` rad/s, world frame (placed bodies only)."""
+        if self.body_type != "placed":
+            raise ValueError(f"only placed bodies are placed, not a {self.body_type} one")
+        component = self.component
+        self.entity.set_pose(to_sapien_pose(position, orientation))
+        lever = Rotation.from_quat(np.asarray(orientation, dtype=float)).apply(
+            np.asarray(component.cmass_local_pose.p, dtype=float))  # type: ignore[attr-defined]
+        omega = np.asarray(angular_velocity, dtype=float)
+        component.linear_velocity = (  # type: ignore[attr-defined]
+            np.asarray(linear_velocity, dtype=float) + np.cross(omega, lever)
+        ).astype(np.float32)
+        component.angular_velocity = omega.astype(np.float32)  # type: ignore[attr-defined]
 
     @property
     def is_kinematic(self) -> bool:
@@ -135,8 +158,8 @@ def create_kitchenware(
 ) -> SapienBody:
     """Add ``geometry`` to ``world`` as one body at the given object-frame pose.
 
-    A dynamic body weighs ``material.mass`` kg (uniform density over the pieces); static and
-    kinematic bodies ignore the mass.
+    A dynamic or placed body weighs ``material.mass`` kg (uniform density over the pieces);
+    static and kinematic bodies ignore the mass.
     """
     material = material or BodyMaterial()
     config = world.config
@@ -147,15 +170,19 @@ def create_kitchenware(
         component = physx.PhysxRigidDynamicComponent()
     physical = _material(material, 1.0)
     density = 1000.0
-    if body_type == "dynamic":
+    if body_type in ("dynamic", "placed"):
         if material.mass <= 0:
-            raise ValueError("a dynamic body needs a positive mass")
+            raise ValueError(f"a {body_type} body needs a positive mass")
         density = material.mass / geometry.volume()
     scale = np.ones(3, dtype=np.float32)
     # Beads rest slightly inside a spoon held as a tool, as in PyBullet (see
-    # SapienWorldConfig.spoon_rest_offset); every other body's surface is exact.
-    rest_offset = (config.spoon_rest_offset
-                   if geometry.kind == "spoon" and body_type == "kinematic" else 0.0)
+    # SapienWorldConfig.spoon_rest_offset and placed_spoon_rest_offset); every other body's
+    # surface is exact.
+    rest_offset = 0.0
+    if geometry.kind == "spoon" and body_type == "kinematic":
+        rest_offset = config.spoon_rest_offset
+    elif geometry.kind == "spoon" and body_type == "placed":
+        rest_offset = config.placed_spoon_rest_offset
     for piece in geometry.pieces:
         shape = physx.PhysxCollisionShapeConvexMesh(
             np.asarray(piece, dtype=np.float32), scale, physical

@@ -19,7 +19,7 @@ import numpy as np
 from ltamp_cli.backends.kitchenware_geometry import KitchenwareGeometry
 from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial
 from ltamp_cli.backends.pybullet.particles import BeadSpec
-from ltamp_cli.backends.pybullet.paths import PosePath
+from ltamp_cli.backends.pybullet.paths import PosePath, velocities
 from ltamp_cli.backends.sapien.bodies import (
     Beads,
     BodyType,
@@ -62,8 +62,14 @@ class SapienTrialPhysics(WorldPhysics):
         position: Sequence[float] | np.ndarray = (0.0, 0.0, 0.0),
         quaternion: Sequence[float] | np.ndarray = IDENTITY_QUAT,
     ) -> SapienBody:
-        return create_kitchenware(self.world, geometry, position, quaternion,  # type: ignore[arg-type]
-                                  material=material, body_type=_BODY_TYPES[role])
+        body_type = _BODY_TYPES[role]
+        if role == "tool" and geometry.kind == "spoon" and self.world.config.spoon_tool == "placed":
+            body_type = "placed"
+        body = create_kitchenware(self.world, geometry, position, quaternion,  # type: ignore[arg-type]
+                                  material=material, body_type=body_type)
+        if body_type == "placed":
+            body.place(position, quaternion)
+        return body
 
     def spawn_beads_in(
         self, container: SimBody, spec: BeadSpec, rng: np.random.Generator
@@ -77,6 +83,15 @@ class SapienTrialPhysics(WorldPhysics):
         """Step ``i`` targets pose ``i + 1`` (PhysX moves the kinematic tool there within the
         step, with the implied velocity); the last step targets the last pose again."""
         body = _sapien_body(tool)
+        if body.body_type == "placed":
+            linear, angular = velocities(path, self.time_step)
+
+            def place(i: int) -> None:
+                body.place(path.positions[i], path.quaternions[i], linear[i], angular[i])
+
+            taken = self.run_steps(len(path), place, on_step, step_offset)
+            body.place(path.positions[-1], path.quaternions[-1])
+            return taken
         last = len(path) - 1
 
         def target(i: int) -> None:
@@ -90,7 +105,13 @@ class SapienTrialPhysics(WorldPhysics):
     ) -> int:
         """Step ``steps`` times: a kinematic tool stays at its last target (its creation
         pose or the end of the path it followed), which must be the pose to hold."""
-        here, turned = _sapien_body(tool).pose()
+        body = _sapien_body(tool)
+        if body.body_type == "placed":
+            taken = self.run_steps(steps, lambda _: body.place(position, quaternion), on_step,
+                                   step_offset)
+            body.place(position, quaternion)
+            return taken
+        here, turned = body.pose()
         if (np.linalg.norm(here - np.asarray(position)) > HOLD_TOLERANCE_M
                 or abs(float(np.dot(turned, quaternion))) < 1.0 - 1e-6):
             raise ValueError("a SAPIEN tool is held where it is: move it to the pose first")
