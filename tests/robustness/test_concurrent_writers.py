@@ -32,7 +32,10 @@ def _collect(out: Path, n: int, *extra: str) -> subprocess.Popen[str]:
     return subprocess.Popen(
         [sys.executable, "-m", "ltamp_cli", *extra, "collect", "moving2d", "--backend",
          "synthetic", "-n", str(n), "--out", str(out)],
-        cwd=out.parent, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        cwd=out.parent, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        # a test run started in the background of a non-interactive shell ignores SIGINT,
+        # and children inherit that: the interrupted collect must see Ctrl-C as a user's does
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
 
 
 def _indices(path: Path) -> Counter[int]:

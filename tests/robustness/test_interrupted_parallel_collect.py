@@ -28,7 +28,10 @@ def _collect(out: Path, n: int) -> subprocess.Popen[str]:
         [sys.executable, "-m", "ltamp_cli", "collect", "moving2d", "--backend", "synthetic",
          "-n", str(n), "--out", str(out), "--workers", "2"],
         cwd=out.parent, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-        start_new_session=True)
+        start_new_session=True,
+        # a test run started in the background of a non-interactive shell ignores SIGINT,
+        # and children inherit that: the interrupted collect must see Ctrl-C as a user's does
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
 
 
 def _indices(path: Path) -> Counter[int]:
