@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import platform
 import time
@@ -43,6 +42,7 @@ import numpy as np
 from tqdm import tqdm
 
 from ltamp_cli.backends import SkillBackend, load_backend
+from ltamp_cli.learning.metrics import wilson_interval
 
 BACKENDS = ("pybullet", "sapien")
 RESULTS_DIR = Path(__file__).resolve().parent / "results"
@@ -210,23 +210,12 @@ def execute_plans(n: int, path: Path = POUR_BLOCKED, backends: tuple[str, ...] =
     return rows
 
 
-def wilson(successes: int, n: int) -> list[float]:
-    """95 % Wilson score interval of ``successes / n`` (``[0, 1]`` when ``n`` is 0)."""
-    if n == 0:
-        return [0.0, 1.0]
-    z = 1.959963984540054
-    phat = successes / n
-    centre = (phat + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * math.sqrt(phat * (1 - phat) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return [max(0.0, centre - half), min(1.0, centre + half)]
-
-
 def plan_summary(plans: list[dict], backends: tuple[str, ...]) -> dict:
     """Plans found and, per backend, executions whose goal holds (Wilson 95 % intervals
     over the seeds tried) and the median CPU seconds per execution."""
     solved = [row for row in plans if row["status"] == "solved"]
     out: dict = {"seeds": len(plans), "solved": len(solved),
-                 "solved_wilson95": wilson(len(solved), len(plans)),
+                 "solved_wilson95": list(wilson_interval(len(solved), len(plans))),
                  "plan_cpu_median_s": float(np.median([r["plan_cpu_s"] for r in plans]))
                  if plans and "plan_cpu_s" in plans[0] else None}
     for name in backends:
@@ -235,8 +224,8 @@ def plan_summary(plans: list[dict], backends: tuple[str, ...]) -> dict:
         out[name] = {
             "executed": len(runs),
             "goal_holds": held,
-            "goal_holds_of_seeds_wilson95": wilson(held, len(plans)),
-            "goal_holds_of_plans_wilson95": wilson(held, len(runs)),
+            "goal_holds_of_seeds_wilson95": list(wilson_interval(held, len(plans))),
+            "goal_holds_of_plans_wilson95": list(wilson_interval(held, len(runs))),
             "cpu_median_s": float(np.median([r["cpu_s"] for r in runs]))
             if runs and "cpu_s" in runs[0] else None,
             "failures": [{"seed": row["seed"], "failed_step": row[name].get("failed_step"),

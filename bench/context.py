@@ -56,9 +56,9 @@ import numpy as np
 from scipy.stats import fisher_exact
 
 from bench.fidelity import append_record, is_success, load_cache, run_trial, trial_key
-from bench.fidelity import wilson_interval as wilson
 from ltamp_cli.backends import SkillBackend, load_backend
 from ltamp_cli.learning.gp import HyperBounds, fit_gp
+from ltamp_cli.learning.metrics import wilson_interval
 from ltamp_cli.learning.normalize import BoxNormalizer, join_inputs, joint_space
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -90,7 +90,7 @@ def trial_seed(seed: int, index: int, repeat: int, seeds: int, common: bool) -> 
 def rate(labels: np.ndarray) -> dict:
     """Successes, trials, rate and 95 % Wilson interval of boolean ``labels`` ``(n,)``."""
     k, n = int(labels.sum()), len(labels)
-    low, high = wilson(k, n)
+    low, high = wilson_interval(k, n)
     return {"successes": k, "n": n, "rate": k / n if n else None, "wilson95": [low, high]}
 
 

@@ -28,18 +28,9 @@ from pathlib import Path
 import numpy as np
 
 from ltamp_cli.backends import load_backend
+from ltamp_cli.learning.metrics import wilson_interval
 from ltamp_cli.learning.model_dir import load_model
 from ltamp_cli.threads import use_one_thread
-
-
-def wilson(successes: int, n: int, z: float = 1.96) -> list[float]:
-    """95 % Wilson score interval of ``successes`` of ``n``."""
-    if n == 0:
-        return [0.0, 1.0]
-    p = successes / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * (p * (1 - p) / n + z * z / (4 * n * n)) ** 0.5 / (1 + z * z / n)
-    return [max(0.0, centre - half), min(1.0, centre + half)]
 
 
 def combine(main_log: Path, shards: list[Path], trials: int) -> dict:
@@ -64,8 +55,8 @@ def combine(main_log: Path, shards: list[Path], trials: int) -> dict:
     return {
         "contexts": n, "missing": [i for i in range(trials) if i not in complete],
         "theta_successes": theta, "theta_rate": theta / n if n else None,
-        "theta_wilson95": wilson(theta, n), "random_successes": rand,
-        "random_rate": rand / n if n else None, "random_wilson95": wilson(rand, n),
+        "theta_wilson95": list(wilson_interval(theta, n)), "random_successes": rand,
+        "random_rate": rand / n if n else None, "random_wilson95": list(wilson_interval(rand, n)),
         "gap": (theta - rand) / n if n else None,
         "cpu_s_per_trial_mean": sum(cpu) / len(cpu) if cpu else None,
         "per_context": [{"index": i, "context": found[i]["theta_star"]["context"],

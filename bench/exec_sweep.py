@@ -42,6 +42,8 @@ from typing import Any
 
 import numpy as np
 
+from ltamp_cli.learning.metrics import wilson_interval
+
 ROOT = Path(__file__).resolve().parents[1]
 PROBLEMS = ROOT / "problems"
 RESULTS = ROOT / "docs" / "results" / "exec3d"
@@ -97,17 +99,6 @@ REUSE: dict[str, list[tuple[str, tuple[int, ...]]]] = {
     "kitchen3d/push_to_reach:pybullet": [("push_to_reach_across.jsonl", SEEDS)],
     "kitchen3d/push_to_reach:sapien": [("push_to_reach_across.jsonl", SEEDS)],
 }
-
-
-def wilson(successes: int, n: int) -> list[float]:
-    """95 % Wilson score interval of ``successes / n`` (``[0, 1]`` when ``n`` is 0)."""
-    if n == 0:
-        return [0.0, 1.0]
-    z = 1.959963984540054
-    phat = successes / n
-    centre = (phat + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * math.sqrt(phat * (1 - phat) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return [max(0.0, centre - half), min(1.0, centre + half)]
 
 
 def goal_facts(goal: Any) -> list[dict]:
@@ -255,7 +246,7 @@ def cell_summary(cell: Cell, rows: dict[int, dict], seeds: tuple[int, ...]) -> d
         "seeds": [r["seed"] for r in tried],
         "planned": len(solved),
         "goal_holds": len(held),
-        "goal_holds_wilson95": wilson(len(held), len(tried)),
+        "goal_holds_wilson95": list(wilson_interval(len(held), len(tried))),
         "plan_cpu_median_s": median([r["plan_cpu_s"] for r in tried if "plan_cpu_s" in r]),
         "exec_cpu_median_s": median([r["execution"]["cpu_s"] for r in solved
                                      if "cpu_s" in r.get("execution", {})]),

@@ -5,7 +5,7 @@ For each comparison row (a skill, a *fast* setting and a *reference* setting) th
 and a control uniform in its box, redrawn until the pre-check of both settings accepts it.
 Every input runs once under each setting with the same trial seed; a trial's label is
 ``valid and score > 0`` (success). The table gives each setting's success rate, the label
-agreement with its 95 % Wilson interval (:func:`scipy.stats.binomtest`), the disagreements
+agreement with its 95 % Wilson interval (`wilson_interval`), the disagreements
 by direction, the mean CPU seconds per trial of each setting, and whether the agreement
 reaches ``--target`` (default 0.95).
 
@@ -85,7 +85,6 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
-from scipy.stats import binomtest
 
 from ltamp_cli.backends import SkillBackend, load_backend
 from ltamp_cli.backends.box2d.backend import Kitchen2DBackend
@@ -94,6 +93,7 @@ from ltamp_cli.backends.box2d.skills.scoop import reference_config as reference_
 from ltamp_cli.backends.pybullet.skills.robot import ROBOT_SETUP_VERSIONS
 from ltamp_cli.backends.pybullet.world import physics_version as pybullet_physics_version
 from ltamp_cli.backends.sapien.world import physics_version as sapien_physics_version
+from ltamp_cli.learning.metrics import wilson_interval
 
 RESULTS_DIR = Path(__file__).resolve().parent / "results"
 SKILLS_3D = ("pour", "scoop", "push", "stir")
@@ -195,14 +195,6 @@ ROWS: tuple[Row, ...] = (
 def is_success(result: dict) -> bool:
     """The label of a trial record: valid and ``score > 0``."""
     return bool(result["valid"]) and float(result["score"]) > 0.0
-
-
-def wilson_interval(agree: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
-    """Wilson score interval of a binomial proportion ``agree / n``."""
-    if n == 0:
-        return 0.0, 1.0
-    ci = binomtest(agree, n).proportion_ci(confidence_level=confidence, method="wilson")
-    return float(ci.low), float(ci.high)
 
 
 def draw_inputs(fast: SkillBackend, reference: SkillBackend, skill: str, n: int, seed: int

@@ -28,16 +28,11 @@ from typing import Any
 
 import numpy as np
 
+from ltamp_cli.learning.metrics import wilson_interval
+
 REPO = Path(__file__).resolve().parents[1]
 SKILLS = ("pour", "scoop", "push")
 SEEDS = (0, 1)
-
-
-def _wilson(k: int, n: int) -> list[float]:
-    from scipy.stats import binomtest
-
-    ci = binomtest(k, n).proportion_ci(confidence_level=0.95, method="wilson")
-    return [round(float(ci.low), 3), round(float(ci.high), 3)]
 
 
 def _read(path: Path) -> dict[str, Any]:
@@ -87,11 +82,11 @@ def report(evals: Path, old: Path, new: Path, out: Path) -> dict[str, Any]:
                                      "random": sum(rows["random"][i * 20:(i + 1) * 20])}
                          for i, seed in enumerate(SEEDS)},
             "old": {"successes": sum(rows["old"]), "rate": sum(rows["old"]) / n,
-                    "wilson95": _wilson(sum(rows["old"]), n)},
+                    "wilson95": [round(x, 3) for x in wilson_interval(sum(rows["old"]), n)]},
             "new": {"successes": sum(rows["new"]), "rate": sum(rows["new"]) / n,
-                    "wilson95": _wilson(sum(rows["new"]), n)},
+                    "wilson95": [round(x, 3) for x in wilson_interval(sum(rows["new"]), n)]},
             "random": {"successes": sum(rows["random"]), "rate": sum(rows["random"]) / n,
-                       "wilson95": _wilson(sum(rows["random"]), n)},
+                       "wilson95": [round(x, 3) for x in wilson_interval(sum(rows["random"]), n)]},
             "paired": {"both": both, "only_refit": only_new, "only_shipped": only_old,
                        "mcnemar_exact_p": mcnemar, "text": comparison.describe(),
                        "verdict": comparison.verdict},

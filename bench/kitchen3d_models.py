@@ -25,10 +25,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.stats import binomtest
 
 from ltamp_cli.backends import SkillBackend, load_backend
 from ltamp_cli.cli.evaluate import _live_success_rates
+from ltamp_cli.learning.metrics import wilson_interval
 from ltamp_cli.learning.model_dir import load_model
 from ltamp_cli.threads import use_one_thread
 
@@ -65,12 +65,6 @@ class TimedBackend:
         return result
 
 
-def wilson(rate: float, n: int) -> list[float]:
-    """95 % Wilson interval of a success rate over ``n`` contexts."""
-    ci = binomtest(round(rate * n), n).proportion_ci(confidence_level=0.95, method="wilson")
-    return [float(ci.low), float(ci.high)]
-
-
 def context_lengthscales(metadata: dict) -> dict[str, float]:
     """The GP's lengthscales of the context inputs, by name (empty for a non-GP model)."""
     hyper = metadata.get("hyperparameters", {})
@@ -96,8 +90,10 @@ def bench_model(directory: Path, contexts: int, seed: int, log: Path | None = No
     return {
         "model": str(directory), "skill": skill, "contexts": contexts, "seed": seed,
         "n_train": metadata.get("n_train"),
-        "theta_success": theta_rate, "theta_wilson95": wilson(theta_rate, contexts),
-        "random_success": random_rate, "random_wilson95": wilson(random_rate, contexts),
+        "theta_success": theta_rate,
+        "theta_wilson95": list(wilson_interval(round(theta_rate * contexts), contexts)),
+        "random_success": random_rate,
+        "random_wilson95": list(wilson_interval(round(random_rate * contexts), contexts)),
         "gap": theta_rate - random_rate,
         "meets_target": theta_rate >= THETA_TARGET and theta_rate - random_rate >= GAP_TARGET,
         "context_lengthscales": context_lengthscales(metadata),

@@ -54,7 +54,7 @@ import numpy as np
 from ltamp_cli.backends.protocol import ParamSpace, SkillBackend, SkillSpec
 from ltamp_cli.backends.synthetic import AnalyticSkill, SyntheticBackend, _unit
 from ltamp_cli.learning.active import LearningConfig, learn_online
-from ltamp_cli.learning.metrics import SkillEvaluator
+from ltamp_cli.learning.metrics import SkillEvaluator, wilson_interval
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_LOG = REPO / "docs" / "results" / "learning" / "lse2-runs.jsonl"
@@ -257,12 +257,8 @@ def _seeds(text: str) -> list[int]:
 
 
 def _wilson(k: int, n: int) -> list[float]:
-    from scipy.stats import binomtest
-
-    if n == 0:
-        return [0.0, 1.0]
-    ci = binomtest(k, n).proportion_ci(confidence_level=0.95, method="wilson")
-    return [round(float(ci.low), 3), round(float(ci.high), 3)]
+    """Wilson 95 % interval of ``k`` of ``n``, rounded to 3 decimals (for the JSON tables)."""
+    return [round(x, 3) for x in wilson_interval(k, n)]
 
 
 def report(log: Path, out: Path, standard_log: Path | None,

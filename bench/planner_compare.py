@@ -22,20 +22,11 @@ from typing import Any
 
 import numpy as np
 
+from ltamp_cli.learning.metrics import wilson_interval
+
 BOOTSTRAP_RESAMPLES = 10_000
 BOOTSTRAP_SEED = 0
 Key = tuple[str, str, str]
-
-
-def wilson(successes: int, trials: int, z: float = 1.959964) -> tuple[float, float]:
-    """Wilson score interval of a rate (``(nan, nan)`` without trials)."""
-    if trials == 0:
-        return math.nan, math.nan
-    p = successes / trials
-    denominator = 1 + z * z / trials
-    centre = (p + z * z / (2 * trials)) / denominator
-    half = z * math.sqrt(p * (1 - p) / trials + z * z / (4 * trials * trials)) / denominator
-    return max(0.0, centre - half), min(1.0, centre + half)
 
 
 def bootstrap_median(differences: list[float]) -> tuple[float, float]:
@@ -79,7 +70,7 @@ def compare(before: dict[Key, dict[int, dict[str, Any]]],
         cheaper = sum(new[s]["cost"] < old[s]["cost"] - tolerance for s in both)
         longer = sum((new[s].get("length") or 0) > (old[s].get("length") or 0) for s in both)
         shorter = sum((new[s].get("length") or 0) < (old[s].get("length") or 0) for s in both)
-        low, high = wilson(solved_new, len(seeds))
+        low, high = wilson_interval(solved_new, len(seeds))
         ci = bootstrap_median(differences)
         rows.append({
             "example": key[0], "algorithm": key[1], "history": key[2], "seeds": len(seeds),

@@ -29,8 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.fidelity import wilson_interval
 from ltamp_cli.backends.box2d.backend import Kitchen2DBackend
+from ltamp_cli.learning.metrics import wilson_interval
 
 #: Goal-distance bands (world units from the object's start) of the training-trial table.
 BANDS = ((0.0, 2.0), (2.0, 4.0), (4.0, 8.0))

@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import platform
 import sys
 import time
@@ -48,6 +47,7 @@ from ltamp_cli.backends.skills3d.scoop import (
     bed_depth_m,
     sample_scoop_latents,
 )
+from ltamp_cli.learning.metrics import wilson_interval
 from ltamp_cli.threads import use_one_thread
 
 #: The bed before #20's fix: the drawn 200-300 beads whatever the bowl (no depth floor; the
@@ -65,16 +65,6 @@ class TrialCopy:
     valid: bool
     score: float
     info: dict[str, Any]
-
-
-def wilson(successes: int, n: int, z: float = 1.96) -> list[float]:
-    """95 % Wilson score interval ``[low, high]`` of ``successes`` of ``n``."""
-    if n == 0:
-        return [0.0, 1.0]
-    p = successes / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return [max(0.0, centre - half), min(1.0, centre + half)]
 
 
 def bead_count(settings: ScoopSettings, context: np.ndarray, seed: int) -> int:
@@ -144,7 +134,7 @@ def summarise(rows: list[dict[str, Any]], label: str) -> dict[str, Any]:
     cpu = [r["cpu_s"] for r in rows]
     return {
         "label": label, "trials": n, "successes": wins,
-        "rate": wins / n if n else None, "wilson95": wilson(wins, n),
+        "rate": wins / n if n else None, "wilson95": list(wilson_interval(wins, n)),
         "cpu_s_median": float(np.median(cpu)) if cpu else None,
         "cpu_s_mean": float(np.mean(cpu)) if cpu else None,
         "beads_median": float(np.median([r["beads"] for r in rows])) if rows else None,
@@ -246,17 +236,17 @@ def _flip_summary(by_control: dict[int, list[dict[str, Any]]], seeds: int) -> di
         "successes_per_control": {str(i): int(sum(s)) for i, s in sorted(labels.items())},
         "scores_per_control": {str(i): [round(r["score"], 3) for r in full[i][:seeds]]
                                for i in sorted(full)},
-        "mixed_controls": mixed, "mixed_wilson95": wilson(mixed, len(full)),
+        "mixed_controls": mixed, "mixed_wilson95": list(wilson_interval(mixed, len(full))),
         "pair_flip_rate": float(np.mean(flips)) if flips.size else None,
         "pair_flip_bootstrap95": boot(flips),
         "first_seed_successes": int(sum(first)),
-        "first_seed_wilson95": wilson(int(sum(first)), len(first)),
+        "first_seed_wilson95": list(wilson_interval(int(sum(first)), len(first))),
         "mean_success_rate": float(np.mean(rates)) if rates.size else None,
         "mean_success_rate_bootstrap95": boot(rates),
         "trials": int(sum(len(s) for s in labels.values())),
         "trial_successes": int(sum(sum(s) for s in labels.values())),
-        "trial_wilson95": wilson(int(sum(sum(s) for s in labels.values())),
-                                 int(sum(len(s) for s in labels.values()))),
+        "trial_wilson95": list(wilson_interval(int(sum(sum(s) for s in labels.values())),
+                                 int(sum(len(s) for s in labels.values())))),
         "cpu_s_median": float(np.median([r["cpu_s"] for rows in full.values()
                                          for r in rows[:seeds] if not r.get("copied")]))
         if full else None,

@@ -68,6 +68,8 @@ def _human_value(value: Any) -> str:
         return f"{value:.3f}"
     if isinstance(value, Mapping):
         return "  ".join(f"{key}={_human_value(item)}" for key, item in value.items())
+    if isinstance(value, list | tuple) and value and all(isinstance(v, float) for v in value):
+        return "[" + ", ".join(f"{v:.3f}" for v in value) + "]"
     return str(value)
 
 

@@ -42,7 +42,7 @@ def evaluate_command(
     from ltamp_cli.backends import load_backend
     from ltamp_cli.cli.conventions import emit
     from ltamp_cli.cli.train import heldout_from_records, read_records
-    from ltamp_cli.learning.metrics import SkillEvaluator
+    from ltamp_cli.learning.metrics import SkillEvaluator, wilson_interval
     from ltamp_cli.learning.model_dir import load_model
     from ltamp_cli.threads import use_one_thread
 
@@ -76,6 +76,9 @@ def evaluate_command(
                 n_contexts=trials,
                 n_test=len(evaluator.heldout.scores) if evaluator.heldout else 0,
             )
+            if result.success_rate is not None and trials > 0:
+                report["success_rate_wilson95"] = list(
+                    wilson_interval(round(result.success_rate * trials), trials))
         else:
             f1 = None
             if data is not None:
@@ -86,6 +89,11 @@ def evaluate_command(
             star, baseline, contexts = _live_outcomes(physics, skill, model, trials, seed)
             report["success_rate"] = sum(star) / trials if trials else None
             report["random_success_rate"] = sum(baseline) / trials if trials else None
+            if trials:
+                # Rates of a few contexts are claims only with their uncertainty.
+                report["success_rate_wilson95"] = list(wilson_interval(sum(star), trials))
+                report["random_success_rate_wilson95"] = list(
+                    wilson_interval(sum(baseline), trials))
             report["n_contexts"] = trials
             # Per context, in draw order (the same contexts for every model at one --seed):
             # for paired comparisons of two models (e.g. a refit against the shipped one).

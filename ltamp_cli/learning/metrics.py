@@ -8,8 +8,10 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from statistics import NormalDist
 
 import numpy as np
 
@@ -18,6 +20,27 @@ from ltamp_cli.learning.model import PhysicalValidity, SkillModel
 
 # physical contexts (k, dα), controls (k, dθ) -> true scores (k,)
 TrueScore = Callable[[np.ndarray, np.ndarray], np.ndarray]
+
+
+def wilson_interval(successes: int, trials: int, confidence: float = 0.95
+                    ) -> tuple[float, float]:
+    """Wilson score interval ``(low, high)`` of the rate ``successes / trials``.
+
+    ``confidence`` is two-sided (0.95: z = 1.96). With no trials the interval is the whole
+    ``(0.0, 1.0)``: nothing is known about the rate.
+    """
+    if not 0 <= successes <= trials:
+        raise ValueError(f"need 0 <= successes <= trials, got {successes} of {trials}")
+    if not 0.0 < confidence < 1.0:
+        raise ValueError(f"confidence must lie in (0, 1), got {confidence}")
+    if trials == 0:
+        return 0.0, 1.0
+    z = NormalDist().inv_cdf(0.5 + confidence / 2.0)
+    rate = successes / trials
+    shrink = 1.0 + z * z / trials
+    centre = (rate + z * z / (2.0 * trials)) / shrink
+    half = z * math.sqrt(rate * (1.0 - rate) / trials + z * z / (4.0 * trials * trials)) / shrink
+    return max(0.0, centre - half), min(1.0, centre + half)
 
 
 def f1_score(true_scores: np.ndarray, decisions: np.ndarray) -> float:

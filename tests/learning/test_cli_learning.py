@@ -65,6 +65,8 @@ def test_train_then_evaluate(capsys, tmp_path):
     report = json.loads(stdout)
     assert report["f1"] > 0.8 and report["success_rate"] >= 0.9
     assert report["f1"] == pytest.approx(summary["f1"], abs=0.1)
+    low, high = report["success_rate_wilson95"]  # 10 contexts: a rate with its uncertainty
+    assert low < report["success_rate"] <= high and high - low > 0.15
 
 
 def test_train_pool_mode_from_a_dataset(capsys, tmp_path, synthetic):

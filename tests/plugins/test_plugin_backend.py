@@ -96,6 +96,9 @@ def test_plugin_skill_is_collected_trained_sampled_and_solved(plugin_site: Path,
     evaluated = ok_json(ltamp(plugin_site, tmp_path, "evaluate", "model", "--trials", "20",
                               "--json"))
     assert evaluated["backend"] == "slide" and evaluated["success_rate"] >= 0.8
+    for rate in ("success_rate", "random_success_rate"):  # live trials: both with intervals
+        low, high = evaluated[f"{rate}_wilson95"]
+        assert low <= evaluated[rate] <= high and high - low > 0.1
 
     sampled = ok_json(ltamp(plugin_site, tmp_path, "sample", "model", "--context",
                             "target=3.0", "-n", "20", "--json"))
