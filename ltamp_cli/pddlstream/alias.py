@@ -28,6 +28,7 @@ If a real PDDLStream is importable, :func:`install` refuses to shadow it unless
 from __future__ import annotations
 
 import contextlib
+import dis
 import importlib
 import importlib.abc
 import importlib.machinery
@@ -268,10 +269,28 @@ class MissingName:
         return f"<{self.qualname}: not provided by ltamp>"
 
 
+_IMPORT_FROM = dis.opmap["IMPORT_FROM"]
+
+
+def _in_import_from() -> bool:
+    """Whether the attribute lookup in progress is a ``from module import NAME`` statement
+    (the caller's frame is executing ``IMPORT_FROM``) rather than ``module.NAME``,
+    ``hasattr`` or ``getattr``."""
+    frame = sys._getframe(2)  # 0: here, 1: AliasModule.__getattr__, 2: its caller
+    code = frame.f_code.co_code
+    return 0 <= frame.f_lasti < len(code) and code[frame.f_lasti] == _IMPORT_FROM
+
+
+class AliasAttributeError(AttributeError):
+    """``module.NAME`` (or ``hasattr``) for a name an alias module does not provide."""
+
+
 class AliasModule(types.ModuleType):
-    """A ``pddlstream.*`` module served by the alias. Reading a public name it lacks raises
-    :class:`AliasImportError` (``from ... import NAME`` shows that one line); setting any
-    attribute (PDDLStream's module-level switches) is allowed and has no effect on ltamp."""
+    """A ``pddlstream.*`` module served by the alias. ``from module import NAME`` of a public
+    name it lacks raises :class:`AliasImportError` (one line: the script's line, the name,
+    the hint); ``module.NAME`` raises :class:`AliasAttributeError` with the same line (so
+    ``hasattr`` answers ``False``). Setting any attribute (PDDLStream's module-level
+    switches) is allowed and has no effect on ltamp."""
 
     def __getattr__(self, name: str) -> Any:
         if name.startswith("_"):
@@ -279,18 +298,20 @@ class AliasModule(types.ModuleType):
         submodule = f"{self.__name__}.{name}"
         if submodule in SERVED:  # `from pddlstream.algorithms import refinement`
             return importlib.import_module(submodule)
+        error = AliasImportError if _in_import_from() else AliasAttributeError
         hint = MISSING.get(self.__name__, {}).get(name)
         if hint is not None:  # only reached when strict
-            raise AliasImportError(f"{_caller()}{MissingName(submodule, hint).message()}",
-                                   name=self.__name__)
-        if self.__name__ in SWITCH_MODULES:
-            raise AliasImportError(
-                f"{_caller()}{submodule}: one of PDDLStream's planner switches; ltamp's "
-                "alias accepts setting it (no effect) but has no value to read",
-                name=self.__name__)
-        raise AliasImportError(
-            f"{_caller()}cannot import {name!r} from {self.__name__}: ltamp's pddlstream "
-            f"alias does not provide it (see {DOCS} for what it provides)", name=self.__name__)
+            message = MissingName(submodule, hint).message()
+        elif self.__name__ in SWITCH_MODULES:
+            message = (f"{submodule}: one of PDDLStream's planner switches; ltamp's alias "
+                       "accepts setting it (no effect) but has no value to read")
+        else:
+            what = (f"cannot import {name!r} from {self.__name__}" if error is AliasImportError
+                    else f"{self.__name__} has no attribute {name!r}")
+            message = (f"{what}: ltamp's pddlstream alias does not provide it (see {DOCS} for "
+                       "what it provides)")
+        raise error(_caller() + message, name=self.__name__ if error is AliasImportError
+                    else name)
 
 
 class PddlstreamAlias(importlib.abc.MetaPathFinder, importlib.abc.Loader):
@@ -354,8 +375,9 @@ def is_installed() -> bool:
 def real_pddlstream() -> str | None:
     """Where a real (non-alias) ``pddlstream`` would be imported from, or ``None``."""
     module = sys.modules.get("pddlstream")
-    if module is not None and not isinstance(module, AliasModule):
-        return str(getattr(module, "__file__", None) or module)
+    if module is not None and not isinstance(module, AliasModule) and getattr(
+            module, "__file__", None):
+        return str(module.__file__)
     for finder in sys.meta_path:
         if isinstance(finder, PddlstreamAlias) or not hasattr(finder, "find_spec"):
             continue
@@ -363,8 +385,10 @@ def real_pddlstream() -> str | None:
             spec = finder.find_spec("pddlstream", None)
         except (ImportError, ValueError):
             continue
-        if spec is not None:
-            return str(spec.origin or list(spec.submodule_search_locations or []) or finder)
+        # A folder called pddlstream without __init__.py (a namespace package: data, a
+        # scratch folder) is not a PDDLStream.
+        if spec is not None and spec.origin not in (None, "namespace"):
+            return str(spec.origin)
     return None
 
 
@@ -427,7 +451,8 @@ def served_modules() -> list[str]:
 
 
 __all__ = [
-    "MISSING", "SERVED", "AliasConflictError", "AliasImportError", "AliasModule",
-    "AliasModuleNotFoundError", "MissingEquivalentError", "MissingName", "PddlstreamAlias",
+    "MISSING", "SERVED", "AliasAttributeError", "AliasConflictError", "AliasImportError",
+    "AliasModule", "AliasModuleNotFoundError", "MissingEquivalentError", "MissingName",
+    "PddlstreamAlias",
     "install", "installed", "is_installed", "real_pddlstream", "served_modules", "uninstall",
 ]

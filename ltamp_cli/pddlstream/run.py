@@ -27,6 +27,7 @@ from typing import Any, TextIO
 
 from ltamp_cli.errors import InputError
 from ltamp_cli.pddlstream.alias import (
+    AliasAttributeError,
     AliasImportError,
     MissingEquivalentError,
     install,
@@ -121,7 +122,7 @@ def run_target(target: str, argv: Sequence[str] = (), *, module: bool = False,
             runpy.run_path(str(path), run_name="__main__")
     except SystemExit as done:
         return _exit_code(done, err)
-    except (AliasImportError, MissingEquivalentError) as error:
+    except (AliasImportError, AliasAttributeError, MissingEquivalentError) as error:
         print(f"ltamp: error: {' '.join(str(error).split())}", file=err)
         return EXIT_BAD_INPUT
     except InputError as error:
