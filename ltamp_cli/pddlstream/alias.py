@@ -246,7 +246,7 @@ class MissingName:
         self._fail()
 
     def __getattr__(self, name: str) -> Any:
-        if name.startswith("__"):
+        if name.startswith("_"):  # introspection (copy, inspect, namedtuple checks)
             raise AttributeError(name)
         self._fail()
 
