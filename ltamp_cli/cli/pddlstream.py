@@ -3,7 +3,7 @@ imports served by ``ltamp_cli.pddlstream``; see :mod:`ltamp_cli.pddlstream.run`)
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -31,6 +31,9 @@ def run_command(
         "--force", help="Shadow a real PDDLStream that is importable.")] = False,
     strict: Annotated[bool, typer.Option(
         "--strict", help="PDDLStream names ltamp lacks fail at import, not at use.")] = False,
+    as_json: Annotated[bool, typer.Option(
+        "--json", help="After the script's own output, print one JSON object: script, "
+        "exit_code, cpu_s, error (the runner's one-line reason, if any).")] = False,
 ) -> None:
     """Run SCRIPT as __main__ with `pddlstream.*` imports served by ltamp_cli.pddlstream.
 
@@ -38,7 +41,36 @@ def run_command(
     code: the script's; 2 with one line if it needs a PDDLStream name ltamp lacks or ltamp
     rejects its problem; 1 with its traceback if it fails in its own code.
     """
+    import io
+    import sys
+    import time
+
+    from ltamp_cli.cli.conventions import emit
     from ltamp_cli.pddlstream.run import run_target
 
-    raise typer.Exit(run_target(script, list(ctx.args), module=module, force=force,
-                                strict=strict))
+    errors = _Tee(sys.stderr, io.StringIO())
+    start = time.process_time()
+    code = run_target(script, list(ctx.args), module=module, force=force, strict=strict,
+                      stderr=errors)
+    if as_json:
+        lines = errors.copy.getvalue().splitlines()
+        error = next((line.removeprefix("ltamp: error: ") for line in reversed(lines)
+                      if line.startswith("ltamp: ")), None)
+        emit({"script": script, "module": module, "exit_code": code,
+              "cpu_s": round(time.process_time() - start, 3), "error": error}, True)
+    raise typer.Exit(code)
+
+
+class _Tee:
+    """Writes to ``target`` and keeps a copy (the runner's messages for ``--json``)."""
+
+    def __init__(self, target: Any, copy: Any) -> None:
+        self.target = target
+        self.copy = copy
+
+    def write(self, text: str) -> int:
+        self.copy.write(text)
+        return int(self.target.write(text))
+
+    def flush(self) -> None:
+        self.target.flush()

@@ -23,7 +23,7 @@ import sys
 import traceback
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any, Protocol
 
 from ltamp_cli.errors import InputError
 from ltamp_cli.pddlstream.alias import (
@@ -45,6 +45,12 @@ USAGE = ("usage: ltamp pddlstream run [--force] [--strict] (SCRIPT.py | -m MODUL
          "  --strict  PDDLStream names ltamp lacks fail at import, not at use\n"
          "  -m MODULE run a module (current folder first on sys.path), as python -m")
 
+class Writer(Protocol):
+    """Where the runner's messages go (``sys.stderr`` or any object with ``write``)."""
+
+    def write(self, text: str, /) -> int: ...
+
+
 _RUNNER_FILES = (str(Path(__file__).resolve()), runpy.__file__)
 
 
@@ -58,7 +64,7 @@ def _user_frames(error: BaseException) -> traceback.StackSummary:
     return traceback.StackSummary.from_list(frames[start:])
 
 
-def _exit_code(done: SystemExit, stderr: TextIO) -> int:
+def _exit_code(done: SystemExit, stderr: Writer) -> int:
     """``sys.exit(code)`` as the interpreter maps it: None -> 0, int -> itself, else the
     text on stderr and 1."""
     if done.code is None:
@@ -86,14 +92,14 @@ def _check_module(name: str) -> None:
 def run_target(target: str, argv: Sequence[str] = (), *, module: bool = False,
                force: bool = False, strict: bool = False,
                overrides: Mapping[str, Any] | None = None,
-               stderr: TextIO | None = None) -> int:
+               stderr: Writer | None = None) -> int:
     """Run the script at path ``target`` (or the module named ``target`` if ``module``) as
     ``__main__`` with the alias installed and ``argv`` as its arguments; return its exit
     code (see the module docstring). ``sys.argv``, ``sys.path`` and the import system are
     restored afterwards. Raises :class:`InputError` if ``target`` is no script, or the alias
     cannot be installed. ``overrides`` as in :func:`~ltamp_cli.pddlstream.alias.install`.
     """
-    err = stderr if stderr is not None else sys.stderr
+    err: Writer = stderr if stderr is not None else sys.stderr
     if module:
         if not target or not all(part.isidentifier() for part in target.split(".")):
             raise InputError(f"-m {target!r}: not a module name (dotted identifiers)")

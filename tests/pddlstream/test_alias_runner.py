@@ -5,6 +5,7 @@ runner nothing serves `pddlstream`."""
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -58,6 +59,14 @@ def test_exit_code_is_the_scripts(courier: Path, tmp_path: Path) -> None:
     done = run([str(courier), "--exit", "5"], cwd=tmp_path)
     assert done.returncode == 5, done.stderr
     assert "Solved: True" in done.stdout
+    reported = run(["--json", str(courier), "--exit", "4"], cwd=tmp_path)
+    assert reported.returncode == 4
+    summary = json.loads(reported.stdout.splitlines()[-1])  # after the script's own output
+    assert summary["exit_code"] == 4 and summary["error"] is None
+    assert summary["script"] == str(courier) and summary["cpu_s"] > 0
+    missing = run(["--json", str(courier.parent / "missing.py")], cwd=tmp_path)
+    assert missing.returncode == 2 and missing.stderr.count("\n") == 1
+    assert json.loads(missing.stdout)["error"].startswith(f"{courier.parent / 'missing.py'}:4:")
 
 
 def test_the_scripts_own_error_gives_its_traceback(courier: Path, tmp_path: Path) -> None:
