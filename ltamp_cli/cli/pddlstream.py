@@ -7,12 +7,21 @@ from typing import Annotated, Any
 
 import typer
 
+RUN_HELP = (
+    "Run SCRIPT as __main__ with its `pddlstream.*` imports served by ltamp_cli.pddlstream."
+    "\n\n"
+    "Options go before SCRIPT; everything after it is the script's own command line. Exit "
+    "code: the script's; 2 with one line if it needs a PDDLStream name ltamp lacks or ltamp "
+    "rejects its problem; 1 with its traceback if it fails in its own code."
+)
+
 
 def register(app: typer.Typer) -> None:
     pddlstream_app = typer.Typer(help="Run PDDLStream scripts with ltamp's planner.",
                                  no_args_is_help=True)
     pddlstream_app.command(
         name="run",
+        help=RUN_HELP,
         context_settings={"allow_extra_args": True, "ignore_unknown_options": True,
                           "allow_interspersed_args": False},
     )(run_command)
@@ -35,12 +44,7 @@ def run_command(
         "--json", help="After the script's own output, print one JSON object: script, "
         "exit_code, cpu_s, error (the runner's one-line reason, if any).")] = False,
 ) -> None:
-    """Run SCRIPT as __main__ with `pddlstream.*` imports served by ltamp_cli.pddlstream.
-
-    Options go before SCRIPT; everything after it is the script's own command line. Exit
-    code: the script's; 2 with one line if it needs a PDDLStream name ltamp lacks or ltamp
-    rejects its problem; 1 with its traceback if it fails in its own code.
-    """
+    """See :data:`RUN_HELP`."""
     import io
     import sys
     import time
