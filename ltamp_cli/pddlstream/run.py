@@ -96,8 +96,10 @@ def run_target(target: str, argv: Sequence[str] = (), *, module: bool = False,
     """Run the script at path ``target`` (or the module named ``target`` if ``module``) as
     ``__main__`` with the alias installed and ``argv`` as its arguments; return its exit
     code (see the module docstring). ``sys.argv``, ``sys.path`` and the import system are
-    restored afterwards. Raises :class:`InputError` if ``target`` is no script, or the alias
-    cannot be installed. ``overrides`` as in :func:`~ltamp_cli.pddlstream.alias.install`.
+    restored afterwards (the modules the script imported, other than ``pddlstream.*``, stay
+    in ``sys.modules`` as after any import). Raises :class:`InputError` if ``target`` is no
+    script, or the alias cannot be installed. ``overrides``: as in
+    :func:`~ltamp_cli.pddlstream.alias.install`; ``stderr``: where the runner's messages go.
     """
     err: Writer = stderr if stderr is not None else sys.stderr
     if module:
