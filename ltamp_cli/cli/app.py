@@ -63,6 +63,7 @@ def build_app() -> typer.Typer:
         collect,
         evaluate,
         import_trials,
+        pddlstream,
         plot,
         problems,
         sample,
@@ -73,7 +74,7 @@ def build_app() -> typer.Typer:
     )
 
     for module in (solve, problems, check, collect, skills, train, evaluate, sample,
-                   import_trials, tell, plot):
+                   import_trials, tell, plot, pddlstream):
         module.register(app)
     return app
 

@@ -1,6 +1,7 @@
 """bench/pddlstream_examples.py on a stand-in checkout written here (never a real PDDLStream
-checkout in the tests): the import hook serves ``pddlstream.*`` from ltamp_cli.pddlstream,
-the example's own module and samplers run unmodified, and the table/JSON report it."""
+checkout in the tests): the runner's alias serves ``pddlstream.*`` from ltamp_cli.pddlstream
+(shadowing the checkout's own package), the example's own module and samplers run
+unmodified in a child process, and the table/JSON report it."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ from pddlstream.algorithms.meta import solve, create_parser
 from pddlstream.language.constants import PDDLProblem, print_solution
 from pddlstream.language.generator import from_gen_fn, from_test
 from pddlstream.utils import read, get_file_path
-from pddlstream.algorithms.downward import no_such_helper  # unused: must not stop loading
+from pddlstream.language.optimizer import OptimizerOutput  # unused: must not stop loading
 from examples.hop.primitives import hops
 
 def get_problem():
@@ -30,6 +31,17 @@ def get_problem():
 def main():
     args = create_parser().parse_args()
     print_solution(solve(get_problem(), algorithm=args.algorithm, planner='max-astar'))
+
+if __name__ == '__main__':
+    main()
+"""
+USES_INTERNALS_PY = """
+from pddlstream.algorithms.meta import solve
+from pddlstream.algorithms.skeleton import SkeletonQueue
+
+def main():
+    SkeletonQueue(None, None)
+    solve(None)
 
 if __name__ == '__main__':
     main()
@@ -58,7 +70,8 @@ def write_checkout(root: Path) -> None:
              "pddlstream/algorithms/meta.py": "", "pddlstream/algorithms/downward.py": "",
              "pddlstream/language/constants.py": "", "pddlstream/language/generator.py": "",
              "examples/__init__.py": "", "examples/hop/__init__.py": "",
-             "examples/hop/run.py": RUN_PY, "examples/hop/primitives.py": PRIMITIVES,
+             "examples/hop/run.py": RUN_PY, "examples/hop/internals.py": USES_INTERNALS_PY,
+             "examples/hop/primitives.py": PRIMITIVES,
              "examples/hop/domain.pddl": DOMAIN, "examples/hop/stream.pddl": STREAM}
     for relative, text in files.items():
         path = root / relative
@@ -80,12 +93,17 @@ def test_stand_in_checkout_is_loaded_and_solved(tmp_path: Path) -> None:
     out = tmp_path / "result.json"
     run = bench(str(checkout), "--max-time", "30", "--out", str(out), cwd=tmp_path)
     assert run.returncode == 0, run.stderr
-    [row] = json.loads(out.read_text())["examples"]
+    internals, row = json.loads(out.read_text())["examples"]
     assert row["example"] == "hop/run.py"
     assert row["loaded"] and row["solved"], row
     assert row["plan_length"] == 4  # hop, hop, hop, finish
-    assert row["unsupported_names"] == ["pddlstream.algorithms.downward.no_such_helper"]
-    assert "1/1 loaded, 1/1 solved" in run.stdout
+    assert row["exit_code"] == 0 and "error" not in row
+    assert internals["example"] == "hop/internals.py"
+    assert not internals["loaded"] and internals["exit_code"] == 2
+    assert internals["error"].startswith(
+        f"{checkout / 'examples' / 'hop' / 'internals.py'}:5: pddlstream.algorithms.skeleton."
+        "SkeletonQueue is not provided by ltamp's pddlstream alias"), internals
+    assert "1/2 loaded, 1/2 solved" in run.stdout
 
 
 def test_missing_checkout_is_skipped_with_a_message(tmp_path: Path) -> None:
