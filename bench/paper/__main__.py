@@ -76,6 +76,11 @@ def pool_units(ctx: Context, pooled: list[str]) -> list[Unit]:
             for (backend, skill), n in wanted.items()]
 
 
+def _pool_skill(unit: Unit) -> str:
+    """The skill of a pool unit (its part is ``backend:skill:n``)."""
+    return str(unit.part).split(":")[1]
+
+
 def plan(ctx: Context, names: list[str], pools_only: bool = False) -> list[Unit]:
     """The units of work for the experiments ``names``: pools, parts and whole experiments
     (``pools_only``: only the trial-pool collections the pooled ones among them need)."""
@@ -88,7 +93,10 @@ def plan(ctx: Context, names: list[str], pools_only: bool = False) -> list[Unit]
         module = importlib.import_module(EXPERIMENTS[name])
         after = tuple(p.key for p in pools) if name in POOLED else ()
         if hasattr(module, "parts"):
-            units += [Unit(f"{name}:{part}", name, part, cost, after)
+            # A pooled experiment's parts are its skills: each waits only for its own pool.
+            units += [Unit(f"{name}:{part}", name, part, cost,
+                           tuple(p.key for p in pools if _pool_skill(p) == part)
+                           if name in POOLED else after)
                       for part, cost in module.parts(ctx)]
         else:
             units.append(Unit(name, name, None, ESTIMATED_CPU_S.get(name, 60.0), after))

@@ -5,6 +5,7 @@ Nothing here holds state between experiments: each ``run(ctx)`` gets a :class:`C
 
 from __future__ import annotations
 
+import fcntl
 import hashlib
 import json
 import os
@@ -89,13 +90,17 @@ class JobLog:
         read them back (JSON values: lists for tuples, floats for numpy scalars)."""
         line = json.dumps({"key": key, "sizes": self.sizes, "rows": rows},
                           default=_jsonable) + "\n"
-        with self.path.open("a+b") as handle:
-            if handle.tell() > 0:
-                handle.seek(-1, os.SEEK_END)
-                if handle.read(1) != b"\n":
-                    line = "\n" + line  # end a line torn by an interruption first
-            handle.write(line.encode("utf-8"))
-            handle.flush()
+        # The parts of a split experiment (one per skill) may run in parallel processes and
+        # share this log: the lock keeps the torn-line check and the append together, and the
+        # line is one unbuffered write (a buffered one could be split and interleaved).
+        with self.path.open("a+b", buffering=0) as handle:
+            fcntl.flock(handle.fileno(), fcntl.LOCK_EX)
+            size = os.fstat(handle.fileno()).st_size
+            if size > 0 and os.pread(handle.fileno(), 1, size - 1) != b"\n":
+                line = "\n" + line  # end a line torn by an interruption first
+            data = line.encode("utf-8")
+            while data:
+                data = data[os.write(handle.fileno(), data):]
             os.fsync(handle.fileno())
         self._done[key] = json.loads(line.strip())["rows"]
         return self._done[key]

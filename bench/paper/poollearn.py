@@ -29,6 +29,20 @@ class CheckpointEvaluator(SkillEvaluator):
         return super().evaluate(model, n_trials, success and n_trials in self.success_at)
 
 
+#: CPU seconds of one simulated θ* trial per (engine, skill), from the fidelity engine rows
+#: (``docs/results/fidelity/engine.json``; loaded 2-core machine): they only order the work.
+THETA_TRIAL_CPU_S = {("pybullet", "pour"): 1.13, ("pybullet", "scoop"): 5.46,
+                     ("sapien", "pour"): 0.21, ("sapien", "scoop"): 1.28}
+
+
+def theta_trials(sizes: Mapping[str, Any], learners: int, skill: str) -> int:
+    """Simulated θ* trials of one skill: learners × seeds × checkpoints × contexts, counting
+    only the checkpoints at which each seed simulates (:func:`success_checkpoints`)."""
+    del skill  # every skill of an experiment has the same sizes
+    per_learner = sum(len(success_checkpoints(sizes, seed)) for seed in range(sizes["seeds"]))
+    return learners * per_learner * int(sizes["contexts"])
+
+
 def success_checkpoints(sizes: Mapping[str, Any], seed: int) -> set[int]:
     """The checkpoints (trials) at which seed ``seed`` simulates the success rate:
     ``sizes["success_at"]`` for the first ``sizes["success_seeds"]`` seeds (default: all

@@ -29,10 +29,12 @@ from bench.paper.common import (
     write_json,
 )
 from bench.paper.poollearn import (
+    THETA_TRIAL_CPU_S,
     CheckpointEvaluator,
     held_out_contexts,
     pool_curve,
     success_checkpoints,
+    theta_trials,
 )
 from bench.paper.pools import (
     FULL_SKILL_BACKENDS,
@@ -75,15 +77,36 @@ SIZES: dict[str, dict[str, Any]] = {
 }
 
 
-def run(ctx: Context) -> dict[str, Any]:
-    """Writes ``supervised3d.json``, ``supervised3d.png`` and ``supervised3d_kernels.png``."""
-    started = time.perf_counter()
+def parts(ctx: Context) -> list[tuple[str, float]]:
+    """One part per skill, with its estimated CPU seconds: a part needs only its own skill's
+    pool, so one skill's jobs can run while the other's pool is still being collected."""
+    sizes = ctx.sizes(SIZES)
+    return [(skill, theta_trials(sizes, len(LEARNERS), skill)
+             * THETA_TRIAL_CPU_S.get((skill_backend(sizes, skill), skill), 0.01) + 10.0)
+            for skill in sizes["skills"]]
+
+
+def run_part(ctx: Context, part: str) -> None:
+    """Run (or finish) the jobs of skill ``part``; each goes to the job log when done."""
+    if part not in ctx.sizes(SIZES)["skills"]:
+        raise KeyError(f"{NAME} has no part {part!r} in {ctx.mode} mode")
+    _skill_results(ctx, [part])
+
+
+def merge(ctx: Context) -> dict[str, Any]:
+    """Join every skill's logged jobs into the experiment's JSON and PNGs (a job missing from
+    the log is run, so this is :func:`run`)."""
+    return run(ctx)
+
+
+def _skill_results(ctx: Context, names: list[str]) -> dict[str, Any]:
+    """The jobs of the skills ``names``: run, or read back from the job log."""
     sizes = ctx.sizes(SIZES)
     backends = SkillBackends(sizes)
     log = JobLog(ctx, NAME, sizes)  # finished jobs: a rerun continues after the last one
     skills: dict[str, Any] = {}
     try:
-        for skill in sizes["skills"]:
+        for skill in names:
             backend = backends[skill]
             pool = get_pool(ctx, skill_backend(sizes, skill), skill, sizes["n_train"],
                             sizes["n_test"])
@@ -130,6 +153,14 @@ def run(ctx: Context) -> dict[str, Any]:
                              "kernel_runs": kernel_rows}
     finally:
         backends.close()
+    return skills
+
+
+def run(ctx: Context) -> dict[str, Any]:
+    """Writes ``supervised3d.json``, ``supervised3d.png`` and ``supervised3d_kernels.png``."""
+    started = time.perf_counter()
+    sizes = ctx.sizes(SIZES)
+    skills = _skill_results(ctx, sizes["skills"])
     learners = [s for s, _ in LEARNERS]
     names = sizes["skills"]
     panels = [{"title": f"{skill}: success rate of θ*", "ylabel": "success rate",

@@ -104,3 +104,48 @@ def test_sampling_parts_merge_in_row_order_and_never_from_stale_files(tmp_path: 
     # A rerun of a measured part reads it back (resuming an interrupted run) instead of
     # measuring again.
     assert sampling_table.run_part(ctx, names[0]) == merged["tables"][0]
+
+
+def test_full_pooled_experiments_split_by_skill_and_wait_only_for_their_own_pool(
+        tmp_path: Path) -> None:
+    # The full pour pool (SAPIEN) can be complete while the scoop pool (PyBullet) is still
+    # being collected: the pour parts must not wait for the scoop pool.
+    ctx = Context("full", tmp_path, False)
+    units = {u.key: u for u in plan(ctx, ["supervised3d", "active3d", "confident"])}
+    pools = {key: unit for key, unit in units.items() if key.startswith("pool:")}
+    assert len(pools) == 2
+    for name in ("supervised3d", "active3d"):
+        for skill in ("pour", "scoop"):
+            part = units[f"{name}:{skill}"]
+            assert part.experiment == name and part.part == skill
+            (pool,) = part.after
+            assert pool.endswith(f"_{skill}") and pool in pools
+        # The scoop's θ* trials cost more than the pour's on any engine.
+        assert units[f"{name}:scoop"].cost > units[f"{name}:pour"].cost > 0
+    assert sorted(units["confident"].after) == sorted(pools)  # one unit: both pools
+
+
+def test_parallel_parts_append_whole_lines_to_a_shared_job_log(tmp_path: Path) -> None:
+    # Two parts of one split experiment share the log; lines larger than any write buffer,
+    # written at once from two processes, must come back whole.
+    import multiprocessing
+
+    ctx = Context("smoke", tmp_path, False, 1)
+    rows = [{"value": float(i), "pad": "x" * 64} for i in range(400)]  # ~30 KB a line
+    workers = [multiprocessing.get_context("fork").Process(
+        target=_put_many, args=(ctx, prefix, rows)) for prefix in ("pour", "scoop")]
+    for worker in workers:
+        worker.start()
+    for worker in workers:
+        worker.join(60)
+        assert worker.exitcode == 0
+    log = JobLog(ctx, "exp", {"seeds": 1})
+    for prefix in ("pour", "scoop"):
+        for job in range(20):
+            assert log.get(f"{prefix}/{job}") == rows
+
+
+def _put_many(ctx: Context, prefix: str, rows: list[dict[str, object]]) -> None:
+    log = JobLog(ctx, "exp", {"seeds": 1})
+    for job in range(20):
+        log.put(f"{prefix}/{job}", rows)
