@@ -182,6 +182,19 @@ def _extend(steps: Sequence[_Step], depth: int, index: FactIndex, binding: dict[
     key = tuple([binding.get(term, term) for term in step.key_terms])
     last = depth + 1 == len(steps)
     checks, binds = step.checks, step.binds
+    if not binds:
+        # Every argument is bound (no new variable, hence no check): a membership test,
+        # and the binding goes on unchanged (in kitchen_fluent's groundings, 85 % of the
+        # steps; the index lookup, its per-predicate index and a copy per step cost more).
+        if (step.predicate, *key) not in index.members:
+            return
+        if not last:
+            _extend(steps, depth + 1, index, binding, found, project)
+        elif project is None:
+            found.append(binding.copy())
+        else:
+            found.append(tuple([binding[v] for v in project]))
+        return
     if last and project is not None:
         here = {variable: position for position, variable in binds}
         plan = [(here.get(v, -1), v) for v in project]
