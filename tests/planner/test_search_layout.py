@@ -211,3 +211,72 @@ def test_joins_with_fully_bound_steps_equal_brute_force() -> None:
         assert tuples == {tuple(v for _, v in b) for b in expected}
         nonempty += bool(expected)
     assert nonempty > 50
+
+
+def reference_vector(task: Task, state: frozenset[int]) -> list[int]:
+    """A state's truth values with its derived facts, by a plain fixpoint per stratum."""
+    from ltamp_cli.planner.search.task import _stratify
+
+    holds = [0] * task.num_facts
+    holds[TRUE_FACT] = 1
+    for fact in state:
+        holds[fact] = 1
+    strata = _stratify(task.axioms)
+    for stratum in sorted(set(strata)):
+        members = [i for i, s in enumerate(strata) if s == stratum]
+        changed = True
+        while changed:
+            changed = False
+            for i in members:
+                head = task.axiom_heads[i]
+                if not holds[head] and all(holds[f] for f in task.axiom_positive[i]) and not any(
+                        holds[f] for f in task.axiom_negative[i]):
+                    holds[head] = 1
+                    changed = True
+    return holds
+
+
+def layered_task(rng: random.Random) -> tuple[Task, list[frozenset[int]]]:
+    """A random task whose axioms form strata of each kind: one body literal of each sign
+    (gathers), several (reduceat), recursive (a chain of derived facts) or not."""
+    basic = [("p", str(i)) for i in range(10)]
+    axioms = []
+    for _ in range(rng.randint(1, 5)):  # stratum 0, recursive: a chain over reach/1
+        a, b = rng.sample(range(6), 2)
+        axioms.append(GroundAxiom(("reach", str(b)), (("reach", str(a)), rng.choice(basic)),
+                                  ()))
+    axioms.append(GroundAxiom(("reach", "0"), (rng.choice(basic),), ()))
+    for i in range(rng.randint(1, 8)):  # stratum 1: one literal of each sign
+        axioms.append(GroundAxiom(("s", str(i)), (rng.choice(basic),),
+                                  (("reach", str(rng.randint(0, 5))),)
+                                  if rng.random() < 0.7 else ()))
+    for i in range(rng.randint(1, 4)):  # stratum 2: several literals of each sign
+        axioms.append(GroundAxiom(("t", str(i)), tuple(rng.sample(basic, 2)),
+                                  (("s", str(rng.randint(0, 7))), ("reach", str(i)))))
+    axioms.append(GroundAxiom(("%goal",), (rng.choice(basic),), ()))
+    actions = [GroundAction("a", (), (("reach", "3"),), (("t", "0"),),
+                            (GroundEffect((), (), rng.choice(basic), True),), 1.0)]
+    reachable = set(basic) | {a.head for a in axioms}
+    grounding = Grounding(actions, axioms, reachable, frozenset(),
+                          frozenset({"s", "reach", "t", "%goal"}))
+    task = Task(grounding, set())
+    states = [frozenset(task.fact_ids[f] for f in rng.sample(basic, rng.randint(0, 8))
+                        if f in task.fact_ids) for _ in range(6)]
+    return task, states
+
+
+def test_state_vectors_equal_a_plain_fixpoint_per_stratum() -> None:
+    rng = random.Random(5)
+    kinds = set()
+    derived_true = 0
+    for _ in range(200):
+        task, states = layered_task(rng)
+        kinds.update((layer.recursive, layer.single_pos, layer.single_neg)
+                     for layer in task.axiom_layers)
+        for state in states:
+            expected = reference_vector(task, state)
+            assert task.state_vector(state).tolist() == expected
+            derived_true += sum(expected[i] for i in range(task.num_facts)
+                                if task.is_derived[i])
+    assert {(True, False, True), (False, True, True), (False, False, False)} <= kinds
+    assert derived_true > 500
