@@ -337,8 +337,9 @@ def _extend_bounded(steps: Sequence[_Step], depth: int, index: FactIndex,
                             weighted, total)
 
 
-def _ground(args: Iterable[str], binding: Mapping[str, str]) -> tuple[str, ...]:
-    return tuple([binding.get(a, a) for a in args])
+def _ground(args: Sequence[str], binding: Mapping[str, str]) -> tuple[str, ...]:
+    get = binding.get
+    return tuple(map(get, args, args))
 
 
 def _match(literal: LiftedLiteral, args: tuple[str, ...]) -> dict[str, str] | None:
@@ -603,11 +604,11 @@ def _emit(rule: _Rule, binding: dict[str, str], index: FactIndex, init: set[Fact
         compiled = rule.compiled = _compile_rule(rule, fluent)
     blocking: Fact | None = None
     for predicate, terms in compiled.static_neg:
-        fact = (predicate, *[get(a, a) for a in terms])
+        fact = (predicate, *map(get, terms, terms))
         if fact in init:
             blocking = fact
             break
-    dynamic_pos = tuple([(predicate, *[get(a, a) for a in terms])
+    dynamic_pos = tuple([(predicate, *map(get, terms, terms))
                          for predicate, terms in compiled.dynamic_pos])
     source = rule.source
     if blocking is not None:
@@ -615,9 +616,9 @@ def _emit(rule: _Rule, binding: dict[str, str], index: FactIndex, init: set[Fact
             head = (source.predicate, *_ground(source.head_args, binding))
             result.blocked_axioms.append((head, dynamic_pos, blocking))
         return
-    negative = tuple([(predicate, *[get(a, a) for a in terms])
+    negative = tuple([(predicate, *map(get, terms, terms))
                       for predicate, terms in compiled.dynamic_neg])
-    static_pos = tuple([(predicate, *[get(a, a) for a in terms])
+    static_pos = tuple([(predicate, *map(get, terms, terms))
                         for predicate, terms in compiled.static_pos])
     if isinstance(source, NormalAxiom):
         head = (source.predicate, *_ground(source.head_args, binding))

@@ -214,6 +214,10 @@ class Task:
     def successor(self, state: frozenset[int], vector: np.ndarray, op_index: int
                   ) -> frozenset[int]:
         op = self.operators[op_index]
+        if not op.conditional:
+            # Two set copies instead of four (a state holds ~100 facts in TAMP tasks).
+            kept = state.difference(op.deletes) if op.deletes else state
+            return kept.union(op.adds) if op.adds else kept
         adds, deletes = set(op.adds), set(op.deletes)
         for effect in op.conditional:
             if all(vector[f] for f in effect.condition_pos) and not any(
