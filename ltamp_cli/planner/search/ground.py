@@ -182,19 +182,6 @@ def _extend(steps: Sequence[_Step], depth: int, index: FactIndex, binding: dict[
     key = tuple([binding.get(term, term) for term in step.key_terms])
     last = depth + 1 == len(steps)
     checks, binds = step.checks, step.binds
-    if not binds:
-        # Every argument is bound (no new variable, hence no check): a membership test,
-        # and the binding goes on unchanged (in kitchen_fluent's groundings, 85 % of the
-        # steps; the index lookup, its per-predicate index and a copy per step cost more).
-        if (step.predicate, *key) not in index.members:
-            return
-        if not last:
-            _extend(steps, depth + 1, index, binding, found, project)
-        elif project is None:
-            found.append(binding.copy())
-        else:
-            found.append(tuple([binding[v] for v in project]))
-        return
     if last and project is not None:
         here = {variable: position for position, variable in binds}
         plan = [(here.get(v, -1), v) for v in project]
@@ -337,9 +324,8 @@ def _extend_bounded(steps: Sequence[_Step], depth: int, index: FactIndex,
                             weighted, total)
 
 
-def _ground(args: Sequence[str], binding: Mapping[str, str]) -> tuple[str, ...]:
-    get = binding.get
-    return tuple(map(get, args, args))
+def _ground(args: Iterable[str], binding: Mapping[str, str]) -> tuple[str, ...]:
+    return tuple([binding.get(a, a) for a in args])
 
 
 def _match(literal: LiftedLiteral, args: tuple[str, ...]) -> dict[str, str] | None:
@@ -604,11 +590,11 @@ def _emit(rule: _Rule, binding: dict[str, str], index: FactIndex, init: set[Fact
         compiled = rule.compiled = _compile_rule(rule, fluent)
     blocking: Fact | None = None
     for predicate, terms in compiled.static_neg:
-        fact = (predicate, *map(get, terms, terms))
+        fact = (predicate, *[get(a, a) for a in terms])
         if fact in init:
             blocking = fact
             break
-    dynamic_pos = tuple([(predicate, *map(get, terms, terms))
+    dynamic_pos = tuple([(predicate, *[get(a, a) for a in terms])
                          for predicate, terms in compiled.dynamic_pos])
     source = rule.source
     if blocking is not None:
@@ -616,9 +602,9 @@ def _emit(rule: _Rule, binding: dict[str, str], index: FactIndex, init: set[Fact
             head = (source.predicate, *_ground(source.head_args, binding))
             result.blocked_axioms.append((head, dynamic_pos, blocking))
         return
-    negative = tuple([(predicate, *map(get, terms, terms))
+    negative = tuple([(predicate, *[get(a, a) for a in terms])
                       for predicate, terms in compiled.dynamic_neg])
-    static_pos = tuple([(predicate, *map(get, terms, terms))
+    static_pos = tuple([(predicate, *[get(a, a) for a in terms])
                         for predicate, terms in compiled.static_pos])
     if isinstance(source, NormalAxiom):
         head = (source.predicate, *_ground(source.head_args, binding))
