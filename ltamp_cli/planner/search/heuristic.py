@@ -103,7 +103,56 @@ class FFHeuristic:
         self.ach_segment = np.repeat(np.arange(len(lists)), counts)
         self.ach_counts = counts
         self.has_ops = len(preconditions) > 0
+        self._compile_layout()
         self._memo: dict[bytes, HeuristicResult] = {}
+
+    def _compile_layout(self) -> None:
+        """Arrays for :meth:`_evaluate`'s cost propagation, laid out so that each round
+        needs few and cheap numpy calls (``reduceat`` costs per segment, and in TAMP tasks
+        most relaxed operators have one precondition and most facts one achiever).
+
+        Relaxed operators are renumbered internally: those with at most one precondition
+        first (their cost is one gather, ``single_pre``), then the others, whose
+        preconditions are a ``(width, n)`` matrix padded with the always-true fact (cost 0)
+        and summed along axis 0 (row by row, so in the same order as a ``reduceat`` over
+        the lists: the same floats). Achieved facts are reordered likewise: facts with one
+        achiever first (a gather, ``single_ach``), then the others (a ``minimum.reduceat``
+        over their achievers, each list in its original order, so that the first achiever
+        of minimal cost is the same operator). ``order`` maps internal operator numbers to
+        the original ones; ``fact_order`` lists the achieved facts in internal order."""
+        lengths = [len(p) for p in self.preconditions]
+        order = [i for i, n in enumerate(lengths) if n <= 1]
+        self.num_single_pre = len(order)
+        order += [i for i, n in enumerate(lengths) if n > 1]
+        self.order = np.asarray(order, dtype=np.int64)
+        internal = np.empty(len(order), dtype=np.int64)
+        internal[self.order] = np.arange(len(order), dtype=np.int64)
+        self.single_pre = np.array(
+            [self.preconditions[i][0] if self.preconditions[i] else TRUE_FACT
+             for i in order[:self.num_single_pre]], dtype=np.int64)
+        multi = order[self.num_single_pre:]
+        width = max((lengths[i] for i in multi), default=0)
+        self.multi_pre = np.full((width, len(multi)), TRUE_FACT, dtype=np.int64)
+        for column, i in enumerate(multi):
+            self.multi_pre[:lengths[i], column] = self.preconditions[i]
+        self.internal_costs = self.costs[self.order]
+        facts = self.achiever_facts.tolist()
+        singles = [f for f in facts if len(self.achievers[f]) == 1]
+        multis = [f for f in facts if len(self.achievers[f]) > 1]
+        self.fact_order = np.array(singles + multis, dtype=np.int64)
+        self.num_single_ach = len(singles)
+        self.single_facts = np.array(singles, dtype=np.int64)
+        self.single_ach = np.array([internal[self.achievers[f][0]] for f in singles],
+                                   dtype=np.int64)
+        self.single_ach_original = np.array([self.achievers[f][0] for f in singles],
+                                            dtype=np.int64)
+        lists = [[int(internal[o]) for o in self.achievers[f]] for f in multis]
+        self.multi_facts = np.array(multis, dtype=np.int64)
+        self.multi_ach, self.multi_ach_starts = _flatten(lists, 0)
+        self.multi_ach_original = self.order[self.multi_ach]
+        self.multi_ach_counts = np.array([len(x) for x in lists], dtype=np.int64)
+        self.multi_ach_segment = np.repeat(np.arange(len(lists)), self.multi_ach_counts)
+        self._cost_of = np.array([INFINITY, 0.0])  # by whether a fact holds
 
     @staticmethod
     def _negations(task: Task) -> tuple[dict[int, int], dict[int, list[list[int]]],
@@ -180,40 +229,65 @@ class FFHeuristic:
         return result
 
     def _evaluate(self, vector: np.ndarray) -> HeuristicResult:
+        """h_add costs by Bellman-Ford rounds until no fact gets cheaper, then the relaxed
+        plan of the goal. Each round computes every relaxed operator's cost (its
+        preconditions' costs plus its own) and every achieved fact's cheapest achiever,
+        kept when cheaper than the fact's cost in the state (0 or infinite). Fact costs
+        only decrease from round to round, so that minimum equals the one with the previous
+        round's cost (the textbook update): the same costs, in fewer numpy calls."""
         task = self.task
         if vector[task.goal]:
             return HeuristicResult(0.0, [])
-        fact_cost = np.full(self.num_facts, INFINITY)
-        fact_cost[: task.num_facts][vector > 0] = 0.0
-        if len(self.negated_ids):
-            fact_cost[self.negated_ids] = np.where(vector[self.negated_sources] > 0,
-                                                   INFINITY, 0.0)
-        fact_cost[TRUE_FACT] = 0.0
         if not self.has_ops or not len(self.achiever_facts):
             return HeuristicResult(INFINITY, [])
-        op_cost = self.costs
+        holds = np.zeros(self.num_facts, dtype=np.intp)
+        holds[: task.num_facts] = vector
+        if len(self.negated_ids):
+            holds[self.negated_ids] = vector[self.negated_sources] == 0
+        holds[TRUE_FACT] = 1
+        fact_cost = self._cost_of[holds]  # 0.0 where the fact holds, else infinite
+        facts, split, singles = self.fact_order, self.num_single_ach, self.num_single_pre
+        base = fact_cost[facts]
+        current = base
+        single_pre, multi_pre, costs = self.single_pre, self.multi_pre, self.internal_costs
+        single_ach, multi_ach = self.single_ach, self.multi_ach
+        multi_starts = self.multi_ach_starts
+        has_multi_pre, has_multi_ach = multi_pre.shape[1] > 0, len(multi_starts) > 0
+        op_cost = np.empty(len(costs))
+        best = np.empty(len(facts))
+        candidate_costs = op_cost[multi_ach]
         for _ in range(self.num_facts + 1):
-            op_cost = np.add.reduceat(fact_cost[self.pre_flat], self.pre_starts)
-            op_cost += self.costs
-            candidate_costs = op_cost[self.ach_flat]
-            best = np.minimum.reduceat(candidate_costs, self.ach_starts)
-            current = fact_cost[self.achiever_facts]
+            fact_cost.take(single_pre, out=op_cost[:singles])
+            if has_multi_pre:
+                np.add.reduce(fact_cost[multi_pre], axis=0, out=op_cost[singles:])
+            op_cost += costs
+            op_cost.take(single_ach, out=best[:split])
+            if has_multi_ach:
+                candidate_costs = op_cost[multi_ach]
+                np.minimum.reduceat(candidate_costs, multi_starts, out=best[split:])
             if not (best < current).any():
                 break
-            # Scatter the element-wise minimum: cheaper than boolean-indexing the changes.
-            fact_cost[self.achiever_facts] = np.minimum(best, current)
+            current = np.minimum(best, base)
+            fact_cost[facts] = current
         if fact_cost[task.goal] == INFINITY:
             return HeuristicResult(INFINITY, [])
         return self._relaxed_plan(fact_cost, candidate_costs, best)
 
     def _best_supporters(self, candidate_costs: np.ndarray, best: np.ndarray) -> np.ndarray:
-        """Per fact, its first achiever of minimal cost (-1: none), as ``(num_facts,)``."""
-        hits = np.flatnonzero(candidate_costs == np.repeat(best, self.ach_counts))
-        segments = self.ach_segment[hits]
-        first = np.ones(len(hits), dtype=bool)
-        first[1:] = segments[1:] != segments[:-1]
+        """Per fact, its first achiever of minimal cost (-1: none), as ``(num_facts,)``
+        original relaxed-operator numbers. ``best``: the last round's cheapest achiever
+        cost per achieved fact (in :attr:`fact_order`); ``candidate_costs``: the costs of
+        the achievers of the facts with several."""
         supporters = np.full(self.num_facts, -1, dtype=np.int64)
-        supporters[self.achiever_facts[segments[first]]] = self.ach_flat[hits[first]]
+        supporters[self.single_facts] = self.single_ach_original
+        if len(self.multi_ach_starts):
+            hits = np.flatnonzero(candidate_costs == np.repeat(best[self.num_single_ach:],
+                                                               self.multi_ach_counts))
+            segments = self.multi_ach_segment[hits]
+            first = np.ones(len(hits), dtype=bool)
+            first[1:] = segments[1:] != segments[:-1]
+            supporters[self.multi_facts[segments[first]]] = self.multi_ach_original[
+                hits[first]]
         return supporters
 
     def _relaxed_plan(self, fact_cost: np.ndarray, candidate_costs: np.ndarray,
