@@ -139,10 +139,11 @@ def _write_failed(ctx: Context, name: str, message: str) -> None:
 
 
 def run_units(units: list[Unit], ctx: Context, jobs: int, collection_workers: int,
-              on_done: Callable[[Result], None]) -> list[Result]:
+              on_done: Callable[[Result], None], merge: bool = True) -> list[Result]:
     """Run ``units`` on ``jobs`` lanes (``<= 1``: in this process) in :func:`pick` order and
-    merge each split experiment once all its parts are done. Returns a result per unit, plus
-    one per split experiment's merge (key ``<name>:merge``).
+    merge each split experiment once all its parts are done (``merge=False``: never, for runs
+    of some parts only). Returns a result per unit, plus one per split experiment's merge (key
+    ``<name>:merge``).
 
     A failed pool fails the experiments waiting for it without running them (an experiment
     would otherwise collect the rest itself, and two of them could append to one file); a
@@ -153,7 +154,8 @@ def run_units(units: list[Unit], ctx: Context, jobs: int, collection_workers: in
     finished: set[str] = set()
     failed: dict[str, str] = {}  # unit key -> error
     results: list[Result] = []
-    left = {u.experiment: 0 for u in units if u.part is not None and u.experiment}
+    left = {u.experiment: 0 for u in units
+            if merge and u.part is not None and u.experiment}
     for unit in units:
         if unit.experiment in left:
             left[unit.experiment] += 1
@@ -317,6 +319,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--report", type=Path, default=None,
                         help="Markdown report path (default: docs/RESULTS.md; smoke: OUT)")
     parser.add_argument("--no-report", action="store_true")
+    parser.add_argument("--parts", default="",
+                        help="comma-separated parts to run alone (e.g. supervised3d:pour), after "
+                             "the pools they need; no merge, no run.json, no report: a later "
+                             "run without --parts reads their logged jobs back")
     parser.add_argument("--pools-only", action="store_true",
                         help="only collect (or resume) the trial pools the pooled experiments "
                              f"({', '.join(POOLED)}) need, then stop (no run.json, no report)")
@@ -338,6 +344,18 @@ def main(argv: list[str] | None = None) -> int:
         print(f"--pools-only: none of {', '.join(names)} uses a trial pool (those that do: "
               f"{', '.join(POOLED)})", file=sys.stderr)
         return 2
+    wanted_parts = [k.strip() for k in args.parts.split(",") if k.strip()]
+    if wanted_parts:
+        known = {u.key: u for u in units if u.part is not None and u.experiment is not None}
+        missing = [k for k in wanted_parts if k not in known]
+        if missing or args.pools_only:
+            problem = ("cannot be combined with --pools-only" if args.pools_only
+                       else f"unknown part {missing[0]!r}")
+            print(f"--parts: {problem}; parts of {', '.join(names)}: "
+                  f"{', '.join(known) or 'none'}", file=sys.stderr)
+            return 2
+        needed = {key for k in wanted_parts for key in known[k].after}
+        units = [u for u in units if u.key in needed or u.key in wanted_parts]
     estimate, _lanes = simulate(units, max(1, args.jobs))
     print(f"[{0.0:7.1f} s] {len(units)} unit(s) on {max(1, args.jobs)} lane(s), estimated "
           f"{estimate:.0f} s on idle cores", flush=True)
@@ -357,11 +375,12 @@ def main(argv: list[str] | None = None) -> int:
             report_done(results[-1])
     else:
         results = run_units(units, ctx, args.jobs, args.workers if args.jobs <= 1 else 1,
-                            report_done)
+                            report_done, merge=not wanted_parts)
     total = time.perf_counter() - started
-    if args.pools_only:
+    if args.pools_only or wanted_parts:
         failed = [r for r in results if r[3]]
-        print(f"{args.mode}: {len(results)} pool(s) in {total:.1f} s wall, "
+        print(f"{args.mode}: {len(results)} {'unit' if wanted_parts else 'pool'}(s) in "
+              f"{total:.1f} s wall, "
               f"{len(failed)} failed", flush=True)
         return 1 if failed else 0
     # CPU of this process and of every finished child (experiment and collection workers):

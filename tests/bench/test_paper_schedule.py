@@ -149,3 +149,25 @@ def _put_many(ctx: Context, prefix: str, rows: list[dict[str, object]]) -> None:
     log = JobLog(ctx, "exp", {"seeds": 1})
     for job in range(20):
         log.put(f"{prefix}/{job}", rows)
+
+
+def test_parts_run_alone_without_merging_or_reporting(tmp_path: Path) -> None:
+    from bench.paper.__main__ import main
+
+    # An unknown part is one line and exit 2.
+    assert main(["--smoke", "--out", str(tmp_path), "--only", "supervised3d", "--parts",
+                 "supervised3d:nope", "--no-report", "--jobs", "1"]) == 2
+    # The smoke skill's part runs (its pool first), logs its jobs, and writes no experiment
+    # JSON (no merge) and no run.json; a later full run reads the jobs back.
+    assert main(["--smoke", "--out", str(tmp_path), "--only", "supervised3d", "--parts",
+                 "supervised3d:skill8d", "--jobs", "1"]) == 0
+    assert not (tmp_path / "supervised3d.json").exists()
+    assert not (tmp_path / "run.json").exists()
+    logged = (tmp_path / "runs" / "supervised3d-smoke.jsonl").read_text().splitlines()
+    assert len(logged) == 5 * 1 + 2 * 1  # learners + the two other kernels, one seed
+    ctx = Context("smoke", tmp_path, False, 1)
+    from bench.paper import supervised3d
+
+    merged = supervised3d.merge(ctx)
+    assert (tmp_path / "runs" / "supervised3d-smoke.jsonl").read_text().splitlines() == logged
+    assert merged["skills"]["skill8d"]["summary"]
