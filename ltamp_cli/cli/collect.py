@@ -7,22 +7,15 @@ from typing import Annotated
 
 import typer
 
-from ltamp_cli.errors import InputError
+# The robot limits live with the collection API (`ltamp train` imports them from here).
+from ltamp_cli.trials.robots import (
+    ROBOT_BACKEND,
+    ROBOT_CHOICES,
+    ROBOT_SKILLS,
+    check_robot,
+)
 
-#: ``--robot`` values, and the (backend, skills) that take a robot.
-ROBOT_CHOICES = ("none", "panda")
-ROBOT_BACKEND = "pybullet"
-ROBOT_SKILLS = ("pour", "scoop", "push", "stir")
-
-
-def check_robot(robot: str, backend: str, skill: str) -> None:
-    """``--robot`` must name a known robot, and a robot needs a PyBullet Kitchen3D skill."""
-    if robot not in ROBOT_CHOICES:
-        raise InputError(f"--robot: expected one of {', '.join(ROBOT_CHOICES)}, got {robot!r}")
-    if robot != "none" and (backend != ROBOT_BACKEND or skill not in ROBOT_SKILLS):
-        raise InputError(f"--robot {robot}: only --backend {ROBOT_BACKEND} with skill "
-                         f"{', '.join(ROBOT_SKILLS)} runs trials with a robot, not "
-                         f"{backend}/{skill}")
+__all__ = ["ROBOT_BACKEND", "ROBOT_CHOICES", "ROBOT_SKILLS", "check_robot", "register"]
 
 
 def register(app: typer.Typer) -> None:
@@ -75,13 +68,7 @@ def collect_command(
     from ltamp_cli.cli.conventions import emit, progress_enabled
     from ltamp_cli.trials.collect import CollectJob, collect
 
-    if n < 0:
-        raise InputError(f"-n: expected a number >= 0, got {n}")
-    if workers is not None and workers < 1:
-        raise InputError(f"--workers: expected a number >= 1, got {workers}")
-    if out.exists() and out.is_dir():
-        raise InputError(f"--out: {out} is a directory, expected a .jsonl file path")
-    check_robot(robot, backend, skill)
+    # collect() checks -n, --workers, --out and --robot (the API's limits are the CLI's).
     job = CollectJob(skill=skill, backend=backend, n=n, seed=seed, valid_only=valid_only,
                      robot=robot)
     added = collect(job, out, workers=workers, ray_address=ray, wait=wait,
