@@ -16,11 +16,15 @@ Bugs this file caught (each failed before its fix):
 
 from __future__ import annotations
 
+import io
+from contextlib import redirect_stderr
 from typing import Any
 
 import numpy as np
+import pytest
 
 from ltamp_cli.backends.protocol import ParamSpace, SkillSpec, TrialResult
+from ltamp_cli.cli.evaluate import _live_outcomes
 from ltamp_cli.learning.active import LearningConfig, learn_online
 
 N_CONTEXT = 12
@@ -83,3 +87,30 @@ def test_an_invalid_trial_never_teaches_a_success(tmp_path: Any) -> None:
         context = Slosh().sample_context("pour", rng)
         _control, confidence = result.model.most_confident_control(context, rng)
         assert confidence <= 0.0
+
+
+class _Middle:
+    """A stand-in model whose θ* is tilt 0."""
+
+    def most_confident_control(self, context: np.ndarray, rng: np.random.Generator,
+                               is_valid: object) -> tuple[np.ndarray, float]:
+        return np.array([0.0]), 0.0
+
+
+@pytest.mark.parametrize("answer, warns", [
+    ("raise", True), ("none", False), ("string", False), ("invalid", False),
+])
+def test_evaluate_counts_a_broken_trial_as_a_failure(answer: str, warns: bool) -> None:
+    err = io.StringIO()
+    with redirect_stderr(err):
+        star, baseline, contexts = _live_outcomes(Slosh(answer), "pour", _Middle(), 6, 0)
+    assert star == [0] * 6 and baseline == [0] * 6 and len(contexts) == 6
+    lines = [line for line in err.getvalue().splitlines() if line]
+    if warns:
+        assert lines == ["ltamp: warning: 12 trial(s) raised (counted as failures), first: "
+                         "trial raised RuntimeError: motor stalled"]
+    else:
+        assert lines == []
+    # the same skill answering normally succeeds at θ* = 0 for central contexts
+    star, _baseline, contexts = _live_outcomes(Slosh(), "pour", _Middle(), 6, 0)
+    assert star == [int(abs(np.mean(c) - 0.5) < 0.4) for c in contexts]
