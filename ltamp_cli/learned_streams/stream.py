@@ -254,6 +254,7 @@ class LearnedStream:
         self.n_samples = 0
         self.n_unusable = 0
         self.n_outside = 0  # calls whose context lay outside the trained range
+        self._kernel_unsaved = False  # a save of the diverse-lk kernel failed (warned once)
 
     @property
     def spec(self) -> SkillSpec:
@@ -333,7 +334,15 @@ class LearnedStream:
         self.n_unusable += 1
         sampler, control = entry
         if sampler.report_unusable(control) is not None and self.kernel is not None:
-            save_kernel(self.kernel, self.config.kernel_path, self.model.spec)
+            try:
+                save_kernel(self.kernel, self.config.kernel_path, self.model.spec)
+            except OSError as error:  # a read-only or full cache: learn for this run only
+                if not self._kernel_unsaved:
+                    LOGGER.warning("learned stream of %s: cannot save its diversity kernel to "
+                                   "%s (%s); it is learned for this run only",
+                                   self.model.spec.name, self.config.kernel_path,
+                                   error.strerror or error)
+                self._kernel_unsaved = True
 
     def binding(self, info: StreamInfo | None = None) -> Binding:
         """The planner :class:`Binding`, with :meth:`on_unusable` wired as its feedback."""
