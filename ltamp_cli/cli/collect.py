@@ -3,9 +3,14 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
+
+from ltamp_cli.errors import InputError
+
+if TYPE_CHECKING:
+    from ltamp_cli.trials.collect import CollectJob
 
 # The robot limits live with the collection API (`ltamp train` imports them from here).
 from ltamp_cli.trials.robots import (
@@ -73,7 +78,32 @@ def collect_command(
                      robot=robot)
     added = collect(job, out, workers=workers, ray_address=ray, wait=wait,
                     progress=progress_enabled())
+    missing = _still_missing(job, out)
+    if missing:
+        # Another process truncated, rotated or replaced the file while this one appended:
+        # "now holds trials 0..n-1" would be false.
+        typer.echo(f"ltamp: warning: {out} lacks {missing} of trials 0..{n - 1} after this "
+                   "run (was it truncated or replaced meanwhile?); run the same command "
+                   "again to fill them in", err=True)
     if as_json:
-        emit({"out": str(out), "added": added, "n": n}, as_json)
-    else:
+        emit({"out": str(out), "added": added, "n": n, "missing": missing}, as_json)
+    elif not missing:
         typer.echo(f"{added} new trials; {out} now holds trials 0..{n - 1}", err=True)
+    else:
+        typer.echo(f"{added} new trials; {out} holds {n - missing} of trials 0..{n - 1}",
+                   err=True)
+
+
+def _still_missing(job: CollectJob, out: Path) -> int:
+    """How many of ``job``'s trials ``out`` lacks now (read again after the run)."""
+    from dataclasses import replace
+
+    from ltamp_cli.seeds import usable_seed
+    from ltamp_cli.trials.collect import pending_indices
+    from ltamp_cli.trials.record import TrialDataset
+
+    try:
+        return len(pending_indices(TrialDataset(out), replace(job, seed=usable_seed(job.seed))))
+    except InputError as error:  # the file now holds another job's trials
+        typer.echo(f"ltamp: warning: {error}", err=True)
+        return job.n
