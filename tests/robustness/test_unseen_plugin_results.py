@@ -114,3 +114,31 @@ def test_evaluate_counts_a_broken_trial_as_a_failure(answer: str, warns: bool) -
     # the same skill answering normally succeeds at θ* = 0 for central contexts
     star, _baseline, contexts = _live_outcomes(Slosh(), "pour", _Middle(), 6, 0)
     assert star == [int(abs(np.mean(c) - 0.5) < 0.4) for c in contexts]
+
+
+def test_tell_refuses_an_invalid_success_in_the_api_and_the_cli(tmp_path: Any) -> None:
+    """``tell --invalid --score 0.5`` recorded a success that could not be run (learned as
+    one); now refused before anything is written, with the same line from API and CLI."""
+    from contextlib import redirect_stdout
+
+    from ltamp_cli.backends import load_backend
+    from ltamp_cli.cli.app import main
+    from ltamp_cli.errors import InputError
+    from ltamp_cli.learning.ask_tell import ask, tell
+
+    backend = load_backend("synthetic")
+    try:
+        ask(backend, "moving2d", LearningConfig(seed=0), tmp_path / "m")
+    finally:
+        backend.close()
+    with pytest.raises(InputError) as caught:
+        tell(tmp_path / "m", 0.5, valid=False)
+    out, err = io.StringIO(), io.StringIO()
+    with redirect_stdout(out), redirect_stderr(err), pytest.raises(SystemExit) as done:
+        main(["tell", str(tmp_path / "m"), "--score", "0.5", "--invalid"])
+    assert done.value.code == 2
+    assert err.getvalue().splitlines() == [f"ltamp: error: {caught.value}"]
+    assert "--invalid" in str(caught.value)
+    assert not (tmp_path / "m" / "trials.jsonl").exists()
+    record = tell(tmp_path / "m", -1.0, valid=False)  # an honest invalid trial is recorded
+    assert not record.valid and record.score == -1.0
