@@ -13,6 +13,10 @@ Python API
   and ``robot="panda"`` on a Box2D skill reached the backend (the CLI: "--robot: expected
   one of none, panda" / "only --backend pybullet …"): the robot check lived in the CLI only;
 * refused ``n=-1`` / ``workers=0`` in other words than ``ltamp collect`` did.
+
+and ``SkillEvaluator.synthetic`` (what ``ltamp evaluate`` calls on a synthetic backend)
+failed in numpy for ``n_test=0`` ("cannot reshape array of size 0") and accepted
+``n_contexts=-1`` (separate commit).
 """
 
 from __future__ import annotations
@@ -85,6 +89,20 @@ def _solve(**config: Any) -> tuple[list[str], ApiCall]:
     return argv, api
 
 
+def _evaluate(trials: int = 50, n_test: int = 2000) -> tuple[list[str], ApiCall]:
+    def api(tmp: Path) -> Any:
+        from ltamp_cli.backends import load_backend
+        from ltamp_cli.learning.metrics import SkillEvaluator
+
+        physics = load_backend("synthetic")
+        try:
+            return SkillEvaluator.synthetic(physics, "toy1d", n_test, trials)
+        finally:
+            physics.close()
+
+    return ["evaluate", "{tmp}/model", "--trials", str(trials), "--n-test", str(n_test)], api
+
+
 ROWS = {
     "collect -n -1": _collect(n=-1),
     "collect --workers 0": _collect(workers=0),
@@ -97,6 +115,8 @@ ROWS = {
     "train --init -1": _train(init=-1),
     "train --strategy x": _train(strategy="x"),
     "train --kernel x": _train(kernel="x"),
+    "evaluate --n-test 0": _evaluate(n_test=0),
+    "evaluate --trials -1": _evaluate(trials=-1),
     "solve --algorithm x": _solve(algorithm="x"),
     "solve --search x": _solve(search="x"),
     "solve --success-cost nan": _solve(success_cost=math.nan),
