@@ -5,11 +5,14 @@ a duplicate key, a mapping where ``planner.skeleton`` wants a list (``file:line:
 the field). ``world``'s other fields and ``objects`` names belong to the bindings and the
 domain (checked there).
 
-Bug this file caught (failed before the fix in ``planner/problem.py``): a
-``world.learned_streams`` entry naming no stream of the stream file (a misspelt
-``sample-good-contrl``) was ignored silently: the bindings look entries up by stream name, so
-the misspelt settings never applied and the stream ran with whatever the bindings do without
-them (here: refused, "missing the 'sample-good-control' entry", which names the wrong line).
+Bugs this file caught (each failed before its fix): top-level ``backend:`` and ``streams:``
+keys were accepted by the schema and read by nothing (``backend: box2d`` executed nothing;
+that is ``ltamp solve --backend``): now unknown fields like any other; and (in
+``planner/problem.py``) a ``world.learned_streams`` entry naming no stream of the stream
+file (a misspelt ``sample-good-contrl``) was ignored silently: the bindings look entries up
+by stream name, so the misspelt settings never applied and the stream ran with whatever the
+bindings do without them (here: refused, "missing the 'sample-good-control' entry", which
+names the wrong line).
 """
 
 from __future__ import annotations
@@ -54,6 +57,10 @@ def _check(path: Path) -> tuple[int, list[str]]:
      "'sample-good-contrl' (streams: sample-good-control, test-clear)"),
     ("  learned_streams:", "  learned_streams:\n    test-clear: {model: model}", None,
      None),
+    ("name: synthetic-goodregion", "name: synthetic-goodregion\nbackend: box2d", 5,
+     "unknown field 'backend'"),
+    ("name: synthetic-goodregion", "name: synthetic-goodregion\nstreams: {test-clear: 1}", 5,
+     "unknown field 'streams'"),
 ])
 def test_an_unknown_key_is_one_line_with_its_position(tmp_path: Path, old: str, new: str,
                                                       line: int | None,
