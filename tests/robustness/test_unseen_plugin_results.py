@@ -142,3 +142,23 @@ def test_tell_refuses_an_invalid_success_in_the_api_and_the_cli(tmp_path: Any) -
     assert not (tmp_path / "m" / "trials.jsonl").exists()
     record = tell(tmp_path / "m", -1.0, valid=False)  # an honest invalid trial is recorded
     assert not record.valid and record.score == -1.0
+
+
+def test_import_refuses_an_invalid_success(tmp_path: Any) -> None:
+    """A recorded row with ``valid`` false and a score > 0 was imported as is (and learned
+    as a success by ``train --data``); now one positioned line, nothing appended."""
+    from contextlib import redirect_stdout
+
+    from ltamp_cli.cli.app import main
+
+    source = tmp_path / "recorded.csv"
+    source.write_text("x,y,phase,score,valid\n0.3,0.2,0.1,-0.5,true\n0.1,0.2,0.1,0.5,false\n")
+    out = tmp_path / "trials.jsonl"
+    stdout, err = io.StringIO(), io.StringIO()
+    with redirect_stdout(stdout), redirect_stderr(err), pytest.raises(SystemExit) as done:
+        main(["import", str(source), "--skill", "moving2d", "--out", str(out)])
+    assert done.value.code == 2
+    assert err.getvalue().splitlines() == [
+        f"ltamp: error: {source}:3:1: field 'score': 0.5 > 0 is a success, but 'valid' says "
+        "the trial could not be run: give its score <= 0 (e.g. -1)"]
+    assert not out.exists()
