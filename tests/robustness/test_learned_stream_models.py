@@ -9,7 +9,10 @@ model, one warning naming push); the pour stream given a 12-D plugin skill also 
 reshape array of size 4 into shape (12,)". Now the Kitchen2D streams (``GoodPour``,
 ``GoodScoop``, the push stream) check the model's context and control names, and every
 :class:`~ltamp_cli.learned_streams.stream.LearnedStream` checks the context size: one line
-naming the model, its skill and what the stream needs, exit 2.
+naming the model, its skill and what the stream needs, exit 2. The Kitchen3D pour and
+scoop streams check the names too (a separate commit; before it, the 3D pour stream given
+the scoop model was refused by the size check only, and a same-size model of another skill
+would have been used).
 """
 
 from __future__ import annotations
@@ -59,6 +62,11 @@ def _solve(path: Path) -> tuple[int, list[str]]:
      "duration), but the stream needs context (cup_width, cup_height)"),
     ("problems/kitchen2d/task2_pour_wall.yaml", "sample-pour", "models/kitchen3d/pour",
      "this model is skill 'pour' with context (bowl_diameter,"),
+    ("problems/kitchen3d/pour_blocked.yaml", "sample-pour", "models/kitchen3d/scoop",
+     "this model is skill 'scoop' with context (bowl_diameter, bowl_height, "
+     "bowl_base_diameter, spoon_length) and control (start_y, end_y, exit_y, scoop_z, "
+     "exit_z), but the stream needs context (bowl_diameter, bowl_height, bowl_base_diameter, "
+     "cup_diameter, cup_height, cup_base_diameter)"),
     ("problems/examples/synthetic_goodregion.yaml", "sample-good-control",
      "models/kitchen2d/scoop",
      "the bindings give a context of 1 value(s), but this 'scoop' model's context has 2 "
