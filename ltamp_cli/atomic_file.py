@@ -9,11 +9,17 @@ hidden ``.NAME.<pid>-<thread>.tmp.SUFFIX`` beside it) instead of a truncated one
 
 from __future__ import annotations
 
+import errno
 import os
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+
+from ltamp_cli.errors import InputError
+
+#: errno values of a write that ran out of room (disk full, file size limit, quota).
+NO_SPACE = frozenset({errno.ENOSPC, errno.EFBIG, errno.EDQUOT})
 
 
 @contextmanager
@@ -36,5 +42,12 @@ def replaced_atomically(path: str | Path) -> Iterator[Path]:
     try:
         yield temporary
         os.replace(temporary, target)
+    except OSError as error:
+        if error.errno not in NO_SPACE:
+            raise
+        # A full disk or a file size limit: one line, the old output kept.
+        raise InputError(f"{path}: could not write it ({error.strerror}); "
+                         f"{'the old file is kept' if path.exists() else 'nothing written'}"
+                         ) from None
     finally:
         temporary.unlink(missing_ok=True)

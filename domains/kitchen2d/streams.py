@@ -53,7 +53,7 @@ from ltamp_cli.backends.box2d.skills import scoop as scoop_skill
 from ltamp_cli.backends.box2d.tamp import KitchenGeometry, Point, section_mask
 from ltamp_cli.backends.box2d.tamp_batch import pour_mask, push_mask, scoop_mask
 from ltamp_cli.errors import InputError
-from ltamp_cli.learned_streams.kitchen import GoodPour, GoodScoop
+from ltamp_cli.learned_streams.kitchen import PUSH_NAMES, GoodPour, GoodScoop
 from ltamp_cli.learned_streams.stream import (
     LearnedStream,
     LearnedStreamConfig,
@@ -314,7 +314,8 @@ def push_stream(config: LearnedStreamConfig, geometry: KitchenGeometry,
             block, p, edge)
 
     stream = LearnedStream(config, context, outputs, rng, models=models,
-                           validity_for=validity_for)
+                           validity_for=validity_for, context_names=PUSH_NAMES[0],
+                           control_names=PUSH_NAMES[1])
     wired = KitchenLearnedStream(stream, applies)
     return wired
 

@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 
+from ltamp_cli.backends.protocol import SkillSpec
 from ltamp_cli.backends.pybullet.backend import Kitchen3DBackend
 from ltamp_cli.backends.pybullet.skills.pour import PourSettings, pour_is_valid
 from ltamp_cli.backends.pybullet.skills.scoop import scoop_is_valid
@@ -42,6 +43,8 @@ from ltamp_cli.backends.pybullet.tamp import skill_paths
 from ltamp_cli.backends.pybullet.tamp.planning import PlanningWorld
 from ltamp_cli.backends.pybullet.tamp.scene import scene_from_world
 from ltamp_cli.backends.pybullet.tamp.values import ArmConf, ArmPath, GraspValue, as_conf
+from ltamp_cli.backends.skills3d.pour import POUR_SPEC
+from ltamp_cli.backends.skills3d.scoop import SCOOP_SPEC
 from ltamp_cli.errors import InputError
 from ltamp_cli.learned_streams.stream import (
     LearnedStream,
@@ -167,14 +170,19 @@ class _LearnedSkill:
 
     def __init__(self, config: LearnedStreamConfig, to_context: Callable[..., np.ndarray],
                  to_outputs: Callable[..., tuple[Any, ...] | None],
-                 rng: np.random.Generator, check: PhysicsCheck | None = None) -> None:
+                 rng: np.random.Generator, check: PhysicsCheck | None = None,
+                 skill: SkillSpec | None = None) -> None:
         self._args = (config, to_context, to_outputs, rng)
+        # the model must be of this skill (its parameter names), not merely of its size
+        self._names = ({} if skill is None else
+                       {"context_names": skill.context.names,
+                        "control_names": skill.control.names})
         self.stream: LearnedStream | None = None
         self.check = check
 
     def __call__(self, *inputs: Any) -> Iterator[list[tuple[Any, ...]]]:
         if self.stream is None:  # the model is loaded on first use only
-            self.stream = LearnedStream(*self._args)
+            self.stream = LearnedStream(*self._args, **self._names)
         if self.check is not None:
             # Controls that passed their trial for other inputs (another grasp of the cup)
             # first: the trial depends on the context only, so they cost no new trial.
@@ -376,12 +384,12 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         configs["sample-pour"],
         lambda r, cup, grasp, bowl, pose: skill_paths.pour_context(scene.object(cup),
                                                                    scene.object(bowl)),
-        pour_outputs, rng, pour_check)
+        pour_outputs, rng, pour_check, POUR_SPEC)
     scoop = _LearnedSkill(
         configs["sample-scoop"],
         lambda r, spoon, grasp, bowl, pose: skill_paths.scoop_context(scene.object(bowl),
                                                                       scene.object(spoon)),
-        scoop_outputs, rng)
+        scoop_outputs, rng, skill=SCOOP_SPEC)
 
     def sample_pour(r: Any, cup: str, grasp: GraspValue, bowl: str, pose: Any
                     ) -> Iterator[list[tuple[Any, ...]]]:

@@ -195,6 +195,8 @@ def run_trial_safely(
     The score may be any real number type (``int``, numpy scalars, a 0-d array) and comes
     back as a ``float``; a ``bool`` score is a success label, ``True`` -> ``+1.0`` and
     ``False`` -> ``-1.0``. ``valid`` must be a bool (or 0/1; a string ``"false"`` is no answer).
+    An invalid trial scoring above 0 (a "success" that could not be run) gets the invalid
+    score, with the reason; invalid trials' scores ≤ 0 are kept.
     """
     spec = skill_spec(backend, skill)
     invalid_score = spec.invalid_score
@@ -231,6 +233,12 @@ def run_trial_safely(
         json.dumps(dict(result.info), allow_nan=False)
     except (TypeError, ValueError) as error:
         return failed_result(invalid_score, f"unrecordable trial info: {error}"), False
+    if not result.valid and score > invalid_score and score > 0:
+        # A trial that could not be run cannot have succeeded: learned as is, its score
+        # would teach the GP a success there (evaluate counts valid successes only).
+        reason = failed_result(invalid_score, f"invalid trial reported score {score:g} > 0 "
+                                              "(a success)").info["reason"]
+        return TrialResult(invalid_score, False, {**dict(result.info), "reason": reason}), False
     result = TrialResult(score, bool(result.valid), result.info, result.outcome)
     if spec.outcome is None or not result.valid:
         return (result if result.outcome is None else replace(result, outcome=None)), False

@@ -3,26 +3,24 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from ltamp_cli.errors import InputError
 
-#: ``--robot`` values, and the (backend, skills) that take a robot.
-ROBOT_CHOICES = ("none", "panda")
-ROBOT_BACKEND = "pybullet"
-ROBOT_SKILLS = ("pour", "scoop", "push", "stir")
+if TYPE_CHECKING:
+    from ltamp_cli.trials.collect import CollectJob
 
+# The robot limits live with the collection API (`ltamp train` imports them from here).
+from ltamp_cli.trials.robots import (
+    ROBOT_BACKEND,
+    ROBOT_CHOICES,
+    ROBOT_SKILLS,
+    check_robot,
+)
 
-def check_robot(robot: str, backend: str, skill: str) -> None:
-    """``--robot`` must name a known robot, and a robot needs a PyBullet Kitchen3D skill."""
-    if robot not in ROBOT_CHOICES:
-        raise InputError(f"--robot: expected one of {', '.join(ROBOT_CHOICES)}, got {robot!r}")
-    if robot != "none" and (backend != ROBOT_BACKEND or skill not in ROBOT_SKILLS):
-        raise InputError(f"--robot {robot}: only --backend {ROBOT_BACKEND} with skill "
-                         f"{', '.join(ROBOT_SKILLS)} runs trials with a robot, not "
-                         f"{backend}/{skill}")
+__all__ = ["ROBOT_BACKEND", "ROBOT_CHOICES", "ROBOT_SKILLS", "check_robot", "register"]
 
 
 def register(app: typer.Typer) -> None:
@@ -75,18 +73,37 @@ def collect_command(
     from ltamp_cli.cli.conventions import emit, progress_enabled
     from ltamp_cli.trials.collect import CollectJob, collect
 
-    if n < 0:
-        raise InputError(f"-n: expected a number >= 0, got {n}")
-    if workers is not None and workers < 1:
-        raise InputError(f"--workers: expected a number >= 1, got {workers}")
-    if out.exists() and out.is_dir():
-        raise InputError(f"--out: {out} is a directory, expected a .jsonl file path")
-    check_robot(robot, backend, skill)
+    # collect() checks -n, --workers, --out and --robot (the API's limits are the CLI's).
     job = CollectJob(skill=skill, backend=backend, n=n, seed=seed, valid_only=valid_only,
                      robot=robot)
     added = collect(job, out, workers=workers, ray_address=ray, wait=wait,
                     progress=progress_enabled())
+    missing = _still_missing(job, out)
+    if missing:
+        # Another process truncated, rotated or replaced the file while this one appended:
+        # "now holds trials 0..n-1" would be false.
+        typer.echo(f"ltamp: warning: {out} lacks {missing} of trials 0..{n - 1} after this "
+                   "run (was it truncated or replaced meanwhile?); run the same command "
+                   "again to fill them in", err=True)
     if as_json:
-        emit({"out": str(out), "added": added, "n": n}, as_json)
-    else:
+        emit({"out": str(out), "added": added, "n": n, "missing": missing}, as_json)
+    elif not missing:
         typer.echo(f"{added} new trials; {out} now holds trials 0..{n - 1}", err=True)
+    else:
+        typer.echo(f"{added} new trials; {out} holds {n - missing} of trials 0..{n - 1}",
+                   err=True)
+
+
+def _still_missing(job: CollectJob, out: Path) -> int:
+    """How many of ``job``'s trials ``out`` lacks now (read again after the run)."""
+    from dataclasses import replace
+
+    from ltamp_cli.seeds import usable_seed
+    from ltamp_cli.trials.collect import pending_indices
+    from ltamp_cli.trials.record import TrialDataset
+
+    try:
+        return len(pending_indices(TrialDataset(out), replace(job, seed=usable_seed(job.seed))))
+    except InputError as error:  # the file now holds another job's trials
+        typer.echo(f"ltamp: warning: {error}", err=True)
+        return job.n

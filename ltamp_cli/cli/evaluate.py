@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -12,7 +12,7 @@ from ltamp_cli.cli.conventions import progress_enabled
 from ltamp_cli.errors import InputError
 
 if TYPE_CHECKING:
-    from ltamp_cli.backends.protocol import SkillBackend
+    from ltamp_cli.backends.protocol import SkillBackend, TrialResult
     from ltamp_cli.learning.model import SkillModel
 
 
@@ -137,6 +137,7 @@ def _live_outcomes(
     successes: list[int] = []
     baseline: list[int] = []
     contexts: list[list[float]] = []
+    problems: list[str] = []  # reasons of the trials that raised
     for index in tqdm(
         range(trials),
         disable=not progress_enabled(),
@@ -149,15 +150,32 @@ def _live_outcomes(
         control, _ = model.most_confident_control(
             context, rng, lambda c, u: physics.is_valid(skill, c, u)
         )
-        result = physics.run_trial(skill, context, control, seed=seed * 100_003 + index)
+        result = _trial(physics, skill, context, control, seed * 100_003 + index, problems)
         successes.append(int(result.valid and result.score > 0))
         # The baseline: the first valid control of a uniform batch (invalid if none is).
         candidates = space.sample_uniform(baseline_rng, 1000)
         valid = np.flatnonzero(physics.is_valid(skill, context, candidates))
         if len(valid):
-            random_result = physics.run_trial(skill, context, candidates[valid[0]],
-                                              seed=seed * 100_003 + index)
+            random_result = _trial(physics, skill, context, candidates[valid[0]],
+                                   seed * 100_003 + index, problems)
             baseline.append(int(random_result.valid and random_result.score > 0))
         else:
             baseline.append(0)
+    if problems:
+        typer.echo(f"ltamp: warning: {len(problems)} trial(s) raised (counted as failures), "
+                   f"first: {problems[0]}", err=True)
     return successes, baseline, contexts
+
+
+def _trial(physics: SkillBackend, skill: str, context: Any, control: Any, seed: int,
+           problems: list[str]) -> TrialResult:
+    """One live trial, as ``collect`` and ``train`` run it (:func:`run_trial_safely`): a
+    plugin's ``run_trial`` that raises, returns no ``TrialResult``, a string or NaN score, or
+    an invalid "success" is an invalid trial (a failure here), not a traceback; the reasons
+    of trials that raised are appended to ``problems``."""
+    from ltamp_cli.backends.sanity import run_trial_safely
+
+    result, crashed = run_trial_safely(physics, skill, context, control, seed)
+    if crashed:
+        problems.append(str(result.info.get("reason", "")))
+    return result

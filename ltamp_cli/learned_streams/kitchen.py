@@ -22,6 +22,15 @@ from ltamp_cli.sampling.superlevel import PhysicalValidity
 
 Size = Sequence[float]  # (width, height) of a cup in world units
 
+#: The Kitchen2D skills' parameter names (``ltamp_cli/backends/box2d``): a model given to
+#: these streams must be of that skill (``tests/robustness/test_learned_stream_models.py``
+#: checks them against the backend).
+POUR_NAMES = (("cup_width", "cup_height", "target_width", "target_height"),
+              ("grasp_ratio", "rel_x", "rel_y", "dangle"))
+SCOOP_NAMES = (("cup_width", "cup_height"),
+               ("grasp_ratio", "x1", "y1", "x2", "y2", "x3", "y3"))
+PUSH_NAMES = (("goal_x", "goal_y"), ("rx", "ry", "angle", "duration"))
+
 
 def _pour_context(source: Size, target: Size) -> np.ndarray:
     return np.array([source[0], source[1], target[0], target[1]], dtype=float)
@@ -52,7 +61,8 @@ class GoodPour(LearnedStream):
                  models: ModelCache | None = None, *,
                  to_context: Callable[..., np.ndarray] = _pour_context,
                  validity_for: Callable[..., PhysicalValidity | None] | None = None) -> None:
-        super().__init__(config, to_context, to_outputs, rng, is_valid, models, validity_for)
+        super().__init__(config, to_context, to_outputs, rng, is_valid, models, validity_for,
+                         context_names=POUR_NAMES[0], control_names=POUR_NAMES[1])
 
 
 class GoodScoop(LearnedStream):
@@ -64,4 +74,5 @@ class GoodScoop(LearnedStream):
                  models: ModelCache | None = None, *,
                  to_context: Callable[..., np.ndarray] = _scoop_context,
                  validity_for: Callable[..., PhysicalValidity | None] | None = None) -> None:
-        super().__init__(config, to_context, to_outputs, rng, is_valid, models, validity_for)
+        super().__init__(config, to_context, to_outputs, rng, is_valid, models, validity_for,
+                         context_names=SCOOP_NAMES[0], control_names=SCOOP_NAMES[1])

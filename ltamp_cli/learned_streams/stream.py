@@ -29,7 +29,7 @@ import json
 import logging
 import math
 import os
-from collections.abc import Callable, Hashable, Iterator, Mapping
+from collections.abc import Callable, Hashable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -188,6 +188,29 @@ def _has_valid_member(sampler: SetSampler) -> bool:
     return star is not None and bool(superlevel.contains(star.reshape(1, -1))[0])
 
 
+def _check_model_shape(spec: SkillSpec, model_dir: Path, context_names: Sequence[str] | None,
+                       control_names: Sequence[str] | None) -> None:
+    """The model must be of the skill the bindings map inputs to and controls from.
+
+    A model of another skill (``world.learned_streams`` naming the push model for the scoop
+    stream) would otherwise be queried with meaningless contexts and answer "no samples"
+    (a wrong "infeasible"), or fail deep in numpy.
+    """
+    expected = (None if context_names is None else tuple(context_names),
+                None if control_names is None else tuple(control_names))
+    found = (spec.context.names, spec.control.names)
+    if all(want is None or want == got for want, got in zip(expected, found, strict=True)):
+        return
+
+    def names(values: Sequence[str] | None) -> str:
+        return "?" if values is None else f"({', '.join(values)})"
+    raise InputError(
+        f"learned stream over {model_dir}: this model is skill {spec.name!r} with context "
+        f"{names(found[0])} and control {names(found[1])}, but the stream needs context "
+        f"{names(expected[0])} and control {names(expected[1])}: is world.learned_streams "
+        "pointing at the right model?")
+
+
 class LearnedStream:
     """A planner stream drawing controls of a learned skill.
 
@@ -212,6 +235,9 @@ class LearnedStream:
         is_valid: PhysicalValidity | None = None,
         models: ModelCache | None = None,
         validity_for: Callable[..., PhysicalValidity | None] | None = None,
+        *,
+        context_names: Sequence[str] | None = None,
+        control_names: Sequence[str] | None = None,
     ) -> None:
         self.config = config
         self.to_context = to_context
@@ -220,6 +246,7 @@ class LearnedStream:
         self.is_valid = is_valid
         self.validity_for = validity_for
         self.model = (models or ModelCache()).get(config.model_dir)
+        _check_model_shape(self.model.spec, config.model_dir, context_names, control_names)
         self.kernel: DiversityKernel | None = None
         if config.sampler == "diverse-lk":
             self.kernel = load_kernel(config.kernel_path, self.model.spec)
@@ -227,6 +254,7 @@ class LearnedStream:
         self.n_samples = 0
         self.n_unusable = 0
         self.n_outside = 0  # calls whose context lay outside the trained range
+        self._kernel_unsaved = False  # a save of the diverse-lk kernel failed (warned once)
 
     @property
     def spec(self) -> SkillSpec:
@@ -235,9 +263,15 @@ class LearnedStream:
     def sampler_for(self, *inputs: Any) -> SetSampler | None:
         """A fresh sampler for the context of ``inputs``, or ``None`` when that context lies
         outside the model's trained range and the stream may not extrapolate."""
-        context = np.asarray(self.to_context(*inputs), dtype=float).reshape(
-            self.model.spec.context.dim
-        )
+        context = np.asarray(self.to_context(*inputs), dtype=float)
+        if context.size != self.model.spec.context.dim:
+            spec = self.model.spec
+            raise InputError(
+                f"learned stream over {self.config.model_dir}: the bindings give a context of "
+                f"{context.size} value(s), but this {spec.name!r} model's context has "
+                f"{spec.context.dim} ({', '.join(spec.context.names) or 'none'}): is "
+                "world.learned_streams pointing at the right model?")
+        context = context.reshape(self.model.spec.context.dim)
         if not self.config.extrapolate:
             outside = outside_trained_range(self.model.spec, context)
             if outside:
@@ -300,7 +334,15 @@ class LearnedStream:
         self.n_unusable += 1
         sampler, control = entry
         if sampler.report_unusable(control) is not None and self.kernel is not None:
-            save_kernel(self.kernel, self.config.kernel_path, self.model.spec)
+            try:
+                save_kernel(self.kernel, self.config.kernel_path, self.model.spec)
+            except OSError as error:  # a read-only or full cache: learn for this run only
+                if not self._kernel_unsaved:
+                    LOGGER.warning("learned stream of %s: cannot save its diversity kernel to "
+                                   "%s (%s); it is learned for this run only",
+                                   self.model.spec.name, self.config.kernel_path,
+                                   error.strerror or error)
+                self._kernel_unsaved = True
 
     def binding(self, info: StreamInfo | None = None) -> Binding:
         """The planner :class:`Binding`, with :meth:`on_unusable` wired as its feedback."""

@@ -224,6 +224,9 @@ def tell(directory: str | Path, score: float, valid: bool = True, *,
         raise InputError(f"--score: expected a finite number, got {score}")
     if abs(score) > MAX_SCORE_MAGNITUDE:  # the refit would overflow (and training refuses it)
         raise InputError(f"--score: {score:g} is beyond ±{MAX_SCORE_MAGNITUDE:g}")
+    if not valid and score > 0:  # learned as is, a trial that could not run would "succeed"
+        raise InputError(f"--score {score:g} is a success, but --invalid says the trial could "
+                         "not be run: give its score <= 0 (e.g. -1), or --valid")
     if not directory.is_dir():
         raise InputError("no pending trial: run `ltamp train SKILL --ask --out DIR` first",
                          location_in(directory))

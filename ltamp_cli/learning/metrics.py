@@ -112,7 +112,14 @@ class SkillEvaluator:
         n_contexts: int = 50,
         seed: int = 12345,
     ) -> SkillEvaluator:
-        """Evaluator for a backend with a vectorised ``true_score`` (the synthetic backend)."""
+        """Evaluator for a backend with a vectorised ``true_score`` (the synthetic backend).
+
+        ``n_test`` held-out points for F1 (>= 1), ``n_contexts`` contexts whose θ* is scored
+        (>= 0): the limits and words of ``ltamp evaluate --n-test/--trials``.
+        """
+        if n_contexts < 0 or n_test < 1:
+            raise ValueError(f"--trials must be >= 0 and --n-test >= 1, got {n_contexts} and "
+                             f"{n_test}")
         spec = backend.skills()[skill]
         rng = np.random.default_rng(seed)
         contexts = np.array([drawn_context(backend, skill, rng) for _ in range(n_test)]).reshape(

@@ -167,8 +167,13 @@ def _write_temporary(path: Path, write: Callable[[BinaryIO], Any]) -> Path:
     """Write a temporary file beside ``path`` (a name of this process and thread: two savers
     never share one) and return its path."""
     temporary = path.with_name(f"{path.name}.{os.getpid()}-{threading.get_ident()}.tmp")
-    with temporary.open("wb") as handle:
-        write(handle)
+    try:
+        with temporary.open("wb") as handle:
+            write(handle)
+    except OSError as error:  # a full disk, a file size limit: no temporary left behind
+        temporary.unlink(missing_ok=True)
+        raise InputError(f"{path.parent}: could not save the model ({path.name}: "
+                         f"{error.strerror or error}); the directory is unchanged") from None
     return temporary
 
 

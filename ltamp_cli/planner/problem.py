@@ -280,6 +280,7 @@ def load_problem(path: str | Path, domain_dir: str | Path | None = None) -> Plan
     world = doc.get("world", default={}) or {}
     if not isinstance(world, dict):
         raise doc.error("'world' must be a mapping", "world")
+    _check_learned_stream_names(doc, world, stream_file)
     factory = None
     bindings_source = ""
     if stream_file is not None and stream_file.external_names():
@@ -306,6 +307,22 @@ def load_problem(path: str | Path, domain_dir: str | Path | None = None) -> Plan
     return with_negated_tests(PlanningProblem(
         problem.name, str(path), domain, stream_file, factory, bindings_source, world, objects,
         problem.init, problem.function_values, goal, dict(planner_options), doc.data))
+
+
+def _check_learned_stream_names(doc: YamlDocument, world: Mapping[str, Any],
+                                stream_file: StreamFile | None) -> None:
+    """Every ``world.learned_streams`` entry must name a stream of the stream file: the
+    bindings look entries up by stream name, so a misspelt one would be ignored silently."""
+    entries = world.get("learned_streams")
+    if not isinstance(entries, Mapping):
+        return
+    streams = [s.name for s in stream_file.streams] if stream_file is not None else []
+    known = {name.lower() for name in streams}
+    for key in entries:
+        if str(key).lower() not in known:
+            raise doc.error(f"world.learned_streams.{key}: the stream file has no stream "
+                            f"{str(key)!r} (streams: {', '.join(streams) or 'none'})",
+                            "world", "learned_streams", key)
 
 
 def with_negated_tests(problem: PlanningProblem) -> PlanningProblem:

@@ -105,8 +105,8 @@ class ProblemFile(BaseModel):
     goal: str | None = None
     pddl_problem: str | None = None
     planner: PlannerOptions | None = None
-    streams: dict[str, Any] | None = None
-    backend: str | None = None
+    # No `streams:` or `backend:` keys: nothing read them (a `backend: box2d` line did not
+    # make `ltamp solve` execute anything; that is `--backend`), so they are unknown fields.
 
 
 # ---- pydantic errors -> one positioned line -----------------------------------------------

@@ -186,7 +186,10 @@ def save_kernel(kernel: DiversityKernel, path: str | Path, spec: SkillSpec) -> P
         **kernel.to_json(),
     }
     handle, temporary = tempfile.mkstemp(prefix=path.name, suffix=".tmp", dir=path.parent)
-    with os.fdopen(handle, "w") as stream:
-        stream.write(json.dumps(record, indent=2) + "\n")
-    os.replace(temporary, path)
+    try:
+        with os.fdopen(handle, "w") as stream:
+            stream.write(json.dumps(record, indent=2) + "\n")
+        os.replace(temporary, path)
+    finally:  # a failed write (full disk) leaves no temporary behind
+        Path(temporary).unlink(missing_ok=True)
     return path

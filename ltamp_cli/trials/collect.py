@@ -41,6 +41,7 @@ from ltamp_cli.backends.sanity import run_trial_safely
 from ltamp_cli.errors import InputError
 from ltamp_cli.seeds import usable_seed
 from ltamp_cli.trials.record import TrialDataset, TrialRecord
+from ltamp_cli.trials.robots import check_robot
 from ltamp_cli.writer_lock import exclusive_writer
 
 VALID_DRAW_BATCH = 256
@@ -308,10 +309,14 @@ def collect(
     writes ``out`` at a time: another one holding it is an :class:`InputError` (or, with
     ``wait``, waited for).
     """
+    # The limits and words of `ltamp collect`, which calls this function for its checks.
     if job.n < 0:
-        raise InputError(f"-n must be >= 0, got {job.n}")
+        raise InputError(f"-n: expected a number >= 0, got {job.n}")
     if workers is not None and workers < 1:
-        raise InputError(f"--workers must be >= 1, got {workers}")
+        raise InputError(f"--workers: expected a number >= 1, got {workers}")
+    if Path(out).is_dir():
+        raise InputError(f"--out: {out} is a directory, expected a .jsonl file path")
+    check_robot(job.robot, job.backend, job.skill)
     if ray_address is not None and not ray_address.strip():
         raise InputError("--ray: expected 'local' or a Ray cluster address, got ''")
     job = replace(job, seed=usable_seed(job.seed))

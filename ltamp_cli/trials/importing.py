@@ -240,13 +240,19 @@ def parse_trials(
     records = []
     for line, row in read_rows(path):
         where = (path, line)
+        score = _score(row, spec, score_from_fraction, where)
+        valid = _flag(row, "valid", True, where)
+        if not valid and score > 0:  # learned as is, it would be a success that never ran
+            raise InputError(f"field 'score': {score:g} > 0 is a success, but 'valid' says the "
+                             "trial could not be run: give its score <= 0 (e.g. -1)",
+                             location_in(path, line, 1))
         records.append(
             TrialRecord(
                 skill=spec.name,
                 context=_vector(row, spec.context, where),
                 control=_vector(row, spec.control, where),
-                score=_score(row, spec, score_from_fraction, where),
-                valid=_flag(row, "valid", True, where),
+                score=score,
+                valid=valid,
                 seed=_seed(row, where),
                 backend=f"import:{path.name}",
                 info={"source": path.name, "line": line},

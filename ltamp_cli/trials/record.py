@@ -8,6 +8,8 @@ worst leave one partial last line, which :meth:`TrialDataset.read` ignores and t
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import json
 import math
 import os
@@ -185,10 +187,21 @@ class TrialDataset:
         self._drop_torn_tail()
         fd = os.open(self.path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
         try:
-            written = os.write(fd, payload)
-            if written != len(payload):  # pragma: no cover - disk full or similar
-                raise OSError(f"short write to {self.path}: {written} of {len(payload)} bytes")
-            os.fsync(fd)
+            size = os.fstat(fd).st_size  # one writer holds the file's lock: nobody else appends
+            try:
+                written = os.write(fd, payload)
+                if written != len(payload):  # a full disk or a file size limit
+                    raise OSError(errno.ENOSPC, f"only {written} of {len(payload)} bytes written "
+                                  "(disk full or a file size limit)")
+                os.fsync(fd)
+            except OSError as error:
+                # Nothing half-written: cut what this write added (shrinking needs no space).
+                with contextlib.suppress(OSError):
+                    os.ftruncate(fd, size)
+                raise InputError(
+                    f"{self.path}: could not append {len(payload.splitlines())} trial "
+                    f"record(s): {error.strerror or error}; the file is unchanged (free some "
+                    "space and run again to resume)") from None
         finally:
             os.close(fd)
 

@@ -230,6 +230,8 @@ def check_streams(streams: StreamFile, domain: Domain) -> None:
         seen.add(name)
     for stream in streams.streams:
         what = f"stream {stream.name!r}"
+        _check_unique(stream.inputs, f"input of {what}", stream.location)
+        _check_unique(stream.outputs, f"output of {what}", stream.location)
         overlap = set(stream.inputs) & set(stream.outputs)
         if overlap:
             raise InputError(f"{what} uses {sorted(overlap)[0]} as both input and output",
@@ -249,6 +251,8 @@ def check_streams(streams: StreamFile, domain: Domain) -> None:
                                  stream.location)
     function_arities = {sig.name: sig.arity for sig in domain.functions}
     for function in streams.functions:
+        _check_unique(function.head.args, f"input of function {function.name!r}",
+                      function.location)
         if function.name not in function_arities:
             raise InputError(f"function {function.name!r} is not declared in the domain's "
                              ":functions", function.location)
@@ -261,6 +265,8 @@ def check_streams(streams: StreamFile, domain: Domain) -> None:
         _check_inputs_covered(function.head.args, function.domain,
                               f"function {function.name!r}", function.location)
     for predicate in streams.predicates:
+        _check_unique(predicate.head.args, f"input of predicate {predicate.name!r}",
+                      predicate.location)
         if predicate.name in domain.derived_predicates():
             raise InputError(f"external predicate {predicate.name!r} is also derived",
                              predicate.location)
@@ -269,6 +275,19 @@ def check_streams(streams: StreamFile, domain: Domain) -> None:
                         f"the domain of predicate {predicate.name!r}")
         _check_inputs_covered(predicate.head.args, predicate.domain,
                               f"predicate {predicate.name!r}", predicate.location)
+
+
+def _check_unique(variables: Iterable[str], what: str, location: SourceLocation) -> None:
+    """A stream's inputs (and its outputs) must be distinct variables, as in PDDLStream.
+
+    ``:outputs (?p ?p)`` would bind one variable to two values (the first silently lost);
+    ``:inputs (?b ?b)`` would call the procedure with one object twice.
+    """
+    seen: set[str] = set()
+    for variable in variables:
+        if variable in seen:
+            raise InputError(f"{variable} is listed twice as an {what}", location)
+        seen.add(variable)
 
 
 def _check_inputs_covered(inputs: Iterable[str], domain_atoms: Iterable[Atom], what: str,
