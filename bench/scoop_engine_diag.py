@@ -27,13 +27,15 @@ import argparse
 import json
 import sys
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from bench.fidelity import setting_version
+from bench.fidelity import setting_version, trial_key
+from ltamp_cli.backends import load_backend
 from ltamp_cli.backends.pybullet.skills.physics import BulletTrialPhysics
 from ltamp_cli.backends.pybullet.world import PhysicsWorld
 from ltamp_cli.backends.sapien.skills import SapienTrialPhysics
@@ -157,6 +159,43 @@ def capacity_rows(cache: Path, first: int, last: int, engine: str, config: dict[
     return rows
 
 
+def rerun_rows(inputs_path: Path, cache: Path, indices: list[int], engine: str,
+               done: set[tuple[int, str]]) -> Iterator[dict[str, Any]]:
+    """Re-run the ``3d-scoop-engine`` trials of ``indices`` (inputs of ``inputs_path``, trial
+    seed = index) on ``engine`` as shipped (``load_backend``), in this process, and yield
+    per trial: the score, the full ``info`` (capacity, beads in the spoon, lost), the CPU
+    seconds and the score the cache holds for the same key (``None`` if absent).
+    ``done``: (index, engine) pairs to skip (a resumed run)."""
+    stored = json.loads(inputs_path.read_text())["inputs"]
+    setting = engine
+    cached = {}
+    for line in cache.open():
+        try:
+            record = json.loads(line)
+        except json.JSONDecodeError:
+            continue
+        cached[record["key"]] = record
+    backend = load_backend(engine)
+    try:
+        for index in indices:
+            if (index, engine) in done:
+                continue
+            row = np.asarray(stored[index], dtype=float)
+            context, control = row[:4], row[4:]
+            key = trial_key(setting, "scoop", context, control, index)
+            start = time.process_time()
+            result = backend.run_trial("scoop", context, control, index)
+            old = cached.get(key)
+            yield {"index": index, "engine": engine, "key_version": key.split("|")[0],
+                   "score": float(result.score), "valid": bool(result.valid),
+                   "cached_score": None if old is None else old["score"],
+                   "info": {k: v for k, v in result.info.items()
+                            if isinstance(v, int | float | str | None)},
+                   "cpu_s": time.process_time() - start}
+    finally:
+        backend.close()
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cache", type=Path, required=True)
@@ -168,10 +207,30 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--first", type=int, default=0)
     parser.add_argument("--last", type=int, default=60)
     parser.add_argument("--config", default="{}", help="SAPIEN settings (JSON)")
+    parser.add_argument("--rerun", type=Path, default=None, metavar="INPUTS_JSON",
+                        help="re-run --indices of this stored-inputs file on --engines as "
+                             "shipped and compare with the cached scores (resumable)")
     parser.add_argument("--sapien-version", default=None,
                         help="pair the cache's SAPIEN trials of this physics version "
                              "(default: the current one), e.g. 3 for the v3 row")
     args = parser.parse_args(argv)
+    if args.rerun is not None:
+        done = set()
+        if args.out.exists():
+            for line in args.out.open():
+                try:
+                    record = json.loads(line)
+                except json.JSONDecodeError:
+                    continue
+                done.add((record["index"], record["engine"]))
+        for engine in args.engines:
+            for row in rerun_rows(args.rerun, args.cache, args.indices or [], engine, done):
+                with args.out.open("a") as out:
+                    out.write(json.dumps(row) + "\n")
+                print(row["index"], engine, f"{row['score']:+.4f}", row["cached_score"],
+                      row["info"].get("spoon_capacity"), row["info"].get("beads_in_spoon_end"),
+                      file=sys.stderr, flush=True)
+        return 0
     if args.capacity:
         config = json.loads(args.config)
         with args.out.open("a") as out:
