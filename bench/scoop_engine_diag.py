@@ -28,7 +28,7 @@ import json
 import sys
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -129,11 +129,12 @@ def disagreeing(cache: Path, versions: dict[str, str] | None = None) -> list[dic
     return out
 
 
-def capacity_rows(cache: Path, first: int, last: int, engine: str, config: dict[str, Any]
-                  ) -> list[dict[str, Any]]:
+def capacity_rows(cache: Path, first: int, last: int, engine: str, config: dict[str, Any],
+                  indices: list[int] | None = None) -> Iterator[dict[str, Any]]:
     """The spoon capacity (beads) of inputs ``first..last-1`` of ``cache``'s scoop pairs
-    (indices = trial seeds of seed 0) on ``engine``, measured as in the trial (same latents
-    and draws), with the spoon and bead masses (kg) and the bead radius (m)."""
+    (indices = trial seeds of seed 0; ``indices``: these instead) on ``engine``, measured as
+    in the trial (same latents and draws), with the spoon and bead masses (kg) and the bead
+    radius (m), one row per input as soon as it is measured."""
     prefix = f"pybullet@v{setting_version('pybullet', 'scoop')}|"
     by_index = {}
     for line in cache.open():
@@ -145,22 +146,21 @@ def capacity_rows(cache: Path, first: int, last: int, engine: str, config: dict[
             by_index[record["seed"]] = record
     physics = engine_physics(engine, **config)
     settings = ScoopSettings()
-    rows = []
-    for index in range(first, last):
+    for index in (range(first, last) if indices is None else indices):
         item = by_index[index]
         trial = prepare_scoop(np.array(item["context"]), np.array(item["control"]), False)
         rng = np.random.default_rng(index)
         latents = sample_scoop_latents(rng, settings, trial.scene.bowl)
         capacity = measure_spoon_capacity(physics, trial.tool, latents.beads,
                                           latents.spoon_material, rng, settings.settle_s)
-        rows.append({"index": index, "engine": engine, "cfg": config, "capacity": capacity,
-                     "spoon_mass": latents.spoon_material.mass,
-                     "bead_mass": latents.beads.mass, "radius": latents.beads.radius})
-    return rows
+        yield {"index": index, "engine": engine, "cfg": config, "capacity": capacity,
+               "spoon_mass": latents.spoon_material.mass,
+               "bead_mass": latents.beads.mass, "radius": latents.beads.radius}
 
 
 def rerun_rows(inputs_path: Path, cache: Path, indices: list[int], engine: str,
-               done: set[tuple[int, str]]) -> Iterator[dict[str, Any]]:
+               done: set[tuple[int, str]], config: dict[str, Any] | None = None
+               ) -> Iterator[dict[str, Any]]:
     """Re-run the ``3d-scoop-engine`` trials of ``indices`` (inputs of ``inputs_path``, trial
     seed = index) on ``engine`` as shipped (``load_backend``), in this process, and yield
     per trial: the score, the full ``info`` (capacity, beads in the spoon, lost), the CPU
@@ -176,6 +176,8 @@ def rerun_rows(inputs_path: Path, cache: Path, indices: list[int], engine: str,
             continue
         cached[record["key"]] = record
     backend = load_backend(engine)
+    if config:
+        backend.config = replace(backend.config, **config)  # type: ignore[attr-defined]
     try:
         for index in indices:
             if (index, engine) in done:
@@ -187,6 +189,7 @@ def rerun_rows(inputs_path: Path, cache: Path, indices: list[int], engine: str,
             result = backend.run_trial("scoop", context, control, index)
             old = cached.get(key)
             yield {"index": index, "engine": engine, "key_version": key.split("|")[0],
+                   "cfg": config or {},
                    "score": float(result.score), "valid": bool(result.valid),
                    "cached_score": None if old is None else old["score"],
                    "info": {k: v for k, v in result.info.items()
@@ -224,7 +227,9 @@ def main(argv: list[str] | None = None) -> int:
                     continue
                 done.add((record["index"], record["engine"]))
         for engine in args.engines:
-            for row in rerun_rows(args.rerun, args.cache, args.indices or [], engine, done):
+            config = json.loads(args.config) if engine == "sapien" else {}
+            for row in rerun_rows(args.rerun, args.cache, args.indices or [], engine, done,
+                                  config):
                 with args.out.open("a") as out:
                     out.write(json.dumps(row) + "\n")
                 print(row["index"], engine, f"{row['score']:+.4f}", row["cached_score"],
@@ -233,10 +238,10 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     if args.capacity:
         config = json.loads(args.config)
-        with args.out.open("a") as out:
-            for engine in args.engines:
-                for row in capacity_rows(args.cache, args.first, args.last, engine,
-                                         config if engine == "sapien" else {}):
+        for engine in args.engines:
+            for row in capacity_rows(args.cache, args.first, args.last, engine,
+                                     config if engine == "sapien" else {}, args.indices):
+                with args.out.open("a") as out:
                     out.write(json.dumps(row) + "\n")
         return 0
     versions = None

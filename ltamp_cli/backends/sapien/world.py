@@ -138,6 +138,7 @@ class SapienWorldConfig:
     spoon_rest_offset: float = -0.002
     spoon_tool: str = "kinematic"
     placed_spoon_rest_offset: float = -0.0025
+    spoon_friction_scale: float = 1.0
 
     def __post_init__(self) -> None:
         if not self.time_step > 0:
@@ -152,6 +153,8 @@ class SapienWorldConfig:
             raise ValueError("spoon_rest_offset must be in (-0.01, 0] m")
         if self.spoon_tool not in ("kinematic", "placed"):
             raise ValueError("spoon_tool must be 'kinematic' or 'placed'")
+        if not self.spoon_friction_scale > 0:
+            raise ValueError("spoon_friction_scale must be positive")
         if not -0.01 < self.placed_spoon_rest_offset <= 0:
             raise ValueError("placed_spoon_rest_offset must be in (-0.01, 0] m")
         if self.rolling_match_speed is not None and not self.rolling_match_speed > 0:
