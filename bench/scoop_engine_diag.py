@@ -19,6 +19,22 @@ This is how SAPIEN physics version 3.1's spoon was fitted (issue #21, inputs 0-5
         --cache docs/results/fidelity/engine_scoop_bed_trials.jsonl --first 0 --last 60 \
         --engines sapien --config '{"spoon_tool": "placed"}' \
         --out docs/results/fidelity/scoop_capacity_fit.jsonl
+
+``--rerun INPUTS`` re-runs ``--indices`` of a stored-inputs file (``bench/fidelity.py
+--inputs``; trial seed = index) on ``--engines`` as shipped (SAPIEN with ``--config``) in
+this process and writes one line per trial with the score, the cached score of the same key
+and the trial's ``info`` (capacity, beads in the spoon); resumable. Issue #21's staleness
+check (are the cached labels what today's code gives?):
+
+    OMP_NUM_THREADS=1 .venv/bin/python bench/scoop_engine_diag.py --rerun \
+        docs/results/fidelity/engine_scoop_inputs.json \
+        --cache docs/results/fidelity/engine_scoop_bed_trials.jsonl --engines pybullet \
+        --indices $(seq 0 5 195) --out docs/results/fidelity/scoop_rerun_pybullet.jsonl
+
+``--compare-sets 0 200 400 ...`` compares the cached pairs of consecutive index ranges
+(:func:`compare_sets`: successes, disagreements, KS per input and latent dimension, a
+two-sample classifier, a logistic model of disagreement with a set indicator) and writes
+the JSON report to ``--out``.
 """
 
 from __future__ import annotations

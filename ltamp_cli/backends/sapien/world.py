@@ -125,6 +125,15 @@ class SapienWorldConfig:
     both far below the rule's 0.95, with SAPIEN-only successes remaining (the placed spoon
     also keeps more of the scooped spoonful), so the default stays ``"kinematic"`` and the
     scoop's physics version stays 3.
+
+    ``spoon_friction_scale`` multiplies a carried spoon's (kinematic or placed) squared
+    friction, as ``bead_friction_scale`` does the beads': the beads' solver correction
+    applied to bead-on-spoon contacts too, meant to let more of a scooped spoonful slide
+    off during the lift. Default 1.0 (physics v3). Tried on the placed spoon (issue #21,
+    ``docs/results/fidelity/scoop_fit_spoon_friction.jsonl``, 17 of inputs 0-59): scales
+    0.7 / 0.5 / 0.35 changed the mean spoonful by < 0.3 beads (4.35-4.65) and the mean
+    fraction-of-capacity bias over PyBullet not at all (+0.050 / +0.050 / +0.049; v3
+    +0.041), so it is an option only.
     """
 
     time_step: float = 1.0 / 240.0
