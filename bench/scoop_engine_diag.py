@@ -19,27 +19,50 @@ This is how SAPIEN physics version 3.1's spoon was fitted (issue #21, inputs 0-5
         --cache docs/results/fidelity/engine_scoop_bed_trials.jsonl --first 0 --last 60 \
         --engines sapien --config '{"spoon_tool": "placed"}' \
         --out docs/results/fidelity/scoop_capacity_fit.jsonl
+
+``--rerun INPUTS`` re-runs ``--indices`` of a stored-inputs file (``bench/fidelity.py
+--inputs``; trial seed = index) on ``--engines`` as shipped (SAPIEN with ``--config``) in
+this process and writes one line per trial with the score, the cached score of the same key
+and the trial's ``info`` (capacity, beads in the spoon); resumable. Issue #21's staleness
+check (are the cached labels what today's code gives?):
+
+    OMP_NUM_THREADS=1 .venv/bin/python bench/scoop_engine_diag.py --rerun \
+        docs/results/fidelity/engine_scoop_inputs.json \
+        --cache docs/results/fidelity/engine_scoop_bed_trials.jsonl --engines pybullet \
+        --indices $(seq 0 5 195) --out docs/results/fidelity/scoop_rerun_pybullet.jsonl
+
+``--compare-sets 0 200 400 ...`` compares the cached pairs of consecutive index ranges
+(:func:`compare_sets`: successes, disagreements, KS per input and latent dimension, a
+two-sample classifier, a logistic model of disagreement with a set indicator) and writes
+the JSON report to ``--out``.
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import sys
 import time
-from dataclasses import dataclass, field
+from collections.abc import Iterator
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from bench.fidelity import setting_version
+from bench.fidelity import setting_version, trial_key
+from ltamp_cli.backends import load_backend
 from ltamp_cli.backends.pybullet.skills.physics import BulletTrialPhysics
 from ltamp_cli.backends.pybullet.world import PhysicsWorld
 from ltamp_cli.backends.sapien.skills import SapienTrialPhysics
 from ltamp_cli.backends.sapien.world import SapienWorld, SapienWorldConfig
 from ltamp_cli.backends.skills3d.physics import contained_mask
 from ltamp_cli.backends.skills3d.scoop import (
+    SCOOP_CONTEXT,
+    SCOOP_CONTROL,
+    SCOOP_TAU,
+    ScoopContext,
     ScoopSettings,
     measure_spoon_capacity,
     prepare_scoop,
@@ -127,11 +150,12 @@ def disagreeing(cache: Path, versions: dict[str, str] | None = None) -> list[dic
     return out
 
 
-def capacity_rows(cache: Path, first: int, last: int, engine: str, config: dict[str, Any]
-                  ) -> list[dict[str, Any]]:
+def capacity_rows(cache: Path, first: int, last: int, engine: str, config: dict[str, Any],
+                  indices: list[int] | None = None) -> Iterator[dict[str, Any]]:
     """The spoon capacity (beads) of inputs ``first..last-1`` of ``cache``'s scoop pairs
-    (indices = trial seeds of seed 0) on ``engine``, measured as in the trial (same latents
-    and draws), with the spoon and bead masses (kg) and the bead radius (m)."""
+    (indices = trial seeds of seed 0; ``indices``: these instead) on ``engine``, measured as
+    in the trial (same latents and draws), with the spoon and bead masses (kg) and the bead
+    radius (m), one row per input as soon as it is measured."""
     prefix = f"pybullet@v{setting_version('pybullet', 'scoop')}|"
     by_index = {}
     for line in cache.open():
@@ -143,18 +167,146 @@ def capacity_rows(cache: Path, first: int, last: int, engine: str, config: dict[
             by_index[record["seed"]] = record
     physics = engine_physics(engine, **config)
     settings = ScoopSettings()
-    rows = []
-    for index in range(first, last):
+    for index in (range(first, last) if indices is None else indices):
         item = by_index[index]
         trial = prepare_scoop(np.array(item["context"]), np.array(item["control"]), False)
         rng = np.random.default_rng(index)
         latents = sample_scoop_latents(rng, settings, trial.scene.bowl)
         capacity = measure_spoon_capacity(physics, trial.tool, latents.beads,
                                           latents.spoon_material, rng, settings.settle_s)
-        rows.append({"index": index, "engine": engine, "cfg": config, "capacity": capacity,
-                     "spoon_mass": latents.spoon_material.mass,
-                     "bead_mass": latents.beads.mass, "radius": latents.beads.radius})
-    return rows
+        yield {"index": index, "engine": engine, "cfg": config, "capacity": capacity,
+               "spoon_mass": latents.spoon_material.mass,
+               "bead_mass": latents.beads.mass, "radius": latents.beads.radius}
+
+
+def rerun_rows(inputs_path: Path, cache: Path, indices: list[int], engine: str,
+               done: set[tuple[int, str]], config: dict[str, Any] | None = None
+               ) -> Iterator[dict[str, Any]]:
+    """Re-run the ``3d-scoop-engine`` trials of ``indices`` (inputs of ``inputs_path``, trial
+    seed = index) on ``engine`` as shipped (``load_backend``), in this process, and yield
+    per trial: the score, the full ``info`` (capacity, beads in the spoon, lost), the CPU
+    seconds and the score the cache holds for the same key (``None`` if absent).
+    ``done``: (index, engine) pairs to skip (a resumed run)."""
+    stored = json.loads(inputs_path.read_text())["inputs"]
+    setting = engine
+    cached = {}
+    for line in cache.open():
+        try:
+            record = json.loads(line)
+        except json.JSONDecodeError:
+            continue
+        cached[record["key"]] = record
+    backend = load_backend(engine)
+    if config:
+        backend.config = replace(backend.config, **config)  # type: ignore[attr-defined]
+    try:
+        for index in indices:
+            if (index, engine) in done:
+                continue
+            row = np.asarray(stored[index], dtype=float)
+            context, control = row[:4], row[4:]
+            key = trial_key(setting, "scoop", context, control, index)
+            start = time.process_time()
+            result = backend.run_trial("scoop", context, control, index)
+            old = cached.get(key)
+            yield {"index": index, "engine": engine, "key_version": key.split("|")[0],
+                   "cfg": config or {},
+                   "score": float(result.score), "valid": bool(result.valid),
+                   "cached_score": None if old is None else old["score"],
+                   "info": {k: v for k, v in result.info.items()
+                            if isinstance(v, int | float | str | None)},
+                   "cpu_s": time.process_time() - start}
+    finally:
+        backend.close()
+
+
+#: The latent draws of a scoop trial compared across input sets (:func:`compare_sets`).
+LATENT_NAMES = ("bead_count", "bead_radius_m", "bead_mass_kg", "bead_friction",
+                "bead_restitution", "bowl_friction", "spoon_mass_kg", "spoon_friction",
+                "spoon_restitution")
+
+
+def scoop_latents(context: np.ndarray, index: int) -> list[float]:
+    """The trial's latent draws (:data:`LATENT_NAMES`) of input ``index`` (trial seed)."""
+    latents = sample_scoop_latents(np.random.default_rng(index), ScoopSettings(),
+                                   ScoopContext.from_array(context).bowl)
+    beads = latents.beads
+    return [beads.count, beads.radius, beads.mass, beads.lateral_friction, beads.restitution,
+            latents.bowl_material.lateral_friction, latents.spoon_material.mass,
+            latents.spoon_material.lateral_friction, latents.spoon_material.restitution]
+
+
+def fraction_from_score(score: float) -> float:
+    """The clipped fraction of capacity ``x`` in ``[0, 1]`` of a scoop score ``g(x; τ)``."""
+    return (score + 1.0) * SCOOP_TAU if score <= 0 else SCOOP_TAU + score * (1.0 - SCOOP_TAU)
+
+
+def compare_sets(inputs_path: Path, cache: Path, sets: list[tuple[int, int]]
+                 ) -> dict[str, Any]:
+    """Are the ``3d-scoop-engine`` pairs of the index ranges ``sets`` alike? Per set: both
+    engines' successes and the disagreements, the fraction-of-capacity histograms; between
+    the first set and each other one: KS p-values per input and latent dimension, a
+    random-forest two-sample test (10-fold CV AUC of telling the sets apart from inputs and
+    latents; 0.5 = alike), Fisher's exact test of the disagreement counts, and a logistic
+    model of disagreement on the strongest covariates with and without a set indicator
+    (likelihood-ratio p-value: whether the covariates explain the sets' difference)."""
+    from scipy.stats import chi2, fisher_exact, ks_2samp
+    from sklearn.ensemble import RandomForestClassifier
+    from sklearn.linear_model import LogisticRegression
+    from sklearn.model_selection import cross_val_score
+
+    stored = np.asarray(json.loads(inputs_path.read_text())["inputs"], dtype=float)
+    pairs = {p["index"]: p for p in disagreeing(cache)}
+    report: dict[str, Any] = {"sets": []}
+    per_set = []
+    for first, last in sets:
+        idx = [i for i in range(first, last) if i in pairs]
+        fp = np.array([fraction_from_score(pairs[i]["scores"]["pybullet"]) for i in idx])
+        fs = np.array([fraction_from_score(pairs[i]["scores"]["sapien"]) for i in idx])
+        feats = np.array([[*stored[i], *scoop_latents(stored[i][:4], i)] for i in idx])
+        per_set.append((idx, fp, fs, feats))
+        bins = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 1.01]
+        report["sets"].append({
+            "inputs": [first, last - 1], "pairs": len(idx),
+            "pybullet_successes": int((fp > SCOOP_TAU).sum()),
+            "sapien_successes": int((fs > SCOOP_TAU).sum()),
+            "sapien_only": int(((fs > SCOOP_TAU) & (fp <= SCOOP_TAU)).sum()),
+            "pybullet_only": int(((fp > SCOOP_TAU) & (fs <= SCOOP_TAU)).sum()),
+            "mean_fraction": {"pybullet": float(fp.mean()), "sapien": float(fs.mean())},
+            "fraction_bins": bins[:-1],
+            "fraction_hist": {"pybullet": np.histogram(fp, bins)[0].tolist(),
+                              "sapien": np.histogram(fs, bins)[0].tolist()}})
+    names = [*SCOOP_CONTEXT.names, *SCOOP_CONTROL.names, *LATENT_NAMES]
+    _, fp0, fs0, f0 = per_set[0]
+    report["versus_first"] = []
+    for k in range(1, len(per_set)):
+        _, fp1, fs1, f1 = per_set[k]
+        features = np.concatenate([f0, f1])
+        which = np.r_[np.zeros(len(f0)), np.ones(len(f1))]
+        auc = cross_val_score(RandomForestClassifier(300, random_state=0, min_samples_leaf=5),
+                              features, which, cv=10, scoring="roc_auc").mean()
+        dis = np.r_[(fp0 > SCOOP_TAU) != (fs0 > SCOOP_TAU), (fp1 > SCOOP_TAU) != (fs1 > SCOOP_TAU)]
+        table = [[int(dis[:len(f0)].sum()), len(f0) - int(dis[:len(f0)].sum())],
+                 [int(dis[len(f0):].sum()), len(f1) - int(dis[len(f0):].sum())]]
+        chosen = ["scoop_z", "spoon_length", "start_y", "bead_mass_kg", "spoon_mass_kg"]
+        cov = features[:, [names.index(c) for c in chosen]]
+        cov = (cov - cov.mean(0)) / cov.std(0)
+
+        def loglik(design: np.ndarray, labels: np.ndarray = dis) -> float:
+            model = LogisticRegression(C=1e6, max_iter=5000).fit(design, labels)
+            p = np.clip(model.predict_proba(design)[:, 1], 1e-12, 1 - 1e-12)
+            return float(np.sum(labels * np.log(p) + (1 - labels) * np.log(1 - p)))
+
+        base, with_set = loglik(cov), loglik(np.c_[cov, which])
+        report["versus_first"].append({
+            "sets": [report["sets"][0]["inputs"], report["sets"][k]["inputs"]],
+            "ks_p": {n: float(ks_2samp(f0[:, j], f1[:, j]).pvalue)
+                     for j, n in enumerate(names)},
+            "two_sample_rf_auc": float(auc),
+            "disagreements_fisher_p": float(fisher_exact(table)[1]),
+            "logistic_covariates": chosen,
+            "set_effect_given_covariates_lr_p": float(chi2.sf(2 * (with_set - base), 1))})
+    return report
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -168,16 +320,51 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--first", type=int, default=0)
     parser.add_argument("--last", type=int, default=60)
     parser.add_argument("--config", default="{}", help="SAPIEN settings (JSON)")
+    parser.add_argument("--rerun", type=Path, default=None, metavar="INPUTS_JSON",
+                        help="re-run --indices of this stored-inputs file on --engines as "
+                             "shipped and compare with the cached scores (resumable)")
+    parser.add_argument("--compare-sets", type=int, nargs="+", default=None,
+                        metavar="BOUND", help="compare the cached pairs of index ranges "
+                        "BOUND[0]..BOUND[1]-1, BOUND[1]..BOUND[2]-1, ... (needs --rerun's "
+                        "inputs file as --inputs); writes JSON to --out")
+    parser.add_argument("--inputs", type=Path, default=None, help="stored inputs (JSON)")
     parser.add_argument("--sapien-version", default=None,
                         help="pair the cache's SAPIEN trials of this physics version "
                              "(default: the current one), e.g. 3 for the v3 row")
     args = parser.parse_args(argv)
+    if args.compare_sets is not None:
+        if args.inputs is None or len(args.compare_sets) < 3:
+            parser.error("--compare-sets needs --inputs and at least 3 bounds")
+        bounds = args.compare_sets
+        report = compare_sets(args.inputs, args.cache, list(itertools.pairwise(bounds)))
+        args.out.write_text(json.dumps(report, indent=1))
+        print(json.dumps(report["versus_first"], indent=1))
+        return 0
+    if args.rerun is not None:
+        done = set()
+        if args.out.exists():
+            for line in args.out.open():
+                try:
+                    record = json.loads(line)
+                except json.JSONDecodeError:
+                    continue
+                done.add((record["index"], record["engine"]))
+        for engine in args.engines:
+            config = json.loads(args.config) if engine == "sapien" else {}
+            for row in rerun_rows(args.rerun, args.cache, args.indices or [], engine, done,
+                                  config):
+                with args.out.open("a") as out:
+                    out.write(json.dumps(row) + "\n")
+                print(row["index"], engine, f"{row['score']:+.4f}", row["cached_score"],
+                      row["info"].get("spoon_capacity"), row["info"].get("beads_in_spoon_end"),
+                      file=sys.stderr, flush=True)
+        return 0
     if args.capacity:
         config = json.loads(args.config)
-        with args.out.open("a") as out:
-            for engine in args.engines:
-                for row in capacity_rows(args.cache, args.first, args.last, engine,
-                                         config if engine == "sapien" else {}):
+        for engine in args.engines:
+            for row in capacity_rows(args.cache, args.first, args.last, engine,
+                                     config if engine == "sapien" else {}, args.indices):
+                with args.out.open("a") as out:
                     out.write(json.dumps(row) + "\n")
         return 0
     versions = None

@@ -279,3 +279,26 @@ def test_the_placed_spoon_is_an_option_and_the_shipped_physics_is_unchanged() ->
     assert SapienWorldConfig().spoon_tool == "kinematic"
     assert {physics_version(s) for s in ("pour", "scoop", "push", "stir")} == {
         f"{PHYSICS_VERSION}"}
+
+
+def test_spoon_friction_scale_scales_only_a_carried_spoons_friction() -> None:
+    # Issue #21's second option (not shipped: no effect on the fit inputs): the beads'
+    # solver correction applied to bead-on-spoon contacts. Default 1.0 = physics v3.
+    assert SapienWorldConfig().spoon_friction_scale == 1.0
+    material = BodyMaterial(mass=0.05, lateral_friction=0.5, restitution=0.1)
+    spoon = spoon_geometry(SpoonDims(0.2))
+    cup = vessel_geometry(CUP, "cup")
+
+    def friction(scale: float, geometry: object, body_type: str) -> float:
+        world = SapienWorld(SapienWorldConfig(spoon_friction_scale=scale))
+        body = create_kitchenware(world, geometry, material=material,  # type: ignore[arg-type]
+                                  body_type=body_type)  # type: ignore[arg-type]
+        return float(body.component.collision_shapes[0].physical_material.static_friction)
+
+    for body_type in ("kinematic", "placed"):
+        assert friction(0.5, spoon, body_type) == pytest.approx(0.5 * friction(1.0, spoon,
+                                                                              body_type))
+    assert friction(0.5, spoon, "static") == pytest.approx(0.25)  # not a carried tool
+    assert friction(0.5, cup, "kinematic") == pytest.approx(0.25)  # not a spoon
+    with pytest.raises(ValueError, match="spoon_friction_scale"):
+        SapienWorldConfig(spoon_friction_scale=0.0)

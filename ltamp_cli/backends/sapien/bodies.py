@@ -168,7 +168,10 @@ def create_kitchenware(
         component = physx.PhysxRigidStaticComponent()
     else:
         component = physx.PhysxRigidDynamicComponent()
-    physical = _material(material, 1.0)
+    # A spoon carried as a tool gets SapienWorldConfig.spoon_friction_scale (the beads'
+    # solver correction, bead_friction_scale, applied to bead-on-spoon contacts too).
+    tool_spoon = geometry.kind == "spoon" and body_type in ("kinematic", "placed")
+    physical = _material(material, config.spoon_friction_scale if tool_spoon else 1.0)
     density = 1000.0
     if body_type in ("dynamic", "placed"):
         if material.mass <= 0:

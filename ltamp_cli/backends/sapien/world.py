@@ -125,6 +125,15 @@ class SapienWorldConfig:
     both far below the rule's 0.95, with SAPIEN-only successes remaining (the placed spoon
     also keeps more of the scooped spoonful), so the default stays ``"kinematic"`` and the
     scoop's physics version stays 3.
+
+    ``spoon_friction_scale`` multiplies a carried spoon's (kinematic or placed) squared
+    friction, as ``bead_friction_scale`` does the beads': the beads' solver correction
+    applied to bead-on-spoon contacts too, meant to let more of a scooped spoonful slide
+    off during the lift. Default 1.0 (physics v3). Tried on the placed spoon (issue #21,
+    ``docs/results/fidelity/scoop_fit_spoon_friction.jsonl``, 17 of inputs 0-59): scales
+    0.7 / 0.5 / 0.35 changed the mean spoonful by < 0.3 beads (4.35-4.65) and the mean
+    fraction-of-capacity bias over PyBullet not at all (+0.050 / +0.050 / +0.049; v3
+    +0.041), so it is an option only.
     """
 
     time_step: float = 1.0 / 240.0
@@ -138,6 +147,7 @@ class SapienWorldConfig:
     spoon_rest_offset: float = -0.002
     spoon_tool: str = "kinematic"
     placed_spoon_rest_offset: float = -0.0025
+    spoon_friction_scale: float = 1.0
 
     def __post_init__(self) -> None:
         if not self.time_step > 0:
@@ -152,6 +162,8 @@ class SapienWorldConfig:
             raise ValueError("spoon_rest_offset must be in (-0.01, 0] m")
         if self.spoon_tool not in ("kinematic", "placed"):
             raise ValueError("spoon_tool must be 'kinematic' or 'placed'")
+        if not self.spoon_friction_scale > 0:
+            raise ValueError("spoon_friction_scale must be positive")
         if not -0.01 < self.placed_spoon_rest_offset <= 0:
             raise ValueError("placed_spoon_rest_offset must be in (-0.01, 0] m")
         if self.rolling_match_speed is not None and not self.rolling_match_speed > 0:
