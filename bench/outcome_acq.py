@@ -47,7 +47,10 @@ SKILL = "flick2d"
 #: Variant pairs compared (a − b) on each skill.
 COMPARISONS = (("lse-oc", "lse-hs-cap1-data"), ("lse-oc", "gp-hs-cap1-data"),
                ("lse-ov", "lse-hs-cap1-data"), ("lse-hs-cap1-data", "gp-hs-cap1-data"),
-               ("lse-osd", "lse-hs-cap1-data"), ("lse-oc", "lse-ov"))
+               ("lse-osd", "lse-hs-cap1-data"), ("lse-oc", "lse-ov"),
+               ("lse2-oc", "lse2-hs-straddle"), ("lse2-oc-w50", "lse2-hs-straddle"),
+               ("lse2-oc", "lse2-oc-w50"), ("lse2-oc", "lse-oc"),
+               ("lse2-oc", "gp-hs-cap1-data"))
 
 
 def run_job(variant: str, seed: int) -> dict[str, Any]:
