@@ -6,7 +6,9 @@ Strategies (``LearningConfig.strategy``):
 * ``lse2`` — GP; the context is drawn from the skill's context distribution, the control
   is the one with the largest ψ among ``lse2_candidates`` uniform controls that pass the
   pre-check for it (the paper's discrete GP-LSE2, section 6.2, which picks the pool trial
-  with the largest ψ among those of a sampled bowl–cup pair; see below);
+  with the largest ψ among those of a sampled bowl–cup pair; see below); for a skill with
+  an outcome, the one of largest outcome value (``hindsight_acquisition``, as ``lse``;
+  :func:`_outcome_choice`), ψ breaking ties;
 * ``gp`` — GP on uniformly random trials (no active learning);
 * ``random`` — uniformly random trials, no model (:class:`~.baselines.RandomModel`);
 * ``nn-c``, ``nn-r``, ``rf-c``, ``rf-r`` — scikit-learn baselines on uniformly random trials.

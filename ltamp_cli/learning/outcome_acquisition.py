@@ -29,6 +29,12 @@ an approximation for skills with such contexts. All three are compared in
 ``docs/results/push/README.md``; ``outcome-cover`` won on the push and flick2d and is the
 default (``LearningConfig.hindsight_acquisition``).
 
+``lse2`` and pool mode choose among *given* candidates (the drawn context's valid controls;
+the pool's remaining trials) with :func:`rank_by_outcome`: the same values, each candidate
+keeping its own goal as the trial's goal (it does not change the outcome), optionally
+weighted in (``LearningConfig.outcome_own_goal_weight``; 0 by default). Measured in
+``docs/results/push/README.md``, "lse2 and pool mode".
+
 This module only *chooses* trials; the learned model stays the score GP on the trials and
 their relabelled points (what is saved, sampled and used for θ*). The outcome GPs are
 refitted from the recorded trials whenever a choice is made, so nothing of them is saved.
