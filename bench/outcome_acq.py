@@ -10,7 +10,13 @@ scored by the skill's true score) and appends each job as one JSON line to ``--l
 --variant V --seeds S --log docs/results/push/outcome-acq-runs.jsonl`` (the al2d standard
 push protocol, live Box2D θ*).
 
-``python -m bench.outcome_acq report`` reads both logs and writes
+``run --variant pool-lse2-oc`` (and the other :data:`POOL_VARIANTS`) runs pool mode on
+flick2d instead: the learner picks its 100 trials from :data:`POOL_SIZE` uniformly random
+ones (:func:`flick_pool`); jobs go to ``outcome-acq-pool-flick2d-runs.jsonl``. The ``lse2-*``
+variants of :data:`bench.push_al.VARIANTS` compare lse2's straddle with the outcome
+acquisition (``docs/results/push/README.md``, "lse2 and pool mode").
+
+``python -m bench.outcome_acq report`` reads the three logs and writes
 ``docs/results/push/outcome-acq.json``: per variant and skill the final θ* success rate
 (per seed, pooled with a Wilson interval) and the training diagnostics, and paired
 comparisons over seed × held-out context units (bootstrap 95 % interval of the mean
