@@ -10,7 +10,13 @@ scored by the skill's true score) and appends each job as one JSON line to ``--l
 --variant V --seeds S --log docs/results/push/outcome-acq-runs.jsonl`` (the al2d standard
 push protocol, live Box2D θ*).
 
-``python -m bench.outcome_acq report`` reads both logs and writes
+``run --variant pool-lse2-oc`` (and the other :data:`POOL_VARIANTS`) runs pool mode on
+flick2d instead: the learner picks its 100 trials from :data:`POOL_SIZE` uniformly random
+ones (:func:`flick_pool`); jobs go to ``outcome-acq-pool-flick2d-runs.jsonl``. The ``lse2-*``
+variants of :data:`bench.push_al.VARIANTS` compare lse2's straddle with the outcome
+acquisition (``docs/results/push/README.md``, "lse2 and pool mode").
+
+``python -m bench.outcome_acq report`` reads the three logs and writes
 ``docs/results/push/outcome-acq.json``: per variant and skill the final θ* success rate
 (per seed, pooled with a Wilson interval) and the training diagnostics, and paired
 comparisons over seed × held-out context units (bootstrap 95 % interval of the mean
@@ -35,19 +41,88 @@ from bench.lse2 import _seeds, _wilson
 from bench.paper.stats import bootstrap_interval, paired_comparison, sign_test
 from bench.push_al import SIZES, VARIANTS
 from ltamp_cli.backends import load_backend
-from ltamp_cli.learning.active import LearningConfig, learn_online
+from ltamp_cli.backends.sanity import run_trial_safely
+from ltamp_cli.learning.active import LearningConfig, learn_from_pool, learn_online
 from ltamp_cli.learning.metrics import SkillEvaluator
+from ltamp_cli.trials.record import TrialRecord
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "docs" / "results" / "push"
 FLICK_LOG = RESULTS / "outcome-acq-flick2d-runs.jsonl"
+POOL_LOG = RESULTS / "outcome-acq-pool-flick2d-runs.jsonl"
+#: Pool mode on flick2d (``run --variant pool-...``): uniformly random trials, seeded
+#: ``default_rng([2024, 22])`` (not the held-out contexts' stream), from which the learner
+#: picks ``SIZES["budget"]`` without replacement.
+POOL_SIZE = 2000
+#: Pool-mode variants: LearningConfig settings (besides budget, init, seed). ``joint``: the
+#: straddle over the pool candidates (pool mode's choice before); ``outcome-cover``: the
+#: outcome acquisition (:func:`ltamp_cli.learning.active._pool_pick`).
+POOL_VARIANTS: dict[str, dict[str, Any]] = {
+    "pool-lse-straddle": {"strategy": "lse", "hindsight_acquisition": "joint"},
+    "pool-lse-oc": {"strategy": "lse", "hindsight_acquisition": "outcome-cover"},
+    "pool-lse2-straddle": {"strategy": "lse2", "hindsight_acquisition": "joint"},
+    "pool-lse2-oc": {"strategy": "lse2", "hindsight_acquisition": "outcome-cover"},
+    "pool-gp": {"strategy": "gp"},
+}
 PUSH_LOG = RESULTS / "outcome-acq-runs.jsonl"
 OUT = RESULTS / "outcome-acq.json"
 SKILL = "flick2d"
 #: Variant pairs compared (a − b) on each skill.
 COMPARISONS = (("lse-oc", "lse-hs-cap1-data"), ("lse-oc", "gp-hs-cap1-data"),
                ("lse-ov", "lse-hs-cap1-data"), ("lse-hs-cap1-data", "gp-hs-cap1-data"),
-               ("lse-osd", "lse-hs-cap1-data"), ("lse-oc", "lse-ov"))
+               ("lse-osd", "lse-hs-cap1-data"), ("lse-oc", "lse-ov"),
+               ("lse2-oc", "lse2-hs-straddle"), ("lse2-oc-w50", "lse2-hs-straddle"),
+               ("lse2-oc", "lse2-oc-w50"), ("lse2-oc", "lse-oc"),
+               ("lse2-oc", "gp-hs-cap1-data"),
+               ("pool-lse-oc", "pool-lse-straddle"), ("pool-lse2-oc", "pool-lse2-straddle"),
+               ("pool-lse-oc", "pool-gp"), ("pool-lse2-oc", "pool-gp"))
+
+
+def flick_pool() -> list[TrialRecord]:
+    """:data:`POOL_SIZE` uniformly random flick2d trials (context and control uniform over
+    their boxes), simulated once; the same pool for every seed and variant."""
+    backend = load_backend("synthetic")
+    spec = backend.skills()[SKILL]
+    rng = np.random.default_rng([2024, 22])
+    contexts = spec.context.sample_uniform(rng, POOL_SIZE)
+    controls = spec.control.sample_uniform(rng, POOL_SIZE)
+    pool = []
+    for i, (context, control) in enumerate(zip(contexts, controls, strict=True)):
+        result, _ = run_trial_safely(backend, SKILL, context, control, i)
+        pool.append(TrialRecord(SKILL, tuple(map(float, context)), tuple(map(float, control)),
+                                float(result.score), bool(result.valid), i, backend.name,
+                                index=i, outcome=result.outcome))
+    return pool
+
+
+def run_pool_job(variant: str, seed: int, pool: list[TrialRecord]) -> dict[str, Any]:
+    """One pool-mode flick2d variant × seed job (:data:`POOL_VARIANTS`): θ* curve."""
+    backend = load_backend("synthetic")
+    spec = backend.skills()[SKILL]
+    rng = np.random.default_rng([2024, 21])
+    contexts = spec.context.sample_uniform(rng, SIZES["contexts"])
+
+    def score(c: np.ndarray, u: np.ndarray) -> np.ndarray:
+        return backend.true_score(SKILL, c, u)
+
+    evaluator = SkillEvaluator(spec, None, score, contexts, None, seed=seed,
+                               n_candidates=SIZES["candidates"])
+    config = LearningConfig(budget=SIZES["budget"], init=SIZES["init"], seed=seed,
+                            **POOL_VARIANTS[variant])
+    cpu0 = time.process_time()
+    result = learn_from_pool(spec, pool, config, evaluator=evaluator,
+                             eval_every=SIZES["eval_every"])
+    cpu = time.process_time() - cpu0
+    finals = np.array([r.outcome for r in result.records], dtype=float)
+    landings = np.vstack([np.zeros((1, 2)), finals])
+    covered = (np.linalg.norm(contexts[:, None, 1:3] - landings[None], axis=2) < 1.0).any(1)
+    return {"skill": f"{SKILL}-pool", "variant": variant, "config": POOL_VARIANTS[variant],
+            "seed": seed, "sizes": {**SIZES, "pool": POOL_SIZE}, "cpu_s": round(cpu, 1),
+            "training_successes": int(sum(r.score > 0 for r in result.records)),
+            "moved": int((np.linalg.norm(finals, axis=1) > 0.05).sum()),
+            "replay_bound": [bool(v) for v in covered],
+            "curve": [{"n_trials": p.n_trials, "success_rate": p.success_rate,
+                       "successes": list(p.successes or ())} for p in result.curve]}
 
 
 def run_job(variant: str, seed: int) -> dict[str, Any]:
@@ -127,7 +202,8 @@ def _skill_report(jobs: dict[tuple[str, int], dict[str, Any]]) -> dict[str, Any]
     return {"variants": rows, "comparisons": comparisons}
 
 
-def report(push_log: Path, flick_log: Path, out: Path) -> dict[str, Any]:
+def report(push_log: Path, flick_log: Path, out: Path,
+           pool_log: Path = POOL_LOG) -> dict[str, Any]:
     """Tables and paired comparisons of both skills; written to ``out`` and printed."""
     payload: dict[str, Any] = {
         "experiment": "acquisition for a skill with an outcome (issue #21)", "sizes": SIZES,
@@ -136,7 +212,8 @@ def report(push_log: Path, flick_log: Path, out: Path) -> dict[str, Any]:
                  "flick2d": str(flick_log.relative_to(REPO)) if flick_log.is_relative_to(REPO)
                  else str(flick_log)},
         "skills": {"push": _skill_report(_read(push_log)),
-                   "flick2d": _skill_report(_read(flick_log))}}
+                   "flick2d": _skill_report(_read(flick_log)),
+                   "flick2d-pool": _skill_report(_read(pool_log))}}
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(payload, indent=1) + "\n")
     for skill, part in payload["skills"].items():
@@ -163,31 +240,39 @@ def main(argv: list[str] | None = None) -> int:
                                      description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="command", required=True)
     run_p = sub.add_parser("run", help="run flick2d variant x seed jobs (skips logged ones)")
-    run_p.add_argument("--variant", choices=sorted(VARIANTS), required=True)
+    run_p.add_argument("--variant", choices=sorted({*VARIANTS, *POOL_VARIANTS}),
+                       required=True)
     run_p.add_argument("--seeds", default="0-9", help="e.g. 0-9 or 0,2")
-    run_p.add_argument("--log", type=Path, default=FLICK_LOG)
+    run_p.add_argument("--log", type=Path, default=None,
+                       help="default: the flick2d log (pool-* variants: the pool log)")
     rep = sub.add_parser("report", help="tables + paired comparisons -> JSON")
     rep.add_argument("--push-log", type=Path, default=PUSH_LOG)
     rep.add_argument("--flick-log", type=Path, default=FLICK_LOG)
+    rep.add_argument("--pool-log", type=Path, default=POOL_LOG)
     rep.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args(argv)
     if args.command == "report":
-        report(args.push_log.resolve(), args.flick_log.resolve(), args.out)
+        report(args.push_log.resolve(), args.flick_log.resolve(), args.out,
+               args.pool_log.resolve())
         return 0
     try:
         seeds = _seeds(args.seeds)
     except ValueError:
         print(f"error: bad --seeds {args.seeds!r} (e.g. 0-9 or 0,2)", file=sys.stderr)
         return 2
-    if VARIANTS[args.variant]["strategy"] not in ("lse", "lse2", "gp", "random"):
+    pooled = args.variant in POOL_VARIANTS
+    if args.log is None:
+        args.log = POOL_LOG if pooled else FLICK_LOG
+    if not pooled and VARIANTS[args.variant]["strategy"] not in ("lse", "lse2", "gp", "random"):
         print(f"error: variant {args.variant!r} is not a GP/random learner", file=sys.stderr)
         return 2
     done = _read(args.log)
     args.log.parent.mkdir(parents=True, exist_ok=True)
+    pool = flick_pool() if pooled else []
     for seed in seeds:
         if (args.variant, seed) in done:
             continue
-        job = run_job(args.variant, seed)
+        job = run_pool_job(args.variant, seed, pool) if pooled else run_job(args.variant, seed)
         with args.log.open("a") as handle:
             handle.write(json.dumps(job) + "\n")
         print(f"{SKILL} {args.variant} seed {seed}: θ* {job['curve'][-1]['success_rate']:.2f}, "

@@ -134,6 +134,15 @@ VARIANTS: dict[str, dict[str, Any]] = {
                 "hindsight_acquisition": "outcome-sd"},
     "lse-oc": {"strategy": "lse", "hindsight": True, "lengthscale_max": 1.0,
                "hindsight_acquisition": "outcome-cover"},
+    # lse2 on a skill with an outcome (issue #21, third outcome session): the drawn context's
+    # valid control chosen by the straddle (lse2's choice before), by outcome-cover (the
+    # straddle only breaks ties), and by outcome-cover with half the weight on the drawn goal.
+    "lse2-hs-straddle": {"strategy": "lse2", "hindsight": True, "lengthscale_max": 1.0,
+                         "hindsight_acquisition": "joint"},
+    "lse2-oc": {"strategy": "lse2", "hindsight": True, "lengthscale_max": 1.0,
+                "hindsight_acquisition": "outcome-cover"},
+    "lse2-oc-w50": {"strategy": "lse2", "hindsight": True, "lengthscale_max": 1.0,
+                    "hindsight_acquisition": "outcome-cover", "outcome_own_goal_weight": 0.5},
     # The paper's NN_r / NN_c loop (bench.paper.al2d.learn_nn_argmax), with and without the
     # same relabelled points.
     "nn-r": {"strategy": "nn-r", "hindsight": False},

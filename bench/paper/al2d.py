@@ -117,11 +117,13 @@ def _job_key_sizes(own: dict[str, Any], skill: str) -> dict[str, Any]:
 
 
 def job_key(learner: str, seed: int, learns_from_outcome: bool) -> str:
-    """The log key of one job. GP-LSE on a skill with an outcome chooses its trials with
-    ``LearningConfig.hindsight_acquisition``, so the key names it: a job logged under another
-    acquisition (an earlier default) is not resumed as if it were this one."""
-    if learner == "lse" and learns_from_outcome:
-        return f"lse+{LearningConfig().hindsight_acquisition}/{seed}"
+    """The log key of one job. GP-LSE (and GP-LSE2, should it join :data:`LEARNERS`: since
+    issue #21's third outcome session it too chooses by the outcome acquisition) on a skill
+    with an outcome chooses its trials with ``LearningConfig.hindsight_acquisition``, so the
+    key names it: a job logged under another acquisition (an earlier default) is not resumed
+    as if it were this one."""
+    if learner in ("lse", "lse2") and learns_from_outcome:
+        return f"{learner}+{LearningConfig().hindsight_acquisition}/{seed}"
     return f"{learner}/{seed}"
 
 

@@ -6,7 +6,9 @@ Strategies (``LearningConfig.strategy``):
 * ``lse2`` — GP; the context is drawn from the skill's context distribution, the control
   is the one with the largest ψ among ``lse2_candidates`` uniform controls that pass the
   pre-check for it (the paper's discrete GP-LSE2, section 6.2, which picks the pool trial
-  with the largest ψ among those of a sampled bowl–cup pair; see below);
+  with the largest ψ among those of a sampled bowl–cup pair; see below); for a skill with
+  an outcome, the one of largest outcome value (``hindsight_acquisition``, as ``lse``;
+  :func:`_outcome_choice`), ψ breaking ties;
 * ``gp`` — GP on uniformly random trials (no active learning);
 * ``random`` — uniformly random trials, no model (:class:`~.baselines.RandomModel`);
 * ``nn-c``, ``nn-r``, ``rf-c``, ``rf-r`` — scikit-learn baselines on uniformly random trials.
@@ -70,9 +72,11 @@ from ltamp_cli.learning.kernels import KERNEL_NAMES
 from ltamp_cli.learning.metrics import Evaluation, SkillEvaluator
 from ltamp_cli.learning.model import LevelSetModel, PhysicalValidity, SkillModel
 from ltamp_cli.learning.outcome_acquisition import (
+    DEFAULT_GOALS,
     OUTCOME_ACQUISITIONS,
     OutcomeModel,
     propose_by_outcome,
+    rank_by_outcome,
 )
 from ltamp_cli.learning.outcomes import (
     DEFAULT_CAP,
@@ -149,6 +153,11 @@ class LearningConfig:
     hindsight_cap: int = DEFAULT_CAP
     #: ``lse`` with relabelled trials: ``"outcome-cover"`` (default) — a GP on the trials'
     #: outcomes chooses the control expected to reach the most goals no trial has reached;
+    #: ``lse2`` (among the drawn context's valid controls) and pool mode (among the pool
+    #: candidates) rank by the same outcome acquisitions and fall back to the straddle only
+    #: when no candidate has a positive value (:func:`_outcome_choice`); with ``"goal-mean"``
+    #: or ``"joint"`` they use the plain straddle, their choice before issue #21's third
+    #: outcome session (``docs/results/push/README.md``, "lse2 and pool mode");
     #: ``"outcome-var"`` / ``"outcome-sd"`` — the one whose outcome resolves the most goals'
     #: labels / is the least certain (:mod:`~ltamp_cli.learning.outcome_acquisition`);
     #: ``"goal-mean"`` — the control whose ψ averaged over drawn goals is largest
@@ -157,6 +166,11 @@ class LearningConfig:
     #: the object, ``docs/results/push/README.md``); ``"joint"`` — the plain straddle over
     #: control and context.
     hindsight_acquisition: str = "outcome-cover"
+    #: ``lse2`` and pool mode with an outcome acquisition: the weight ``w`` of the
+    #: candidate's own goal (the drawn goal; the pool trial's goal) in its value, the rest
+    #: going to goals drawn over the box (:func:`~.outcome_acquisition.rank_by_outcome`).
+    #: 0: the own goal does not count (what the outcome teaches does not depend on it).
+    outcome_own_goal_weight: float = 0.0
     #: GP strategies with relabelled trials: θ* also considers the training controls
     #: (:attr:`~ltamp_cli.learning.model.LevelSetModel.data_candidates`).
     hindsight_theta_data: bool = True
@@ -192,6 +206,9 @@ class LearningConfig:
             raise ValueError(f"hindsight_acquisition must be one of "
                              f"{', '.join(HINDSIGHT_ACQUISITIONS)}, got "
                              f"{self.hindsight_acquisition!r}")
+        if not 0.0 <= self.outcome_own_goal_weight <= 1.0:
+            raise ValueError(f"outcome_own_goal_weight must be in [0, 1], got "
+                             f"{self.outcome_own_goal_weight}")
         if self.hindsight_goals < 0 or self.hindsight_cap < 0:
             raise ValueError(f"hindsight_goals and hindsight_cap must be >= 0, got "
                              f"{self.hindsight_goals} and {self.hindsight_cap}")
@@ -278,7 +295,7 @@ def fit_model(
 
 def uses_outcome_model(config: LearningConfig) -> bool:
     """Whether ``config``'s acquisition chooses trials with an :class:`OutcomeModel`."""
-    return (config.strategy == "lse" and config.hindsight
+    return (config.strategy in ACTIVE_STRATEGIES and config.hindsight
             and config.hindsight_acquisition in OUTCOME_ACQUISITIONS)
 
 
@@ -404,8 +421,12 @@ def training_metadata(spec: SkillSpec, config: LearningConfig) -> dict[str, obje
     ``training.hindsight``): ``None`` when its data are the trials' scores only."""
     if config.relabeller(spec) is None:
         return {"hindsight": None}
+    # "acquisition_in": where the acquisition chooses trials (models saved before it was
+    # recorded chose by the straddle in lse2 and pool mode whatever "acquisition" says).
     return {"hindsight": {"goals": config.hindsight_goals, "cap": config.hindsight_cap,
                           "acquisition": config.hindsight_acquisition,
+                          "acquisition_in": ["lse", "lse2", "pool"],
+                          "own_goal_weight": config.outcome_own_goal_weight,
                           "theta_data": config.hindsight_theta_data}}
 
 
@@ -558,7 +579,7 @@ def _propose(
         context = drawn_context(backend, skill, rng)
         return context, spec.control.sample_uniform(rng, 1)[0]
     test = model.validity_test(is_valid)
-    if outcome_model is not None and uses_outcome_model(config):
+    if config.strategy == "lse" and outcome_model is not None and uses_outcome_model(config):
         x = propose_by_outcome(spec, outcome_model, rng, config.n_candidates, test,
                                config.hindsight_acquisition)
         if x is not None:
@@ -584,7 +605,7 @@ def _propose(
         context = drawn_context(backend, skill, rng)
     else:
         context = drawn_context(backend, skill, rng)
-        control = _lse2_control(model, spec, config, context, rng, is_valid)
+        control = _lse2_control(model, spec, config, context, rng, is_valid, outcome_model)
         if control is not None:
             return context, control
     return context, spec.control.sample_uniform(rng, 1)[0]
@@ -597,15 +618,23 @@ def _lse2_control(
     context: np.ndarray,
     rng: np.random.Generator,
     is_valid: PhysicalValidity,
+    outcome_model: OutcomeModel | None = None,
 ) -> np.ndarray | None:
     """The control ``(dθ,)`` with the largest ψ for physical ``context (dα,)`` among
     ``config.lse2_candidates`` uniform ones that pass the pre-check (a uniform one of them if
-    ψ ≤ 0 for all and ``config.lse2_uniform_if_classified``); ``None`` if none passes."""
+    ψ ≤ 0 for all and ``config.lse2_uniform_if_classified``); ``None`` if none passes.
+    With ``outcome_model`` (a skill with an outcome, :func:`uses_outcome_model`): the
+    candidate of largest outcome value (:func:`_outcome_choice`), ψ only if none has one."""
     controls = spec.control.sample_uniform(rng, config.lse2_candidates)
     controls = controls[np.asarray(is_valid(context, controls), dtype=bool)]
     if len(controls) == 0:
         return None
     contexts = np.repeat(np.asarray(context, dtype=float).reshape(1, -1), len(controls), axis=0)
+    if outcome_model is not None and uses_outcome_model(config):
+        pick = _outcome_choice(spec, config, outcome_model, model.to_unit(contexts, controls),
+                               rng)
+        if pick is not None:
+            return controls[pick]
     values = evaluate(model.gp, straddle, model.to_unit(contexts, controls))
     best = int(np.argmax(values))
     if config.lse2_uniform_if_classified and not values[best] > 0:
@@ -663,7 +692,8 @@ def learn_from_pool(
             model = (learner.current() if goes_active(config, learner.scores(), len(learner.y))
                      else None)
             if isinstance(model, LevelSetModel):
-                index = _pool_pick(model, config, spec, x_pool, available, rng)
+                index = _pool_pick(model, config, spec, x_pool, available, rng,
+                                   learner.outcome_model())
             else:
                 while not available[order[cursor]]:
                     cursor += 1
@@ -683,12 +713,39 @@ def _pool_pick(
     x_pool: np.ndarray,
     available: np.ndarray,
     rng: np.random.Generator,
+    outcome_model: OutcomeModel | None = None,
 ) -> int:
+    """The pool index of the next trial (``learn_from_pool``'s doc); with ``outcome_model``
+    the candidate of largest outcome value (:func:`_outcome_choice`; for ``lse`` among at
+    most ``n_candidates // DEFAULT_GOALS`` remaining trials drawn at random, as many as
+    online ``lse`` scores), the straddle only if none has one."""
     remaining = np.flatnonzero(available)
     if config.strategy == "lse2" and spec.context.dim > 0:
         anchor = x_pool[rng.choice(remaining), spec.control.dim :]
         distance = np.linalg.norm(x_pool[remaining, spec.control.dim :] - anchor, axis=1)
         size = max(1, min(len(remaining), math.ceil(config.pool_neighbourhood * len(x_pool))))
         remaining = remaining[np.argsort(distance, kind="stable")[:size]]
+    if outcome_model is not None and uses_outcome_model(config):
+        ranked = remaining
+        limit = max(1, config.n_candidates // DEFAULT_GOALS)
+        if len(ranked) > limit:
+            ranked = np.sort(rng.choice(ranked, size=limit, replace=False))
+        pick = _outcome_choice(spec, config, outcome_model, x_pool[ranked], rng)
+        if pick is not None:
+            return int(ranked[pick])
     values = evaluate(model.gp, straddle, x_pool[remaining])
     return int(remaining[int(np.argmax(values))])
+
+
+def _outcome_choice(spec: SkillSpec, config: LearningConfig, outcome_model: OutcomeModel,
+                    candidates: np.ndarray, rng: np.random.Generator) -> int | None:
+    """Index of the candidate (normalised joint inputs ``(m, d)``, each with its own goal)
+    of largest value under ``config.hindsight_acquisition``
+    (:func:`~.outcome_acquisition.rank_by_outcome`, own-goal weight
+    ``config.outcome_own_goal_weight``); ``None`` when no value is positive (e.g. every goal
+    reached already, or no candidate expected to reach a new one): the caller's straddle
+    then breaks the tie."""
+    values = rank_by_outcome(spec, outcome_model, candidates, rng, config.hindsight_acquisition,
+                             config.outcome_own_goal_weight)
+    best = int(np.argmax(values))
+    return best if values[best] > 0 else None

@@ -29,6 +29,12 @@ an approximation for skills with such contexts. All three are compared in
 ``docs/results/push/README.md``; ``outcome-cover`` won on the push and flick2d and is the
 default (``LearningConfig.hindsight_acquisition``).
 
+``lse2`` and pool mode choose among *given* candidates (the drawn context's valid controls;
+the pool's remaining trials) with :func:`rank_by_outcome`: the same values, each candidate
+keeping its own goal as the trial's goal (it does not change the outcome), optionally
+weighted in (``LearningConfig.outcome_own_goal_weight``; 0 by default). Measured in
+``docs/results/push/README.md``, "lse2 and pool mode".
+
 This module only *chooses* trials; the learned model stays the score GP on the trials and
 their relabelled points (what is saved, sampled and used for θ*). The outcome GPs are
 refitted from the recorded trials whenever a choice is made, so nothing of them is saved.
@@ -166,20 +172,72 @@ def propose_by_outcome(
     n_controls = max(1, n_candidates // n_goals)
     candidates = rng.uniform(-1.0, 1.0, size=(n_controls, dim))
     goals = rng.uniform(-1.0, 1.0, size=(n_goals, len(goal_columns)))
-    mean, std = outcome_model.predict(candidates)
-    p = success_probability(spec, candidates, mean, std, goals, rng, n_samples)
-    variance = p * (1.0 - p)
-    if kind == "outcome-var":
-        values = variance.mean(axis=1)
-    elif kind == "outcome-sd":
-        values = std.sum(axis=1)
-    else:  # outcome-cover: expected number of goals no trial has reached yet
-        new = p * ~outcome_model.covered(goals)[None, :]
-        values = new.mean(axis=1)
-        variance = np.where(new.any(axis=1, keepdims=True), new, variance)
+    values, variance = _values(spec, outcome_model, candidates, goals, rng, kind, n_samples)
     candidates[:, goal_columns] = goals[np.argmax(variance, axis=1)]
     order = np.argsort(-values, kind="stable")
     chosen = first_valid(order, candidates, 1, is_valid)
     if len(chosen) == 0:
         return None
     return candidates[int(chosen[0])]
+
+
+def _values(spec: SkillSpec, outcome_model: OutcomeModel, candidates: np.ndarray,
+            goals: np.ndarray, rng: np.random.Generator, kind: str,
+            n_samples: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each candidate's value under ``kind`` (module doc), ``(m,)``, and its per-goal
+    terms ``(m, k)`` (what picks the trial's own goal in :func:`propose_by_outcome`) for the
+    normalised ``candidates (m, d)`` and goals ``(k, len(goals))``."""
+    mean, std = outcome_model.predict(candidates)
+    p = success_probability(spec, candidates, mean, std, goals, rng, n_samples)
+    variance = p * (1.0 - p)
+    if kind == "outcome-var":
+        return variance.mean(axis=1), variance
+    if kind == "outcome-sd":
+        return std.sum(axis=1), variance
+    # outcome-cover: expected number of goals no trial has reached yet
+    new = p * ~outcome_model.covered(goals)[None, :]
+    return new.mean(axis=1), np.where(new.any(axis=1, keepdims=True), new, variance)
+
+
+def rank_by_outcome(
+    spec: SkillSpec,
+    outcome_model: OutcomeModel,
+    candidates: np.ndarray,
+    rng: np.random.Generator,
+    kind: str = "outcome-cover",
+    own_goal_weight: float = 0.0,
+    n_goals: int = DEFAULT_GOALS,
+    n_samples: int = DEFAULT_SAMPLES,
+) -> np.ndarray:
+    """Values ``(m,)`` of given candidates, normalised joint inputs ``(m, d)`` whose goal
+    columns hold each candidate's *own* goal (``lse2``: the drawn goal, the same for all;
+    pool mode: each pool trial's goal): ``(1 − w) · value`` over ``n_goals`` goals drawn
+    uniformly from the goal box ``+ w · term`` at the candidate's own goal, ``w =
+    own_goal_weight`` (``outcome-cover``: ``p`` of reaching the own goal if no trial has
+    reached it yet, else 0; ``outcome-var``: ``p (1 − p)`` there; ``outcome-sd`` ignores
+    goals). ``w = 0`` (the default) ranks by the drawn goals alone: the outcome, hence what
+    the trial teaches, does not depend on the candidate's own goal
+    (``docs/results/push/README.md``, "lse2 and pool mode", measures both)."""
+    if kind not in OUTCOME_ACQUISITIONS:
+        raise ValueError(f"unknown outcome acquisition {kind!r}")
+    if not 0.0 <= own_goal_weight <= 1.0:
+        raise ValueError(f"own_goal_weight must be in [0, 1], got {own_goal_weight}")
+    assert spec.outcome is not None
+    candidates = np.atleast_2d(np.asarray(candidates, dtype=float))
+    goals = rng.uniform(-1.0, 1.0, size=(n_goals, len(spec.outcome.goals)))
+    values, _ = _values(spec, outcome_model, candidates, goals, rng, kind, n_samples)
+    if own_goal_weight == 0.0 or kind == "outcome-sd":
+        return values
+    goal_columns = spec.control.dim + np.asarray(spec.outcome.goals, dtype=int)
+    own = candidates[:, goal_columns]
+    mean, std = outcome_model.predict(candidates)
+    physical = BoxNormalizer.for_space(joint_space(spec)).from_unit(candidates)
+    noise = rng.standard_normal((n_samples, *mean.shape))
+    draws = (mean[None] + std[None] * noise).reshape(-1, mean.shape[1])  # (s * m, d_outcome)
+    scores = spec.outcome.scores(np.tile(physical[:, spec.control.dim:], (n_samples, 1)),
+                                 np.tile(physical[:, : spec.control.dim], (n_samples, 1)),
+                                 draws)
+    p = (scores.reshape(n_samples, len(candidates)) > 0.0).mean(axis=0)
+    term = (p * ~outcome_model.covered(own) if kind == "outcome-cover"
+            else p * (1.0 - p))
+    return (1.0 - own_goal_weight) * values + own_goal_weight * term

@@ -125,6 +125,7 @@ def refit_model_dir(
             key: hindsight[name] for key, name in (
                 ("hindsight_goals", "goals"), ("hindsight_cap", "cap"),
                 ("hindsight_acquisition", "acquisition"),
+                ("outcome_own_goal_weight", "own_goal_weight"),
                 ("hindsight_theta_data", "theta_data")) if name in hindsight}
         config = LearningConfig(
             strategy=strategy if strategy in GP_STRATEGIES else "gp",

@@ -22,3 +22,6 @@ def test_lse_push_jobs_name_their_acquisition() -> None:
     assert al2d.job_key("lse", 0, learns_from_outcome=True) == "lse+outcome-cover/0"
     assert al2d.job_key("lse", 3, learns_from_outcome=False) == "lse/3"
     assert al2d.job_key("nn-r", 1, learns_from_outcome=True) == "nn-r/1"
+    # lse2 chooses by the outcome acquisition too (issue #21, third outcome session)
+    assert al2d.job_key("lse2", 2, learns_from_outcome=True) == "lse2+outcome-cover/2"
+    assert al2d.job_key("lse2", 2, learns_from_outcome=False) == "lse2/2"

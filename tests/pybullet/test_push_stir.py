@@ -26,14 +26,14 @@ from ltamp_cli.backends.pybullet.skills.stir import (
     stir_path,
 )
 
-# A 5 cm, 0.3 kg cube (friction 0.5) pushed 15 cm.
+# A 5 cm, 0.3 kg cube (friction 0.5), the goal 15 cm ahead.
 PUSH_CONTEXT = np.array([0.05, 0.3, 0.5, 0.15])
-# Centred, at mid height, slowly, stopping where the block's centre is on the target.
-PUSH_GOOD = np.array([0.5, 0.1, 0.0, 0.0])
-# The same push stopping 5 cm short.
-PUSH_SHORT = np.array([0.5, 0.1, 0.0, -0.05])
+# Centred, at mid height, slowly, the pad travelling 15 cm past the block's back face.
+PUSH_GOOD = np.array([0.5, 0.1, 0.0, 0.15])
+# The same push travelling 5 cm less.
+PUSH_SHORT = np.array([0.5, 0.1, 0.0, 0.10])
 # Pad centre 1.5 cm above a 5 cm block's base: the 3 cm pad would touch the table.
-PUSH_LOW = np.array([0.3, 0.1, 0.0, 0.0])
+PUSH_LOW = np.array([0.3, 0.1, 0.0, 0.15])
 
 STIR_CONTEXT = np.array([NOMINAL_CUP.top_diameter, NOMINAL_CUP.height, NOMINAL_CUP.base_diameter])
 # Two turns of radius 1.8 cm, tip 2 cm above the cup's base (inside the beads).
@@ -90,9 +90,12 @@ def test_push_path_is_a_straight_line_along_x_ending_at_the_contact_point() -> N
     scene = PushContext.from_array(PUSH_CONTEXT)
     path = push_path(scene, PUSH_GOOD)
     assert np.allclose(path.positions[:, 1:], path.positions[0, 1:])
-    # The pad's front face ends where the block's back face is when its centre is on target.
+    # The pad's front face ends ``travel`` past the block's resting back face.
     front = path.positions[-1, 0] + 0.008
-    assert front == pytest.approx(scene.distance - scene.size / 2)
+    assert front == pytest.approx(PUSH_GOOD[3] - scene.size / 2)
+    # ... wherever the goal is: the path never sees it (a pure goal, issue #20)
+    other = PushContext.from_array(np.array([0.05, 0.3, 0.5, 0.07]))
+    np.testing.assert_array_equal(push_path(other, PUSH_GOOD).positions, path.positions)
 
 
 def test_push_validity_rejects_a_pad_that_would_touch_the_table(backend: SkillBackend) -> None:
@@ -110,6 +113,27 @@ def test_good_push_reaches_the_target_and_a_short_one_fails(backend: SkillBacken
     # Stopping 5 cm short leaves the block about 5 cm short.
     assert short.score < -0.5 and 0.04 < short.info["error_m"] < 0.06
     assert short.info["final_xy"][0] < good.info["final_xy"][0] - 0.04
+
+
+def test_push_outcome_scores_every_goal_exactly(backend: SkillBackend) -> None:
+    """The goal is a pure goal: the same push with another goal ends the same way, and the
+    declared outcome's score reproduces each trial's score (what hindsight relabelling
+    relies on); the achieved goal is where the block ended."""
+    spec = backend.skills()["push"]
+    assert spec.outcome is not None and spec.outcome.goals == (3,)
+    assert spec.context.names[3] == "goal_x" and spec.control.names[3] == "travel"
+    far = PUSH_CONTEXT.copy()
+    far[3] = 0.22
+    here = backend.run_trial("push", PUSH_CONTEXT, PUSH_GOOD, seed=1)
+    there = backend.run_trial("push", far, PUSH_GOOD, seed=1)
+    assert here.outcome is not None and here.outcome == there.outcome
+    assert here.score > 0 > there.score  # 15 cm reached, 22 cm missed by ~7 cm
+    both = spec.outcome.scores(np.stack([PUSH_CONTEXT, far]), np.stack([PUSH_GOOD] * 2),
+                               np.array([here.outcome] * 2))
+    np.testing.assert_allclose(both, [here.score, there.score], atol=1e-9)
+    assert spec.outcome.achieved_goal is not None
+    achieved = spec.outcome.achieved_goal(np.array([here.outcome]))
+    assert achieved[0, 0] == pytest.approx(here.info["final_xy"][0])
 
 
 def test_push_is_deterministic_given_the_seed(backend: SkillBackend) -> None:

@@ -14,9 +14,9 @@ from ltamp_cli.backends.pybullet.skills.pour import NOMINAL_CUP
 
 PUSH_CONTEXT = np.array([0.05, 0.3, 0.5, 0.15])
 PUSH_CONTROLS = {
-    "good": (np.array([0.5, 0.1, 0.0, 0.0]), True),
-    "short": (np.array([0.5, 0.1, 0.0, -0.05]), False),     # stops 5 cm short
-    "off_centre": (np.array([0.5, 0.1, 0.45, 0.0]), False),  # slips past the block's corner
+    "good": (np.array([0.5, 0.1, 0.0, 0.15]), True),         # travels 15 cm to the goal
+    "short": (np.array([0.5, 0.1, 0.0, 0.10]), False),       # stops 5 cm short
+    "off_centre": (np.array([0.5, 0.1, 0.45, 0.15]), False),  # slips past the block's corner
 }
 STIR_CONTEXT = np.array([NOMINAL_CUP.top_diameter, NOMINAL_CUP.height, NOMINAL_CUP.base_diameter])
 STIR_CONTROLS = {
@@ -39,6 +39,7 @@ def test_push_labels_agree(backends: dict[str, SkillBackend], case: str) -> None
     results = {n: b.run_trial("push", PUSH_CONTEXT, control, seed=0) for n, b in backends.items()}
     for name, result in results.items():
         assert result.valid and (result.score > 0) == success, (name, result.info)
+        assert result.outcome is not None and len(result.outcome) == 3, name
     # Same straight push, same block: the final positions are within a centimetre.
     a, b = (np.asarray(r.info["final_xy"]) for r in results.values())
     if case != "off_centre":  # a slipping corner contact is chaotic

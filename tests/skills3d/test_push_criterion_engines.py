@@ -27,9 +27,9 @@ from ltamp_cli.backends.skills3d.push import (
     push_outcome,
 )
 
-SCENE = PushContext(size=0.06, mass=0.3, friction=0.5, distance=0.1)
+SCENE = PushContext(size=0.06, mass=0.3, friction=0.5, goal_x=0.1)
 #: Where the block is placed: 1.2 cm short of the target and 1.6 cm to its side (2 cm off).
-PLACED_XY = (SCENE.distance - 0.012, 0.016)
+PLACED_XY = (SCENE.goal_x - 0.012, 0.016)
 
 
 @pytest.fixture(scope="module")

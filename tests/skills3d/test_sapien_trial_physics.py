@@ -17,7 +17,7 @@ from ltamp_cli.backends.skills3d.push import pad_geometry
 from ltamp_cli.backends.skills3d.trials import run_skill_trial
 
 PUSH_CONTEXT = np.array([0.05, 0.3, 0.5, 0.15])
-PUSH_GOOD = np.array([0.5, 0.1, 0.0, 0.0])
+PUSH_GOOD = np.array([0.5, 0.1, 0.0, 0.15])
 
 
 def test_the_sapien_push_is_the_shared_definition_run_on_sapien_physics() -> None:

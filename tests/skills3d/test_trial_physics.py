@@ -33,7 +33,7 @@ from ltamp_cli.backends.skills3d.push import PushSettings
 from ltamp_cli.backends.skills3d.trials import run_skill_trial
 
 PUSH_CONTEXT = np.array([0.05, 0.3, 0.5, 0.15])
-PUSH_GOOD = np.array([0.5, 0.1, 0.0, 0.0])
+PUSH_GOOD = np.array([0.5, 0.1, 0.0, 0.15])
 POUR_CONTEXT = PourContext(NOMINAL_BOWL, NOMINAL_CUP).to_array()
 POUR_GOOD = np.array([-3 * np.pi / 4, -0.5, 0.5, 0.15, 0.12])
 

@@ -1,12 +1,18 @@
 """Push: the closed gripper's fingertips slide a block along a straight line on the table.
 
 Frames: the block's base centre starts at the world origin (table top, ``z = 0``); the target
-is ``(distance, 0)``, so the push runs along ``+x``. The fingertips (:data:`PAD_SIZE_M`, a
+is ``(goal_x, 0)``, so the push runs along ``+x``. The fingertips (:data:`PAD_SIZE_M`, a
 box standing in for the closed Panda fingers) start :data:`APPROACH_GAP_M` behind the block's
 ``-x`` face and move kinematically along ``+x`` at constant speed, then stop and stay.
 
 Context (4): block side (m, a cube), block mass (kg), block lateral friction coefficient
-(Bullet multiplies it with the table's 0.6), push distance (m).
+(Bullet multiplies it with the table's 0.6), and the goal ``goal_x`` (m): a *pure goal*
+(issue #20/#21). The pad's path depends on the block's side and the control only, so the
+physics never sees the goal; the skill declares an :class:`~ltamp_cli.backends.protocol.
+OutcomeSpec` (the block's final ``x``, ``y`` and rotation, the score as a function of them
+and the goal, achieved goal = final ``x``) and learners relabel each trial for other goals
+(:mod:`ltamp_cli.learning.outcomes`). Before, the context's ``distance`` set where the pad
+stopped (``stop_offset`` was relative to it), so a learned push was told the answer.
 
 Control (4):
 
@@ -16,8 +22,9 @@ Control (4):
   pad stops);
 * ``lateral_offset`` ∈ [-0.5, 0.5]: the pad's ``y`` as a fraction of the block's side
   (off-centre pushes turn the block and deflect it);
-* ``stop_offset`` ∈ [-0.05, 0.05] m: where the pad stops relative to the point at which it
-  would leave the block's centre exactly on the target.
+* ``travel`` ∈ [0, 0.3] m: how far the pad advances past the block's resting back face,
+  i.e. where the block's centre would stop if it stopped with the pad (it may slide on, lag
+  or turn). The range is the old parameterisation's reach (distance + stop offset, 0-0.3 m).
 
 A control whose pad would start below the table (``contact_height × side`` less than half
 the pad's height plus :data:`PAD_CLEARANCE_M`) is invalid and not simulated.
@@ -38,7 +45,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ltamp_cli.backends.kitchenware_geometry import KitchenwareGeometry, block_geometry, box_piece
-from ltamp_cli.backends.protocol import ParamSpace, SkillSpec, TrialResult
+from ltamp_cli.backends.protocol import OutcomeSpec, ParamSpace, SkillSpec, TrialResult
 from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial
 from ltamp_cli.backends.pybullet.paths import PosePath, timed_poses
 from ltamp_cli.backends.skills3d.common import (
@@ -69,22 +76,52 @@ PAD_MATERIAL = BodyMaterial(mass=PAD_MASS_KG, lateral_friction=0.5, restitution=
 IDENTITY_QUAT = np.array([0.0, 0.0, 0.0, 1.0])
 
 PUSH_CONTEXT = ParamSpace(
-    names=("block_size", "block_mass", "block_friction", "distance"),
+    names=("block_size", "block_mass", "block_friction", "goal_x"),
     lows=(0.04, 0.1, 0.3, 0.05),
     highs=(0.08, 0.5, 0.8, 0.25),
     units=("m", "kg", "", "m"),
 )
 PUSH_CONTROL = ParamSpace(
-    names=("contact_height", "speed", "lateral_offset", "stop_offset"),
-    lows=(0.05, 0.02, -0.5, -0.05),
-    highs=(0.95, 0.4, 0.5, 0.05),
+    names=("contact_height", "speed", "lateral_offset", "travel"),
+    lows=(0.05, 0.02, -0.5, 0.0),
+    highs=(0.95, 0.4, 0.5, 0.3),
     units=("× block side", "m/s", "× block side", "m"),
 )
+#: The outcome: the block's final base centre ``x``, ``y`` (m) and rotation (rad, [0, π]).
+PUSH_OUTCOME_SPACE = ParamSpace(
+    names=("final_x", "final_y", "rotation"),
+    lows=(-0.1, -0.3, 0.0),
+    highs=(0.6, 0.3, math.pi),
+    units=("m", "m", "rad"),
+)
+#: Index of the goal in the context.
+GOAL_INDEX = 3
+
+
+def push_outcome_scores(contexts: np.ndarray, controls: np.ndarray,
+                        outcomes: np.ndarray) -> np.ndarray:
+    """Scores ``(n,)`` of outcomes ``(n, 3)`` for goals ``contexts[:, 3]`` (m); the same
+    criterion as :func:`push_score` (vectorised, the control is not needed)."""
+    outcomes = np.asarray(outcomes, dtype=float).reshape(-1, 3)
+    goals = np.asarray(contexts, dtype=float).reshape(len(outcomes), -1)[:, GOAL_INDEX]
+    error = np.hypot(outcomes[:, 0] - goals, outcomes[:, 1])
+    margin = np.minimum(1.0 - error / PUSH_TOLERANCE_M,
+                        1.0 - outcomes[:, 2] / PUSH_ROTATION_TOLERANCE_RAD)
+    return np.clip(margin, -1.0, 1.0)
+
+
+def push_achieved_goal(outcomes: np.ndarray) -> np.ndarray:
+    """The goal ``(n, 1)`` each outcome ``(n, 3)`` reaches best: its final ``x``."""
+    return np.asarray(outcomes, dtype=float).reshape(-1, 3)[:, :1]
+
+
 PUSH_SPEC = SkillSpec(
     name="push",
     context=PUSH_CONTEXT,
     control=PUSH_CONTROL,
-    description="push a block along a line to a target with the fingertips (Kitchen3D)",
+    description="push a block along a line to a goal with the fingertips (Kitchen3D)",
+    outcome=OutcomeSpec(space=PUSH_OUTCOME_SPACE, score=push_outcome_scores,
+                        goals=(GOAL_INDEX,), achieved_goal=push_achieved_goal),
 )
 
 
@@ -98,12 +135,12 @@ class PushSettings:
 
 @dataclass(frozen=True)
 class PushContext:
-    """One push context (metres, kilograms, friction coefficient)."""
+    """One push context (metres, kilograms, friction coefficient; the goal in metres)."""
 
     size: float
     mass: float
     friction: float
-    distance: float
+    goal_x: float
 
     @staticmethod
     def from_array(context: np.ndarray) -> PushContext:
@@ -113,7 +150,7 @@ class PushContext:
         return PushContext(float(c[0]), float(c[1]), float(c[2]), float(c[3]))
 
     def to_array(self) -> np.ndarray:
-        return np.array([self.size, self.mass, self.friction, self.distance])
+        return np.array([self.size, self.mass, self.friction, self.goal_x])
 
 
 def sample_push_context(rng: np.random.Generator) -> np.ndarray:
@@ -128,13 +165,15 @@ def pad_geometry() -> KitchenwareGeometry:
 
 
 def push_path(context: PushContext, control: np.ndarray) -> PosePath:
-    """The pad's centre at the start and the end of the push, shape ``(2, ·)``."""
-    height, _, lateral, stop = np.asarray(control, dtype=float).reshape(4)
+    """The pad's centre at the start and the end of the push, shape ``(2, ·)``: from
+    :data:`APPROACH_GAP_M` behind the block's back face to ``travel`` past it (the goal
+    plays no part)."""
+    height, _, lateral, travel = np.asarray(control, dtype=float).reshape(4)
     half_pad = PAD_SIZE_M[0] / 2.0
     z = height * context.size
     y = lateral * context.size
     start_x = -context.size / 2.0 - half_pad - APPROACH_GAP_M
-    end_x = context.distance - context.size / 2.0 - half_pad + stop
+    end_x = travel - context.size / 2.0 - half_pad
     positions = np.array([[start_x, y, z], [end_x, y, z]])
     return PosePath(positions, np.stack([IDENTITY_QUAT, IDENTITY_QUAT]))
 
@@ -198,8 +237,9 @@ def block_material(scene: PushContext, rng: np.random.Generator) -> BodyMaterial
 
 def push_outcome(scene: PushContext, position: np.ndarray, quaternion: np.ndarray,
                  steps: int, dt: float) -> TrialResult:
-    """Score and ``info`` from the block's final pose (shared with the SAPIEN push)."""
-    error = float(np.hypot(position[0] - scene.distance, position[1]))
+    """Score, outcome ``(final_x, final_y, rotation)`` and ``info`` from the block's final
+    pose (shared with the SAPIEN push)."""
+    error = float(np.hypot(position[0] - scene.goal_x, position[1]))
     tilt = tilt_of(quaternion)
     rotation = rotation_angle(quaternion)
     info = {
@@ -211,7 +251,8 @@ def push_outcome(scene: PushContext, position: np.ndarray, quaternion: np.ndarra
         "sim_steps": steps,
         "sim_time_s": steps * dt,
     }
-    return TrialResult(push_score(error, rotation), True, info)
+    return TrialResult(push_score(error, rotation), True, info,
+                       outcome=(float(position[0]), float(position[1]), rotation))
 
 
 def run_push(
@@ -249,8 +290,25 @@ def run_push(
 
 
 __all__ = [
-    "PUSH_CONTEXT", "PUSH_CONTROL", "PUSH_ROTATION_TOLERANCE_RAD", "PUSH_SPEC",
-    "PUSH_TOLERANCE_M", "PushContext",
-    "PushSettings", "check_push", "pad_geometry", "prepare_push", "push_is_valid", "push_outcome",
-    "push_path", "push_score", "rotation_angle", "run_push", "sample_push_context",
+    "GOAL_INDEX",
+    "PUSH_CONTEXT",
+    "PUSH_CONTROL",
+    "PUSH_OUTCOME_SPACE",
+    "PUSH_ROTATION_TOLERANCE_RAD",
+    "PUSH_SPEC",
+    "PUSH_TOLERANCE_M",
+    "PushContext",
+    "PushSettings",
+    "check_push",
+    "pad_geometry",
+    "prepare_push",
+    "push_achieved_goal",
+    "push_is_valid",
+    "push_outcome",
+    "push_outcome_scores",
+    "push_path",
+    "push_score",
+    "rotation_angle",
+    "run_push",
+    "sample_push_context",
 ]
