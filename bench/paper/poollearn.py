@@ -8,7 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from bench.paper.pools import Pool
+from bench.paper.common import Context, first_valid_lazy
+from bench.paper.pools import Pool, SkillBackends, get_pool, skill_backend
 from ltamp_cli.backends.protocol import SkillBackend, SkillSpec
 from ltamp_cli.learning.active import LearningConfig, LearningResult, learn_from_pool
 from ltamp_cli.learning.metrics import Evaluation, HeldOutSet, SkillEvaluator
@@ -35,12 +36,41 @@ THETA_TRIAL_CPU_S = {("pybullet", "pour"): 1.13, ("pybullet", "scoop"): 5.46,
                      ("sapien", "pour"): 0.21, ("sapien", "scoop"): 1.28}
 
 
-def theta_trials(sizes: Mapping[str, Any], learners: int, skill: str) -> int:
+def theta_trials(sizes: Mapping[str, Any], learners: int) -> int:
     """Simulated θ* trials of one skill: learners × seeds × checkpoints × contexts, counting
     only the checkpoints at which each seed simulates (:func:`success_checkpoints`)."""
-    del skill  # every skill of an experiment has the same sizes
     per_learner = sum(len(success_checkpoints(sizes, seed)) for seed in range(sizes["seeds"]))
     return learners * per_learner * int(sizes["contexts"])
+
+
+def skill_parts(sizes: Mapping[str, Any], learners: int) -> list[tuple[str, float]]:
+    """A pooled experiment's parts, one per skill, with estimated CPU seconds (its θ*
+    trials): a part needs only its own skill's pool, so one skill's jobs can run while
+    another's pool is still being collected."""
+    return [(skill, theta_trials(sizes, learners)
+             * THETA_TRIAL_CPU_S.get((skill_backend(sizes, skill), skill), 0.01) + 10.0)
+            for skill in sizes["skills"]]
+
+
+def require_part(experiment: str, ctx: Context, sizes: Mapping[str, Any], part: str) -> None:
+    """Raise ``KeyError`` unless ``part`` is one of the skills of ``experiment``'s sizes."""
+    if part not in sizes["skills"]:
+        raise KeyError(f"{experiment} has no part {part!r} in {ctx.mode} mode")
+
+
+def pooled_skill(ctx: Context, sizes: Mapping[str, Any], backends: SkillBackends, skill: str
+                 ) -> tuple[SkillBackend, Pool, SkillSpec, np.ndarray, PhysicalValidity]:
+    """What every job of ``skill`` in a pooled experiment shares: its engine's backend, its
+    pool (collected or restored), its spec, the held-out θ* contexts ``(contexts, dα)`` and
+    the lazy full validity test θ* uses (same θ*, far fewer pre-checks)."""
+    backend = backends[skill]
+    pool = get_pool(ctx, skill_backend(sizes, skill), skill, sizes["n_train"], sizes["n_test"])
+    contexts = held_out_contexts(backend, skill, sizes["contexts"], seed=3)
+
+    def full_test(context: Any, controls: Any) -> Any:
+        return backend.is_valid(skill, context, controls)
+
+    return backend, pool, backend.skills()[skill], contexts, first_valid_lazy(full_test)
 
 
 def success_checkpoints(sizes: Mapping[str, Any], seed: int) -> set[int]:

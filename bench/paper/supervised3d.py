@@ -23,24 +23,22 @@ from bench.paper.common import (
     Context,
     JobLog,
     curve_series,
-    first_valid_lazy,
     live_score,
     plot_panels,
     write_json,
 )
 from bench.paper.poollearn import (
-    THETA_TRIAL_CPU_S,
     CheckpointEvaluator,
-    held_out_contexts,
     pool_curve,
+    pooled_skill,
+    require_part,
+    skill_parts,
     success_checkpoints,
-    theta_trials,
 )
 from bench.paper.pools import (
     FULL_SKILL_BACKENDS,
     SkillBackends,
     backends_label,
-    get_pool,
     skill_backend,
 )
 from ltamp_cli.learning.active import LearningConfig
@@ -78,18 +76,13 @@ SIZES: dict[str, dict[str, Any]] = {
 
 
 def parts(ctx: Context) -> list[tuple[str, float]]:
-    """One part per skill, with its estimated CPU seconds: a part needs only its own skill's
-    pool, so one skill's jobs can run while the other's pool is still being collected."""
-    sizes = ctx.sizes(SIZES)
-    return [(skill, theta_trials(sizes, len(LEARNERS), skill)
-             * THETA_TRIAL_CPU_S.get((skill_backend(sizes, skill), skill), 0.01) + 10.0)
-            for skill in sizes["skills"]]
+    """One part per skill (:func:`~bench.paper.poollearn.skill_parts`)."""
+    return skill_parts(ctx.sizes(SIZES), len(LEARNERS))
 
 
 def run_part(ctx: Context, part: str) -> None:
     """Run (or finish) the jobs of skill ``part``; each goes to the job log when done."""
-    if part not in ctx.sizes(SIZES)["skills"]:
-        raise KeyError(f"{NAME} has no part {part!r} in {ctx.mode} mode")
+    require_part(NAME, ctx, ctx.sizes(SIZES), part)
     _skill_results(ctx, [part])
 
 
@@ -107,17 +100,7 @@ def _skill_results(ctx: Context, names: list[str]) -> dict[str, Any]:
     skills: dict[str, Any] = {}
     try:
         for skill in names:
-            backend = backends[skill]
-            pool = get_pool(ctx, skill_backend(sizes, skill), skill, sizes["n_train"],
-                            sizes["n_test"])
-            spec = backend.skills()[skill]
-            contexts = held_out_contexts(backend, skill, sizes["contexts"], seed=3)
-
-            def full_test(context: Any, controls: Any, skill: str = skill,
-                          backend: Any = backend) -> Any:
-                return backend.is_valid(skill, context, controls)
-
-            is_valid = first_valid_lazy(full_test)  # same θ*, far fewer pre-checks
+            backend, pool, spec, contexts, is_valid = pooled_skill(ctx, sizes, backends, skill)
 
             rows: list[dict[str, Any]] = []
             kernel_rows: list[dict[str, Any]] = []
