@@ -22,7 +22,8 @@ def _rerun(monkeypatch: pytest.MonkeyPatch, out: Path, result: tuple[str, float,
     """Run ``main`` for coffee only, its one unit reporting ``result``; the new run.json."""
 
     def fake_run_units(units: list[Any], ctx: Any, jobs: int, workers: int,
-                       on_done: Any) -> list[tuple[str, float, float, str]]:
+                       on_done: Any, merge: bool = True) -> list[tuple[str, float, float, str]]:
+        assert merge  # a whole run merges its split experiments
         assert [u.key for u in units] == ["coffee"]
         on_done(result)
         return [result]

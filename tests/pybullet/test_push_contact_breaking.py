@@ -4,7 +4,9 @@ contact breaking threshold is a process-global, not a per-client setting).
 
 The two push inputs are inputs 13 and 137 of ``bench/fidelity.py``'s ``3d-push-engine`` row
 (seed 0; their trial seeds are the inputs' indices); their labels under both thresholds are in
-``docs/results/fidelity/push_sensitivity*.json``.
+``docs/results/fidelity/push_sensitivity*.json``. They were drawn in the push's earlier
+parameterisation; the controls' last value is now ``travel`` = the row's distance + its stop
+offset (the same pad path; the context's last value is now the goal).
 """
 
 from __future__ import annotations
@@ -27,13 +29,13 @@ from ltamp_cli.backends.pybullet.world import (
 FLIPPY_CONTEXT = np.array([0.06309274340979307, 0.3064173919360821, 0.5584540668037008,
                            0.2277961316038693])
 FLIPPY_CONTROL = np.array([0.38007602008486524, 0.33992802672795386, 0.004889563758179283,
-                           -0.04146610492306733])
+                           0.18633002668080198])
 #: Input 137: fails at 4 mm on every shift (block turned past 0.1 rad), succeeds at 2 cm on
 #: every shift, as in SAPIEN.
 TURNING_CONTEXT = np.array([0.04026860079521625, 0.26062557735096237, 0.34317736431251983,
                             0.17948132249324034])
 TURNING_CONTROL = np.array([0.46491170056106124, 0.1936745225921807, 0.19323077483529527,
-                            -0.013476611667442094])
+                            0.16600471082579824])
 SHIFTS_MM = (0.0, -0.2, -0.1, 0.1, 0.2)
 
 
