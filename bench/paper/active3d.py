@@ -26,6 +26,7 @@ from bench.paper.common import (
 )
 from bench.paper.poollearn import (
     CheckpointEvaluator,
+    job_sizes,
     pool_curve,
     pooled_skill,
     require_part,
@@ -89,10 +90,11 @@ def _skill_results(ctx: Context, names: list[str]) -> dict[str, Any]:
     """The jobs of the skills ``names``: run, or read back from the job log."""
     sizes = ctx.sizes(SIZES)
     backends = SkillBackends(sizes)
-    log = JobLog(ctx, NAME, sizes)  # finished jobs: a rerun continues after the last one
     skills: dict[str, Any] = {}
     try:
         for skill in names:
+            # Finished jobs: a rerun continues after the last one.
+            log = JobLog(ctx, NAME, job_sizes(sizes, skill))
             backend, pool, spec, contexts, is_valid = pooled_skill(ctx, sizes, backends, skill)
 
             rows: list[dict[str, Any]] = []

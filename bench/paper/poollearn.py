@@ -43,6 +43,17 @@ def theta_trials(sizes: Mapping[str, Any], learners: int) -> int:
     return learners * per_learner * int(sizes["contexts"])
 
 
+def job_sizes(sizes: Mapping[str, Any], skill: str) -> Mapping[str, Any]:
+    """What the logged jobs of ``skill`` depend on (their job-log hash): the sizes with only
+    this skill's engine. With one engine for every skill (quick, standard) that is the sizes
+    themselves, so their logs stay valid; at full size (``skill_backends``) another skill's
+    engine is left out, so moving the scoop to another engine keeps the pour's jobs."""
+    if "skill_backends" not in sizes:
+        return sizes
+    own = {key: value for key, value in sizes.items() if key != "skill_backends"}
+    return {**own, "skill_backend": skill_backend(sizes, skill)}
+
+
 def skill_parts(sizes: Mapping[str, Any], learners: int) -> list[tuple[str, float]]:
     """A pooled experiment's parts, one per skill, with estimated CPU seconds (its θ*
     trials): a part needs only its own skill's pool, so one skill's jobs can run while

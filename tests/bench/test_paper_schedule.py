@@ -171,3 +171,15 @@ def test_parts_run_alone_without_merging_or_reporting(tmp_path: Path) -> None:
     merged = supervised3d.merge(ctx)
     assert (tmp_path / "runs" / "supervised3d-smoke.jsonl").read_text().splitlines() == logged
     assert merged["skills"]["skill8d"]["summary"]
+
+
+def test_a_skills_job_log_hash_ignores_the_other_skills_engine() -> None:
+    from bench.paper.poollearn import job_sizes
+    from bench.paper.supervised3d import SIZES
+
+    full = SIZES["full"]
+    moved = {**full, "skill_backends": {**full["skill_backends"], "scoop": "other-engine"}}
+    assert job_sizes(moved, "pour") == job_sizes(full, "pour")  # pour's jobs stay valid
+    assert job_sizes(moved, "scoop") != job_sizes(full, "scoop")  # scoop's are rerun
+    # One engine for every skill: the sizes themselves (committed quick/standard logs valid).
+    assert job_sizes(SIZES["quick"], "pour") is SIZES["quick"]
