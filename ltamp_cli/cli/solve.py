@@ -71,7 +71,8 @@ def solve_command(
     use_one_thread()  # after loading the bindings: learned streams bring torch and scipy
     options = dict(loaded.planner_options)
     known = {"algorithm", "max_time", "seed", "search", "unit_costs", "initial_complexity",
-             "max_complexity", "success_cost", "skeleton", "eager_cheap_streams",
+             "max_complexity", "success_cost", "skeleton", "skeletons", "max_cost",
+             "eager_cheap_streams",
              "incremental_grounding"}
     for key in options:
         if key not in known:
@@ -96,6 +97,13 @@ def solve_command(
             raise InputError(f"{problem}: planner option 'skeleton' must be a list of action "
                              "patterns")
         options["skeleton"] = tuple(str(entry) for entry in options["skeleton"])
+    if "skeletons" in options:
+        skeletons = options["skeletons"]
+        if not isinstance(skeletons, list | tuple) or not all(
+                isinstance(entries, list | tuple) for entries in skeletons):
+            raise InputError(f"{problem}: planner option 'skeletons' must be a list of "
+                             "skeletons, each a list of action patterns")
+        options["skeletons"] = tuple(tuple(str(e) for e in entries) for entries in skeletons)
     if statistics:
         from ltamp_cli.planner.statistics import default_statistics_dir
 

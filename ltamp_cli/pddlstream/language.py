@@ -222,15 +222,53 @@ DEBUG = "debug"
 SHARED_DEBUG = "shared_debug"
 
 
-class PlanConstraints(NamedTuple):
-    """``skeletons``: at most one skeleton, a list of ``(action name, args)`` whose args are
-    values, ``?variables`` or :data:`WILD`; ``exact``: the plan is exactly the skeleton (else
-    other actions may come between). ``hint`` and ``max_cost`` are accepted and ignored."""
+GOAL_INDEX = -1  # an ``OrderedSkeleton`` order ``(i, GOAL_INDEX)``: step i done at the end
 
-    skeletons: Sequence[Sequence[tuple[str, Sequence[Any]]]] | None = None
-    exact: bool = True
-    hint: bool = False
-    max_cost: float = float("inf")
+
+class OrderedSkeleton(NamedTuple):
+    """A skeleton whose steps are partially ordered: ``actions`` is a list of ``(name,
+    args)``, ``orders`` a set of ``(i, j)`` (step i before step j; ``j = GOAL_INDEX``: step i
+    must be done when the plan ends)."""
+
+    actions: Sequence[tuple[str, Sequence[Any]]]
+    orders: frozenset[tuple[int, int]] | set[tuple[int, int]]
+
+
+def linear_order(actions: Sequence[Any]) -> set[tuple[int, int]]:
+    """The orders of a skeleton given as a list: in sequence, the last step at the end."""
+    count = len(actions)
+    return {(i, i + 1) for i in range(count - 1)} | ({(count - 1, GOAL_INDEX)} if count else set())
+
+
+class PlanConstraints:
+    """PDDLStream's plan constraints. ``skeletons``: ``None`` (no constraint) or a list of
+    skeletons, each a list of ``(action name, args)`` (or an :class:`OrderedSkeleton`); an
+    arg is a value (that object), a ``'?variable'`` (the same object wherever the skeleton
+    names it), :data:`WILD` (any object) or a key of ``groups`` (one of its values). The
+    plan completes one of the skeletons. ``exact``: the plan is made of skeleton steps only
+    (else other actions may come anywhere between them); ``max_cost``: only plans cheaper
+    than this. ``hint`` is accepted and, as in PDDLStream, has no effect."""
+
+    def __init__(self, skeletons: Sequence[Any] | None = None,
+                 groups: Mapping[Any, Sequence[Any]] | None = None, exact: bool = True,
+                 hint: bool = False, max_cost: float = float("inf")) -> None:
+        if skeletons is not None:
+            skeletons = [s if isinstance(s, OrderedSkeleton)
+                         else OrderedSkeleton(list(s), linear_order(list(s))) for s in skeletons]
+        self.skeletons: list[OrderedSkeleton] | None = skeletons
+        self.groups: dict[Any, list[Any]] = {k: list(v) for k, v in (groups or {}).items()}
+        self.exact = exact
+        self.hint = hint
+        self.max_cost = max_cost
+
+    def dump(self) -> None:
+        print(f"PlanConstraints(exact={self.exact}, max_cost={self.max_cost})")
+        for index, skeleton in enumerate(self.skeletons or ()):
+            print(index, str_from_plan(skeleton.actions))
+
+    def __repr__(self) -> str:
+        return (f"PlanConstraints(skeletons={self.skeletons!r}, groups={self.groups!r}, "
+                f"exact={self.exact!r}, hint={self.hint!r}, max_cost={self.max_cost!r})")
 
 
 def print_solution(solution: Solution) -> None:
@@ -244,11 +282,11 @@ def print_solution(solution: Solution) -> None:
         print(f"{index}) {action.name} {' '.join(map(str, action.args))}")
 
 
-__all__ = ["AND", "DEBUG", "EQ", "EXISTS", "FAILED", "FORALL", "IMPLY", "INCREASE",
-           "INFEASIBLE", "MAXIMIZE", "MINIMIZE", "NOT", "OR", "PARAMETER", "SHARED_DEBUG",
-           "TOTAL_COST", "TOTAL_TIME", "TYPE", "WHEN", "WILD", "Action", "And", "Certificate",
-           "Equal", "Exists", "Fact", "ForAll", "Imply", "Not", "Or", "Output", "PDDLProblem",
-           "PDDLText", "PartialInputs", "PlanConstraints", "Solution", "WildOutput",
-           "get_args", "get_file_path", "get_length", "get_prefix", "is_plan",
-           "partition_facts", "print_solution", "read", "read_pddl_pair",
-           "read_pddlstream_pair", "str_from_plan"]
+__all__ = ["AND", "DEBUG", "EQ", "EXISTS", "FAILED", "FORALL", "GOAL_INDEX", "IMPLY",
+           "INCREASE", "INFEASIBLE", "MAXIMIZE", "MINIMIZE", "NOT", "OR", "PARAMETER",
+           "SHARED_DEBUG", "TOTAL_COST", "TOTAL_TIME", "TYPE", "WHEN", "WILD", "Action", "And",
+           "Certificate", "Equal", "Exists", "Fact", "ForAll", "Imply", "Not", "Or",
+           "OrderedSkeleton", "Output", "PDDLProblem", "PDDLText", "PartialInputs",
+           "PlanConstraints", "Solution", "WildOutput", "get_args", "get_file_path",
+           "get_length", "get_prefix", "is_plan", "linear_order", "partition_facts",
+           "print_solution", "read", "read_pddl_pair", "read_pddlstream_pair", "str_from_plan"]

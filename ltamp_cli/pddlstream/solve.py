@@ -22,9 +22,11 @@ from ltamp_cli.planner.api import solve as plan
 from ltamp_cli.planner.objects import value_key as _value_key
 from ltamp_cli.planner.pddl.check import check_domain, check_problem
 from ltamp_cli.planner.pddl.parse import parse_domain, parse_problem
-from ltamp_cli.planner.pddl.syntax import Domain, IncreaseCost
+from ltamp_cli.planner.pddl.syntax import OBJECT_TYPE, Domain, IncreaseCost
 from ltamp_cli.planner.problem import PlanningProblem
 from ltamp_cli.planner.result import PlanResult
+from ltamp_cli.planner.search.skeleton import ArgPattern, Skeleton, StepPattern
+from ltamp_cli.planner.search.skeleton import PlanConstraints as SkeletonConstraints
 
 FOCUSED_ALGORITHMS = ("focused", "binding", "adaptive")
 
@@ -71,10 +73,11 @@ def solve(problem: PDDLProblem, algorithm: str = "adaptive",
         complexity["max_complexity"] = _complexity("max_complexity", max_complexity,
                                                    infinite=True)
     planning_problem = to_planning_problem(problem, stream_info)
-    skeleton = skeleton_patterns(constraints, planning_problem)
+    skeletons = plan_constraints(constraints, planning_problem)
+    max_cost = math.inf if constraints is None else constraints.max_cost
     config = PlannerConfig(algorithm=algorithm, max_time=max_time, seed=seed, search=search,
-                           unit_costs=unit_costs, success_cost=success_cost, skeleton=skeleton,
-                           **complexity)
+                           unit_costs=unit_costs, success_cost=success_cost,
+                           constraints=skeletons, max_cost=max_cost, **complexity)
     result = plan(planning_problem, config)
     solution = to_solution(result, unit_costs or not has_action_costs(planning_problem.domain))
     if verbose:
@@ -121,31 +124,68 @@ def solve_adaptive(problem: PDDLProblem, **options: Any) -> Solution:
     return solve(problem, algorithm="adaptive", **options)
 
 
-def skeleton_patterns(constraints: PlanConstraints | None, problem: PlanningProblem
-                      ) -> tuple[str, ...]:
-    """A PDDLStream skeleton as the planner's patterns (``?`` for variables and WILD)."""
+def plan_constraints(constraints: PlanConstraints | None, problem: PlanningProblem
+                     ) -> SkeletonConstraints | None:
+    """PDDLStream's skeletons as the planner's constraints (``None``: no skeleton). A value
+    that is no object of the problem yet becomes one (added to ``problem.objects``), as in
+    PDDLStream: a stream output equal to it is then that object."""
     if constraints is None or constraints.skeletons is None:
-        return ()
-    skeletons = list(constraints.skeletons)
-    if len(skeletons) != 1:
-        raise InputError(f"PlanConstraints gives {len(skeletons)} skeletons: ltamp follows "
-                         "exactly one (or none)")
-    by_value = {_value_key(value): name for name, (_, value) in problem.objects.items()}
-    patterns: list[str] = [] if constraints.exact else ["..."]
-    for name, args in skeletons[0]:
-        words = [str(name).lower()]
-        for arg in args:
-            if arg == WILD or (isinstance(arg, str) and arg.startswith("?")):
-                words.append("?")
-            elif _value_key(arg) in by_value:
-                words.append(by_value[_value_key(arg)])
-            else:
-                raise InputError(f"skeleton step ({name} ...): {arg!r:.60} is no object of "
-                                 "the problem; use a '?variable' or WILD")
-        patterns.append(" ".join(words))
-        if not constraints.exact:
-            patterns.append("...")
-    return tuple(patterns)
+        return None
+    if not constraints.skeletons:
+        raise InputError("PlanConstraints(skeletons=[]): no plan follows an empty list of "
+                         "skeletons (skeletons=None plans freely)")
+    by_value = {_value_key(value): name for name, (_, value) in problem.objects.items()
+                if value is not None}
+    by_value.update({_value_key(name): name for name, (_, value) in problem.objects.items()
+                     if value is None})
+
+    def object_name(value: Any) -> str:
+        key = _value_key(value)
+        if key not in by_value:
+            name = f"skeleton-value-{len(by_value)}"
+            while name in problem.objects:
+                name += "-"
+            problem.objects[name] = (OBJECT_TYPE, value)
+            by_value[key] = name
+        return by_value[key]
+
+    groups = {_group_key(group): frozenset(object_name(v) for v in values)
+              for group, values in constraints.groups.items()}
+
+    def arg_pattern(arg: Any) -> ArgPattern:
+        if isinstance(arg, str) and arg == WILD:
+            return None
+        if isinstance(arg, str) and arg.startswith("?"):
+            return arg.lower()
+        group = _group_key(arg)
+        if group is not None and group in groups:
+            return groups[group]
+        return frozenset({object_name(arg)})
+
+    skeletons = []
+    for number, skeleton in enumerate(constraints.skeletons, start=1):
+        steps = []
+        for step in skeleton.actions:
+            if not (isinstance(step, tuple | list) and len(step) == 2
+                    and isinstance(step[0], str) and isinstance(step[1], tuple | list)):
+                raise InputError(f"skeleton #{number}: step {step!r:.60} is no (action name, "
+                                 "[args]) pair")
+            name, args = step
+            steps.append(StepPattern(name.lower(), tuple(arg_pattern(a) for a in args)))
+        orders = frozenset((int(i), int(j)) for i, j in skeleton.orders)
+        skeletons.append(Skeleton(tuple(steps), orders, (not constraints.exact,)
+                                  * (len(steps) + 1)))
+    return SkeletonConstraints(tuple(skeletons))
+
+
+def _group_key(value: Any) -> Any:
+    """``value`` as a key of ``PlanConstraints.groups`` (``None`` if unhashable: PDDLStream
+    looks up only hashable args)."""
+    try:
+        hash(value)
+    except TypeError:
+        return None
+    return value
 
 
 def solve_from_pddl(domain_pddl: str, problem_pddl: str, unit_costs: bool = False,

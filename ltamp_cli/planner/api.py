@@ -26,7 +26,7 @@ from ltamp_cli.planner.pddl.syntax import Stream
 from ltamp_cli.planner.problem import PlanningProblem
 from ltamp_cli.planner.result import INFEASIBLE, TIMEOUT, Certificate, PlanResult
 from ltamp_cli.planner.search.engine import SEARCH_ALGORITHMS
-from ltamp_cli.planner.search.skeleton import ANY_ACTION, parse_skeleton
+from ltamp_cli.planner.search.skeleton import check_constraints, parse_constraints
 from ltamp_cli.planner.statistics import StreamStatistics
 from ltamp_cli.planner.watchdog import CallTracker, RunningCall, run_until
 from ltamp_cli.seeds import usable_seed
@@ -102,7 +102,7 @@ def solve(problem: PlanningProblem, config: PlannerConfig | None = None) -> Plan
         raise InputError(f"seed must be an integer, got {config.seed!r}")
     config = replace(config, seed=usable_seed(config.seed))
     check_config(config)
-    check_skeleton(problem, config.skeleton)
+    config = resolve_constraints(problem, config)
     start = time.perf_counter()
     tracker = CallTracker()
     holder: list[PlannerState] = []
@@ -140,20 +140,28 @@ def check_config(config: PlannerConfig) -> None:
         raise InputError(f"success cost: expected a number >= 0 (or inf), got {success_cost!r}")
 
 
-def check_skeleton(problem: PlanningProblem, skeleton: tuple[str, ...]) -> None:
-    """Every skeleton pattern names an action of the domain ('*' any) with its number of
-    arguments: a misspelt pattern would otherwise only make the problem infeasible."""
-    patterns, _gaps = parse_skeleton(skeleton)
+def resolve_constraints(problem: PlanningProblem, config: PlannerConfig) -> PlannerConfig:
+    """``config`` with its plan constraints in one form (``constraints``), checked against
+    the domain: every pattern names an action ('*' any) with its number of arguments, since
+    a misspelt pattern would otherwise only make the problem infeasible."""
+    given = [name for name in ("skeleton", "skeletons", "constraints")
+             if getattr(config, name)]
+    if len(given) > 1:
+        raise InputError(f"plan constraints given twice ({' and '.join(given)}): give "
+                         "'skeleton' (one), 'skeletons' (one of several) or constraints")
+    constraints = config.constraints
+    if constraints is None:
+        constraints = parse_constraints([config.skeleton] if config.skeleton
+                                        else config.skeletons)
+    max_cost = config.max_cost
+    if (isinstance(max_cost, bool) or not isinstance(max_cost, int | float)
+            or math.isnan(max_cost) or max_cost < 0):
+        raise InputError(f"max cost: expected a number >= 0 (or inf), got {max_cost!r:.40}")
+    if constraints is None:
+        return config
     arities = {action.name: len(action.parameters) for action in problem.domain.actions}
-    for pattern in patterns:
-        if pattern.name == ANY_ACTION:
-            continue
-        if pattern.name not in arities:
-            raise InputError(f"skeleton pattern {pattern.name!r}: the domain has no such action "
-                             f"(actions: {', '.join(sorted(arities))})")
-        if pattern.args is not None and len(pattern.args) != arities[pattern.name]:
-            raise InputError(f"skeleton pattern {pattern.name!r} gives {len(pattern.args)} "
-                             f"argument(s); the action takes {arities[pattern.name]}")
+    check_constraints(constraints, arities)
+    return replace(config, skeleton=(), skeletons=(), constraints=constraints)
 
 
 def refuse_unsupported(problem: PlanningProblem, algorithm: str) -> None:

@@ -85,6 +85,9 @@ class PlannerOptions(BaseModel):
     max_complexity: int | None = Field(None, ge=0)
     success_cost: float | None = Field(None, ge=0.0)
     skeleton: list[str] | None = None
+    # several skeletons: the plan follows one of them (PDDLStream's PlanConstraints)
+    skeletons: list[list[str]] | None = None
+    max_cost: float | None = Field(None, ge=0.0)  # only plans cheaper than this
     eager_cheap_streams: bool | None = None
     incremental_grounding: bool | None = None
 

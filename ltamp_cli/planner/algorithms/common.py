@@ -40,6 +40,7 @@ from ltamp_cli.planner.search.ground import (
 )
 from ltamp_cli.planner.search.incremental import GroundingCache
 from ltamp_cli.planner.search.normalize import LiftedLiteral
+from ltamp_cli.planner.search.skeleton import PlanConstraints
 from ltamp_cli.planner.search.solve import DiscreteResult, plan_discrete
 from ltamp_cli.planner.streams import (
     Binding,
@@ -75,7 +76,12 @@ class PlannerConfig:
     discrete search (``ff``, ``lazy-greedy``, ``wastar``, ``fd``); ``unit_costs`` ignores
     action costs. ``success_cost``: keep improving the plan (anytime) until its cost is at
     most this or time runs out (``inf``: return the first plan). ``skeleton``: action
-    patterns the plan must follow (see :mod:`ltamp_cli.planner.search.skeleton`).
+    patterns the plan must follow (see :mod:`ltamp_cli.planner.search.skeleton`);
+    ``skeletons``: several such lists, the plan follows one of them; ``constraints``: the
+    same as :class:`~ltamp_cli.planner.search.skeleton.PlanConstraints` (partial orders,
+    sets of objects; at most one of the three is given, :func:`.api.solve` turns the
+    strings into ``constraints``). ``max_cost``: only plans cheaper than this (PDDLStream's
+    ``PlanConstraints(max_cost=...)``).
     ``statistics_dir``: where per-domain stream statistics persist across runs (``None``:
     nowhere). Test streams that earlier calls (persisted or in this run) showed to be cheap
     (:func:`.effort.observed_cheap`) are always evaluated eagerly; ``eager_cheap_streams``:
@@ -104,6 +110,9 @@ class PlannerConfig:
     max_complexity: int = 20
     success_cost: float = float("inf")
     skeleton: tuple[str, ...] = ()
+    skeletons: tuple[tuple[str, ...], ...] = ()
+    constraints: PlanConstraints | None = None
+    max_cost: float = float("inf")
     statistics_dir: str | None = None
     eager_cheap_streams: bool = False
     threads: int | None = 1  # thread-pool limit while solving (ltamp_cli.threads)
@@ -484,7 +493,7 @@ class PlannerState:
             result = plan_discrete(
                 self.problem.domain, objects, init, function_values, self.problem.goal,
                 self.deadline, self.config.search, self.config.unit_costs, max_expansions,
-                self.config.skeleton, self.cost_bound, self.fluent_requirements,
+                self.config.constraints, self.cost_bound, self.fluent_requirements,
                 context_blocks, guess, skip_if_grounded_as,
                 self.grounding_cache if self.config.incremental_grounding else None)
         finally:
@@ -677,6 +686,8 @@ def initial_state(problem: PlanningProblem, config: PlannerConfig) -> PlannerSta
                          externals, bindings)
     if config.algorithm == "incremental":
         state.search_budget = INITIAL_INCREMENTAL_EXPANSIONS
+    if config.max_cost < float("inf"):
+        state.cost_bound = config.max_cost  # every search then asks for a cheaper plan
     for atom in problem.init:
         state.add_fact((atom.predicate, *atom.args))
     for value in problem.function_values:

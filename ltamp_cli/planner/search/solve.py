@@ -20,7 +20,7 @@ from ltamp_cli.planner.search.ground import (
 )
 from ltamp_cli.planner.search.incremental import GroundingCache
 from ltamp_cli.planner.search.normalize import Normalizer, type_predicate
-from ltamp_cli.planner.search.skeleton import constrain
+from ltamp_cli.planner.search.skeleton import PlanConstraints, constrain
 from ltamp_cli.planner.search.task import Task
 
 
@@ -100,7 +100,7 @@ def plan_discrete(
     algorithm: str = "ff",
     unit_costs: bool = False,
     max_expansions: int | None = None,
-    skeleton: Sequence[str] | None = None,
+    skeleton: PlanConstraints | None = None,
     cost_bound: float | None = None,
     fluent_requirements: Mapping[Fact, Sequence[Context]] | None = None,
     context_blocks: Mapping[Fact, Sequence[Context]] | None = None,
@@ -110,7 +110,7 @@ def plan_discrete(
 ) -> DiscreteResult:
     """Find a plan for the finite task given by ``objects`` (name → type) and ``init``.
 
-    ``skeleton`` constrains the plan to a sequence of action patterns (see
+    ``skeleton`` constrains the plan to follow one of its skeletons (see
     :mod:`.skeleton`); ``cost_bound`` asks for a plan cheaper than it (weighted A* then).
     ``guess``: a candidate plan (action name, arguments) checked before searching; when
     it reaches the goal in this task it is the plan (after action elimination), else the
@@ -156,8 +156,7 @@ def plan_discrete(
         return DiscreteResult(None, float("inf"), grounding, None, outcome, ground_time, 0.0,
                               skipped=True)
     if skeleton:
-        grounding, first_step = constrain(grounding, skeleton)
-        facts.add(first_step)
+        grounding = constrain(grounding, skeleton)
     task = Task(grounding, facts, deadline)
     if cost_bound is not None:
         outcome = weighted_astar(task, deadline, cost_bound=cost_bound)
