@@ -26,7 +26,11 @@ from ltamp_cli.planner.pddl.syntax import Stream
 from ltamp_cli.planner.problem import PlanningProblem
 from ltamp_cli.planner.result import INFEASIBLE, TIMEOUT, Certificate, PlanResult
 from ltamp_cli.planner.search.engine import SEARCH_ALGORITHMS
-from ltamp_cli.planner.search.skeleton import check_constraints, parse_constraints
+from ltamp_cli.planner.search.skeleton import (
+    check_constraints,
+    equates_arguments,
+    parse_constraints,
+)
 from ltamp_cli.planner.statistics import StreamStatistics
 from ltamp_cli.planner.watchdog import CallTracker, RunningCall, run_until
 from ltamp_cli.seeds import usable_seed
@@ -182,9 +186,16 @@ def _infeasibility_unproven(problem: PlanningProblem, config: PlannerConfig,
                             state: PlannerState) -> bool:
     """Whether an optimistic algorithm's "infeasible" may be wrong: some stream certifies
     facts it does not declare (wild outputs seen, or a stream with no :certified facts),
-    which no optimistic plan can anticipate."""
+    which no optimistic plan can anticipate; or plan constraints equate arguments that
+    optimistic plans keep apart (distinct stream instances have distinct placeholders, yet
+    their real outputs may be one object)."""
     if config.algorithm == "incremental" or problem.stream_file is None:
         return False
+    if config.constraints is not None:
+        known = {arg for atom in problem.init for arg in atom.args}
+        known.update(constant.name for constant in problem.domain.constants)
+        if equates_arguments(config.constraints, known):
+            return True
     if state.saw_wild_facts or any(not stream.certified and not stream.is_rule
                                    for stream in problem.stream_file.streams):
         return True

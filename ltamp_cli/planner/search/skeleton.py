@@ -19,7 +19,7 @@ Compiled into the grounded task as PDDLStream compiles it into its PDDL task: ea
 action that matches step ``i`` of skeleton ``k`` gets a copy that requires the steps
 ordered before ``i`` done and ``i`` not yet done, and marks ``i`` done; a variable first
 bound by the step records its object (``%skeleton-assigned``) and later steps require the
-same one. The goal additionally requires some skeleton complete (all its steps ordered
+same one; no step of another skeleton may follow. The goal additionally requires some skeleton complete (all its steps ordered
 before ``GOAL`` done). Other actions keep their own form where every gap is open, and get a
 copy bound to the gap otherwise.
 """
@@ -40,6 +40,7 @@ DONE = "%skeleton-done"  # (DONE k i): step i of skeleton k was taken
 BOUND = "%skeleton-bound"  # (BOUND k ?x): a step of skeleton k bound the variable ?x
 ASSIGNED = "%skeleton-assigned"  # (ASSIGNED k ?x obj): ... to obj
 COMPLETE = "%skeleton-complete"  # derived: some skeleton has all its final steps done
+STARTED = "%skeleton-started"  # (STARTED k): a step of skeleton k was taken
 
 # An argument pattern: None (any object), "?name" (a variable) or a set of object names.
 ArgPattern = str | frozenset[str] | None
@@ -210,6 +211,24 @@ def check_constraints(constraints: PlanConstraints, arities: dict[str, int]) -> 
                          "in every gap, PDDLStream's exact=False) or nowhere (exact=True)")
 
 
+def equates_arguments(constraints: PlanConstraints, known: set[str]) -> bool:
+    """Whether a skeleton ties an argument to another (a variable named twice) or to an
+    object not among ``known`` (one a stream may make): optimistic plans, whose stream
+    outputs are distinct placeholders, cannot meet such a tie, so their failure proves no
+    infeasibility."""
+    for skeleton in constraints.skeletons:
+        named: list[str] = []
+        for step in skeleton.steps:
+            for pattern in step.args or ():
+                if isinstance(pattern, str):
+                    named.append(pattern)
+                elif isinstance(pattern, frozenset) and not pattern <= known:
+                    return True
+        if len(named) != len(set(named)):
+            return True
+    return False
+
+
 def done_fact(skeleton: int, step: int) -> Fact:
     return (DONE, str(skeleton), str(step))
 
@@ -226,12 +245,14 @@ def constrain(grounding: Grounding, constraints: PlanConstraints) -> Grounding:
             for index, step in enumerate(skeleton.steps):
                 binding = step.match(action)
                 if binding is not None:
-                    actions.extend(_step_copies(action, number, skeleton, index, binding))
+                    actions.extend(_step_copies(action, number, skeleton, index, binding,
+                                                range(len(constraints.skeletons))))
             if not free_everywhere:
                 actions.extend(_gap_copies(action, number, skeleton))
         final = tuple(done_fact(number, i) for i, j in sorted(skeleton.orders) if j == GOAL)
         completions.append(GroundAxiom((COMPLETE,), final, ()))
         new_facts.update(done_fact(number, i) for i in range(len(skeleton.steps)))
+        new_facts.add((STARTED, str(number)))
     for action in actions:
         new_facts.update(e.fact for e in action.effects if e.fact[0] in (ASSIGNED, BOUND))
     if any(not axiom.body_pos for axiom in completions):
@@ -246,7 +267,7 @@ def constrain(grounding: Grounding, constraints: PlanConstraints) -> Grounding:
 
 
 def _step_copies(action: GroundAction, number: int, skeleton: Skeleton, index: int,
-                 binding: dict[str, str]) -> Iterator[GroundAction]:
+                 binding: dict[str, str], others: range) -> Iterator[GroundAction]:
     """``action`` as step ``index`` of skeleton ``number``: one copy, or one per way to
     meet a variable that a step unordered with this one may have bound first."""
     key = str(number)
@@ -256,8 +277,11 @@ def _step_copies(action: GroundAction, number: int, skeleton: Skeleton, index: i
     parallel = {v for i in range(len(skeleton.steps)) if i not in ancestors | descendants | {index}
                 for v in skeleton.steps[i].variables()}
     pre_pos = [done_fact(number, i) for i in skeleton.predecessors(index)]
-    pre_neg = [done_fact(number, index)]
-    adds = [done_fact(number, index)]
+    # Steps of one skeleton only: exact, the plan is then one of the skeletons (PDDLStream
+    # lets steps of several mix, a gap its own comment marks; "exactly one" is the intent).
+    pre_neg = [done_fact(number, index), *((STARTED, str(other)) for other in others
+                                           if other != number)]
+    adds = [done_fact(number, index), (STARTED, key)]
     choices: list[list[tuple[tuple[Fact, ...], tuple[Fact, ...], tuple[Fact, ...]]]] = []
     for variable, obj in sorted(binding.items()):
         assigned, bound = (ASSIGNED, key, variable, obj), (BOUND, key, variable)
