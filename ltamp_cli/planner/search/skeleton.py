@@ -19,9 +19,9 @@ Compiled into the grounded task as PDDLStream compiles it into its PDDL task: ea
 action that matches step ``i`` of skeleton ``k`` gets a copy that requires the steps
 ordered before ``i`` done and ``i`` not yet done, and marks ``i`` done; a variable first
 bound by the step records its object (``%skeleton-assigned``) and later steps require the
-same one; no step of another skeleton may follow. The goal additionally requires some skeleton complete (all its steps ordered
-before ``GOAL`` done). Other actions keep their own form where every gap is open, and get a
-copy bound to the gap otherwise.
+same one; no step of another skeleton may follow. The goal additionally requires some
+skeleton complete (all its steps ordered before ``GOAL`` done). Other actions keep their
+own form where every gap is open, and get a copy bound to the gap otherwise.
 """
 
 from __future__ import annotations
