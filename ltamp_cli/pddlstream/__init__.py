@@ -5,6 +5,7 @@ See ``docs/porting-from-pddlstream.md`` for what maps to what.
 """
 
 from ltamp_cli.errors import InputError
+from ltamp_cli.pddlstream.analysis import analyze_goal
 from ltamp_cli.pddlstream.generator import (
     FunctionInfo,
     PredicateInfo,
@@ -160,6 +161,7 @@ __all__ = [
     "UniqueOptValue",
     "WildOutput",
     "add_opt_function",
+    "analyze_goal",
     "constraint_satisfaction",
     "create_parser",
     "defer_shared",

@@ -81,7 +81,8 @@ SERVED: dict[str, tuple[str, ...]] = {
                                    "FOCUSED_ALGORITHMS", *_SOLVERS, "PlanConstraints",
                                    "DEBUG", "SHARED_DEBUG", "PartialInputs", "Solution",
                                    "Certificate", "PDDLProblem", "is_plan", "get_prefix",
-                                   "INF", "SEPARATOR", "elapsed_time", "irange"),
+                                   "INF", "SEPARATOR", "elapsed_time", "irange",
+                                   "analyze_goal"),
     "pddlstream.algorithms.focused": ("solve_focused", "solve_adaptive", "solve_binding",
                                       "INF", "elapsed_time"),
     "pddlstream.algorithms.incremental": ("solve_incremental", "INF", "elapsed_time"),
@@ -133,11 +134,6 @@ _OPTIMIZERS = ("PDDLStream's :optimizer streams are not supported; write the opt
                ":stream generator (from_gen_fn)")
 # PDDLStream names ltamp knows and does not provide: module -> {name: what to do instead}.
 MISSING: dict[str, dict[str, str]] = {
-    "pddlstream.algorithms.meta": {
-        "analyze_goal": "a debugging helper of PDDLStream's grounding, not its planning API; "
-                        "ltamp's solve reports why no plan was found in its result "
-                        "(`ltamp solve --json` diagnostics)",
-    },
     "pddlstream.algorithms.search": {
         "ABSTRIPSLayer": "hierarchical (ABSTRIPS) search is not supported; drop the "
                          "hierarchy= option of solve",

@@ -19,7 +19,7 @@ from ltamp_cli.planner.search.ground import (
     require_fluent_contexts,
 )
 from ltamp_cli.planner.search.incremental import GroundingCache
-from ltamp_cli.planner.search.normalize import Normalizer, type_predicate
+from ltamp_cli.planner.search.normalize import NormalAction, NormalAxiom, Normalizer, type_predicate
 from ltamp_cli.planner.search.skeleton import PlanConstraints, constrain
 from ltamp_cli.planner.search.task import Task
 
@@ -75,6 +75,31 @@ def grounding_signature(grounding: Grounding) -> frozenset[object]:
     return frozenset((*grounding.actions, *used))
 
 
+def normalized_task(domain: Domain, objects: Mapping[str, str], init: Iterable[Fact],
+                    goal: Formula, deadline: float
+                    ) -> tuple[list[NormalAction], list[NormalAxiom], set[Fact]]:
+    """The domain's actions and axioms (the goal's ``%goal`` axioms included) in normal
+    form, and the initial facts with each object's type facts, ready for grounding."""
+    closure = type_closure(domain)
+    objects_by_type: dict[str, list[str]] = {}
+    facts = set(init)
+    for name, type_name in objects.items():
+        for ancestor in closure.get(type_name, [type_name, OBJECT_TYPE]):
+            objects_by_type.setdefault(ancestor, []).append(name)
+            facts.add((type_predicate(ancestor), name))
+    normalizer = Normalizer(objects_by_type)
+    actions = [variant for action in domain.actions for variant in normalizer.action(action)]
+    check_deadline(deadline)
+    axioms = [rule for axiom in domain.axioms for rule in normalizer.axiom(axiom)]
+    check_deadline(deadline)
+    axioms += normalizer.goal(goal)
+    changing = ({effect.predicate for action in actions for effect in action.effects}
+                | {axiom.head.name for axiom in domain.axioms})
+    axioms += normalizer.take_auxiliary(
+        lambda predicate: predicate not in changing and not predicate.startswith("%"))
+    return actions, axioms, facts
+
+
 def type_closure(domain: Domain) -> dict[str, list[str]]:
     """Each type's ancestors (itself included, and ``object``)."""
     parents = domain.type_parents()
@@ -122,23 +147,7 @@ def plan_discrete(
     successive tasks without redoing the joins; the grounding is the same without it.
     """
     start = time.perf_counter()
-    closure = type_closure(domain)
-    objects_by_type: dict[str, list[str]] = {}
-    facts = set(init)
-    for name, type_name in objects.items():
-        for ancestor in closure.get(type_name, [type_name, OBJECT_TYPE]):
-            objects_by_type.setdefault(ancestor, []).append(name)
-            facts.add((type_predicate(ancestor), name))
-    normalizer = Normalizer(objects_by_type)
-    actions = [variant for action in domain.actions for variant in normalizer.action(action)]
-    check_deadline(deadline)
-    axioms = [rule for axiom in domain.axioms for rule in normalizer.axiom(axiom)]
-    check_deadline(deadline)
-    axioms += normalizer.goal(goal)
-    changing = ({effect.predicate for action in actions for effect in action.effects}
-                | {axiom.head.name for axiom in domain.axioms})
-    axioms += normalizer.take_auxiliary(
-        lambda predicate: predicate not in changing and not predicate.startswith("%"))
+    actions, axioms, facts = normalized_task(domain, objects, init, goal, deadline)
     if grounding_cache is not None:
         grounding = grounding_cache.ground(actions, axioms, facts, function_values, deadline)
     else:
