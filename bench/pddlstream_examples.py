@@ -12,7 +12,8 @@ Each example runs in its own child process (``--child``: a fresh interpreter, as
 run; stdin gives empty lines to ``user_input`` prompts, no display). In the child the alias
 serves an instrumented ``solve`` (``install(overrides=...)``): it converts the problem
 (load: parsing and checking the example's unmodified ``domain.pddl``/``stream.pddl``) and
-solves it with ``adaptive`` whatever algorithm the example asks for, recording load and
+solves it with ``adaptive`` whatever algorithm the example asks for (with its plan
+constraints), recording load and
 solve times and the outcome of each call. Examples that need modules not installed here
 (pybullet, tkinter displays, Gurobi) or PDDLStream names ltamp does not provide are
 reported as not loaded, with the runner's one-line reason.
@@ -49,7 +50,7 @@ from ltamp_cli.pddlstream.satisfaction import (  # noqa: E402
     assignment_from_solution,
     compile_satisfaction,
 )
-from ltamp_cli.pddlstream.solve import to_solution  # noqa: E402
+from ltamp_cli.pddlstream.solve import plan_constraints, to_solution  # noqa: E402
 from ltamp_cli.planner.algorithms.common import PlannerConfig  # noqa: E402
 from ltamp_cli.planner.api import solve as plan  # noqa: E402
 
@@ -73,7 +74,8 @@ class Recorder:
     def save(self) -> None:
         self.record_path.write_text(json.dumps({"runs": self.runs}, default=str))
 
-    def solve(self, problem: Any, stream_info: Any = None, **_: Any) -> api.Solution:
+    def solve(self, problem: Any, stream_info: Any = None, constraints: Any = None,
+              **_: Any) -> api.Solution:
         start = time.perf_counter()
         cpu_start = time.process_time()
         record: dict[str, Any] = {"loaded": False, "solved": False}
@@ -88,7 +90,10 @@ class Recorder:
         record["loaded"] = True
         record["load_s"] = time.perf_counter() - start
         self.save()
-        config = PlannerConfig(algorithm="adaptive", max_time=self.max_time)
+        skeletons = plan_constraints(constraints, planning_problem)  # as solve() does
+        config = PlannerConfig(algorithm="adaptive", max_time=self.max_time,
+                               constraints=skeletons,
+                               max_cost=getattr(constraints, "max_cost", float("inf")))
         result = plan(planning_problem, config)
         record.update(solved=result.solved, status=result.status, solve_s=result.time_s,
                       cpu_s=time.process_time() - cpu_start,
