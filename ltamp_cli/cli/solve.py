@@ -92,6 +92,7 @@ def solve_command(
         options["success_cost"] = success_cost
     if skeleton:
         options["skeleton"] = skeleton
+        options.pop("skeletons", None)  # the command line's skeleton replaces the file's
     if "skeleton" in options:
         if not isinstance(options["skeleton"], list | tuple):
             raise InputError(f"{problem}: planner option 'skeleton' must be a list of action "

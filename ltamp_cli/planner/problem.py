@@ -54,6 +54,7 @@ from ltamp_cli.planner.pddl.syntax import (
     TypedName,
 )
 from ltamp_cli.planner.problem_schema import validate_problem_document
+from ltamp_cli.planner.search.skeleton import check_constraints, parse_constraints
 from ltamp_cli.shipped import resolve_problem_path
 from ltamp_cli.yamlfile import YamlDocument
 
@@ -277,6 +278,7 @@ def load_problem(path: str | Path, domain_dir: str | Path | None = None) -> Plan
     planner_options = doc.get("planner", default={}) or {}
     if not isinstance(planner_options, dict):
         raise doc.error("'planner' must be a mapping of planner options", "planner")
+    _check_plan_constraints(doc, planner_options, domain)
     world = doc.get("world", default={}) or {}
     if not isinstance(world, dict):
         raise doc.error("'world' must be a mapping", "world")
@@ -307,6 +309,34 @@ def load_problem(path: str | Path, domain_dir: str | Path | None = None) -> Plan
     return with_negated_tests(PlanningProblem(
         problem.name, str(path), domain, stream_file, factory, bindings_source, world, objects,
         problem.init, problem.function_values, goal, dict(planner_options), doc.data))
+
+
+def _check_plan_constraints(doc: YamlDocument, options: Mapping[str, Any],
+                            domain: Domain) -> None:
+    """The planner options' skeletons name actions of the domain with their numbers of
+    arguments (a misspelt pattern would only make the problem infeasible); errors point at
+    the skeleton in the file."""
+    given = [key for key in ("skeleton", "skeletons") if options.get(key)]
+    if len(given) > 1:
+        raise doc.error("plan constraints given twice (skeleton and skeletons): give one "
+                        "skeleton or a list of skeletons", "planner", "skeletons")
+    if not given:
+        return
+    located: list[tuple[tuple[str | int, ...], list[Any]]]
+    if given == ["skeleton"]:
+        located = [(("skeleton",), [options["skeleton"]])]
+    else:
+        skeletons = list(options["skeletons"])
+        located = [(("skeletons", index), [entries]) for index, entries in enumerate(skeletons)]
+        located.append((("skeletons",), skeletons))  # together: their gaps must agree
+    arities = {action.name: len(action.parameters) for action in domain.actions}
+    for keys, entries in located:
+        try:
+            constraints = parse_constraints(entries)
+            if constraints is not None:
+                check_constraints(constraints, arities)
+        except InputError as error:
+            raise doc.error(str(error), "planner", *keys) from None
 
 
 def _check_learned_stream_names(doc: YamlDocument, world: Mapping[str, Any],

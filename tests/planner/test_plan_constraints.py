@@ -76,6 +76,12 @@ def test_cli_max_cost_and_refusals(tmp_path: Path) -> None:
     assert refused.returncode == 2
     assert "plan constraints given twice (skeleton and skeletons)" in refused.stderr
     assert len(refused.stderr.strip().splitlines()) == 1
+    misspelt = blocked_with(tmp_path, "  skeletons: [[move], [move, 'pik a ? ? ?']]\n")
+    refused = subprocess.run([sys.executable, "-m", "ltamp_cli", "solve", str(misspelt)],
+                             capture_output=True, text=True, env=env, timeout=120)
+    assert refused.returncode == 2
+    assert refused.stderr.startswith(f"ltamp: error: {misspelt}:40:")
+    assert "skeleton pattern 'pik': the domain has no such action" in refused.stderr
 
 
 @pytest.mark.parametrize(("config", "message"), [
