@@ -129,7 +129,12 @@ def plan_constraints(constraints: PlanConstraints | None, problem: PlanningProbl
     """PDDLStream's skeletons as the planner's constraints (``None``: no skeleton). A value
     that is no object of the problem yet becomes one (added to ``problem.objects``), as in
     PDDLStream: a stream output equal to it is then that object."""
-    if constraints is None or constraints.skeletons is None:
+    if constraints is None:
+        return None
+    if not isinstance(constraints, PlanConstraints):
+        raise InputError(f"constraints: expected PlanConstraints(skeletons=..., exact=..., "
+                         f"max_cost=...), got {constraints!r:.60}")
+    if constraints.skeletons is None:
         return None
     if not constraints.skeletons:
         raise InputError("PlanConstraints(skeletons=[]): no plan follows an empty list of "

@@ -65,7 +65,7 @@ def courier() -> PDDLProblem:
     return PDDLProblem(DOMAIN, {}, STREAM, stream_map, init, goal)
 
 
-def run(constraints: PlanConstraints | None, algorithm: str = "adaptive",
+def run(constraints: object, algorithm: str = "adaptive",
         max_time: float = 20) -> Solution:
     return solve(courier(), algorithm=algorithm, constraints=constraints, max_time=max_time,
                  verbose=False)
@@ -148,8 +148,10 @@ def test_max_cost_bounds_the_plan_cost() -> None:
     (PlanConstraints(skeletons=[OrderedSkeleton([("load", [WILD, WILD])], {(0, 3)})]),
      "order (0, 3) names no step"),
     (PlanConstraints(skeletons=[["load"]]), "skeleton #1: step 'load' is no (action name"),
+    ([("load", [WILD, WILD])], "constraints: expected PlanConstraints("),
+    (PlanConstraints(max_cost=-1), "max cost: expected a number >= 0"),
 ])
-def test_bad_constraints_are_refused_in_one_line(constraints: PlanConstraints,
+def test_bad_constraints_are_refused_in_one_line(constraints: object,
                                                  message: str) -> None:
     with pytest.raises(InputError) as caught:
         run(constraints, max_time=5)
