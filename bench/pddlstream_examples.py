@@ -189,7 +189,7 @@ def run_example(checkout: Path, path: Path, max_time: float,
         record = Path(scratch) / "record.json"
         command = [sys.executable, str(Path(__file__).resolve()), "--child", name,
                    "--record", str(record), "--max-time", str(max_time),
-                   "--example-args", " ".join(example_args)]
+                   f"--example-args={' '.join(example_args)}"]  # '=': args may start with '-'
         before = os.times()
         try:
             done = subprocess.run(command, cwd=checkout, env=env, input=STDIN_LINES,
