@@ -177,7 +177,11 @@ def plan_constraints(constraints: PlanConstraints | None, problem: PlanningProbl
                                  "[args]) pair")
             name, args = step
             steps.append(StepPattern(name.lower(), tuple(arg_pattern(a) for a in args)))
-        orders = frozenset((int(i), int(j)) for i, j in skeleton.orders)
+        try:
+            orders = frozenset((int(i), int(j)) for i, j in skeleton.orders)
+        except (TypeError, ValueError):
+            raise InputError(f"skeleton #{number}: orders must be pairs of step indices "
+                             f"(GOAL_INDEX for the end), got {skeleton.orders!r:.60}") from None
         skeletons.append(Skeleton(tuple(steps), orders, (not constraints.exact,)
                                   * (len(steps) + 1)))
     return SkeletonConstraints(tuple(skeletons))

@@ -142,6 +142,14 @@ def check_config(config: PlannerConfig) -> None:
             or math.isnan(success_cost) or success_cost < 0):
         # as the YAML field planner.success_cost: NaN would compare false with every cost
         raise InputError(f"success cost: expected a number >= 0 (or inf), got {success_cost!r}")
+    max_cost = config.max_cost
+    if (isinstance(max_cost, bool) or not isinstance(max_cost, int | float)
+            or math.isnan(max_cost) or max_cost < 0):
+        raise InputError(f"max cost: expected a number >= 0 (or inf), got {max_cost!r:.40}")
+    if max_cost < math.inf and config.unit_costs:
+        # The bounded search counts action costs; PDDLStream's bound would count actions.
+        raise InputError("max cost with unit costs is not supported: the bound applies to "
+                         "action costs (drop unit_costs, or bound the cost instead)")
 
 
 def resolve_constraints(problem: PlanningProblem, config: PlannerConfig) -> PlannerConfig:
@@ -157,10 +165,6 @@ def resolve_constraints(problem: PlanningProblem, config: PlannerConfig) -> Plan
     if constraints is None:
         constraints = parse_constraints([config.skeleton] if config.skeleton
                                         else config.skeletons)
-    max_cost = config.max_cost
-    if (isinstance(max_cost, bool) or not isinstance(max_cost, int | float)
-            or math.isnan(max_cost) or max_cost < 0):
-        raise InputError(f"max cost: expected a number >= 0 (or inf), got {max_cost!r:.40}")
     if constraints is None:
         return config
     arities = {action.name: len(action.parameters) for action in problem.domain.actions}

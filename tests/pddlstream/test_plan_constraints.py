@@ -136,6 +136,9 @@ def test_max_cost_bounds_the_plan_cost() -> None:
     cheapest cost 9, so 9 admits none: that "no plan" is right."""
     assert run(PlanConstraints(max_cost=9.5)).cost == 9
     assert run(PlanConstraints(max_cost=9), max_time=10).plan is None
+    with pytest.raises(InputError, match="max cost with unit costs is not supported"):
+        solve(courier(), constraints=PlanConstraints(max_cost=3), unit_costs=True,
+              verbose=False)
 
 
 @pytest.mark.parametrize(("constraints", "message"), [
@@ -150,6 +153,8 @@ def test_max_cost_bounds_the_plan_cost() -> None:
     (PlanConstraints(skeletons=[["load"]]), "skeleton #1: step 'load' is no (action name"),
     ([("load", [WILD, WILD])], "constraints: expected PlanConstraints("),
     (PlanConstraints(max_cost=-1), "max cost: expected a number >= 0"),
+    (PlanConstraints(skeletons=[OrderedSkeleton([("load", [WILD, WILD])], {"ab"})]),
+     "orders must be pairs of step indices"),
 ])
 def test_bad_constraints_are_refused_in_one_line(constraints: object,
                                                  message: str) -> None:
