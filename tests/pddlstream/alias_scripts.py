@@ -101,6 +101,19 @@ def main():
 if __name__ == '__main__':
     main()
 """
+CONSTRAINED = """
+from pddlstream.algorithms.constraints import PlanConstraints, WILD
+from pddlstream.algorithms.meta import analyze_goal, solve
+from pddlstream.language.constants import print_solution
+from run import get_problem
+
+problem = get_problem()
+print('Facts:', sorted(fact[0] for fact in analyze_goal(problem, use_actions=True)))
+skeleton = [('load', ['box', WILD]), ('drive', [WILD, '?x']), ('unload', ['box', '?x'])]
+solution = solve(problem, constraints=PlanConstraints(skeletons=[skeleton], exact=False),
+                 max_time=30, verbose=False)
+print_solution(solution)
+"""
 MISSING = """
 from pddlstream.algorithms.meta import solve
 from pddlstream.algorithms.skeleton import SkeletonQueue
@@ -131,7 +144,7 @@ def write_courier(folder: Path, package: str | None = None) -> Path:
     where.mkdir(parents=True, exist_ok=True)
     run = RUN if package is None else RUN.replace("from primitives", f"from {package}.primitives")
     files = {"domain.pddl": DOMAIN, "stream.pddl": STREAM, "primitives.py": PRIMITIVES,
-             "run.py": run, "missing.py": MISSING, "unknown.py": UNKNOWN,
+             "run.py": run, "constrained.py": CONSTRAINED, "missing.py": MISSING, "unknown.py": UNKNOWN,
              "broken.py": BROKEN, "broken.pddl": BROKEN_DOMAIN}
     if package:
         files["__init__.py"] = ""

@@ -79,6 +79,20 @@ def test_the_scripts_own_error_gives_its_traceback(courier: Path, tmp_path: Path
     assert lines[-1].startswith(f"ltamp: the script {courier} failed in its own code")
 
 
+def test_plan_constraints_and_analyze_goal_through_the_alias(courier: Path,
+                                                             tmp_path: Path) -> None:
+    """``pddlstream.algorithms.constraints`` and ``meta.analyze_goal`` as a script imports
+    them: the goal back-chains to the fluent initial facts; the skeleton's ``?x`` makes the
+    last drive end where the parcel is unloaded."""
+    done = run([str(courier.parent / "constrained.py")], cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert "Facts: ['at', 'parcelat']" in done.stdout
+    assert plan_lines(done.stdout) == PLAN
+    drives = [line for line in done.stdout.splitlines() if ") drive " in line]
+    unload = next(line for line in done.stdout.splitlines() if ") unload " in line)
+    assert drives[-1].split(" ", 3)[-1].endswith(unload.split(" ", 3)[-1])
+
+
 def test_missing_ltamp_equivalent_is_one_line_and_exit_2(courier: Path, tmp_path: Path
                                                         ) -> None:
     script = courier.parent / "missing.py"
