@@ -144,8 +144,8 @@ def write_courier(folder: Path, package: str | None = None) -> Path:
     where.mkdir(parents=True, exist_ok=True)
     run = RUN if package is None else RUN.replace("from primitives", f"from {package}.primitives")
     files = {"domain.pddl": DOMAIN, "stream.pddl": STREAM, "primitives.py": PRIMITIVES,
-             "run.py": run, "constrained.py": CONSTRAINED, "missing.py": MISSING, "unknown.py": UNKNOWN,
-             "broken.py": BROKEN, "broken.pddl": BROKEN_DOMAIN}
+             "run.py": run, "constrained.py": CONSTRAINED, "missing.py": MISSING,
+             "unknown.py": UNKNOWN, "broken.py": BROKEN, "broken.pddl": BROKEN_DOMAIN}
     if package:
         files["__init__.py"] = ""
     for name, text in files.items():
