@@ -168,8 +168,9 @@ def _arg_pattern(word: str) -> ArgPattern:
 
 
 def parse_constraints(skeletons: Iterable[Sequence[str]]) -> PlanConstraints | None:
-    """Constraints from skeletons written as strings (``None`` when there are none)."""
-    parsed = tuple(parse_skeleton(entries) for entries in skeletons if entries)
+    """Constraints from skeletons written as strings (``None`` when there are none; an
+    empty skeleton is the empty plan, as in PDDLStream)."""
+    parsed = tuple(parse_skeleton(entries) for entries in skeletons)
     return PlanConstraints(parsed) if parsed else None
 
 
