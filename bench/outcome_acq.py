@@ -39,7 +39,12 @@ from typing import Any
 import numpy as np
 
 from bench.lse2 import _seeds, _wilson
-from bench.paper.stats import bootstrap_interval, paired_comparison, sign_test
+from bench.paper.stats import (
+    bootstrap_interval,
+    paired_comparison,
+    sign_flip_test,
+    sign_test,
+)
 from bench.push_al import SIZES, VARIANTS
 from ltamp_cli.backends import load_backend
 from ltamp_cli.backends.protocol import SkillSpec
@@ -204,7 +209,8 @@ def _skill_report(jobs: dict[tuple[str, int], dict[str, Any]]) -> dict[str, Any]
                             "seed_level": {"differences": [round(float(v), 3) for v in per_seed],
                                            "interval": [round(low, 4), round(high, 4)],
                                            "wins": wins, "losses": losses,
-                                           "sign_p": p_seeds}})
+                                           "sign_p": p_seeds,
+                                           "sign_flip_p": sign_flip_test(per_seed)}})
     return {"variants": rows, "comparisons": comparisons}
 
 
@@ -237,7 +243,7 @@ def report(push_log: Path, flick_log: Path, out: Path,
                   f"      seed level (bootstrap over {len(comparison['seeds'])} seeds): "
                   f"[{level['interval'][0]:+.3f}, {level['interval'][1]:+.3f}], "
                   f"{level['wins']} wins / {level['losses']} losses, sign p = "
-                  f"{level['sign_p']:.3g}")
+                  f"{level['sign_p']:.3g}, exact sign-flip p = {level['sign_flip_p']:.3g}")
     return payload
 
 
