@@ -64,6 +64,21 @@ and scoop), then the summary of the cached pairs (``--settings`` naming none run
         --cache docs/results/fidelity/robot_trials.jsonl \
         --out docs/results/fidelity/robot.json
 
+The 3D push's rows in its goal parameterisation (context ``goal_x``, control ``travel``;
+``engine.json``, ``solver_push.json`` and ``robot.json`` take their rows from the 600-input
+summary; ``--trials 200`` gives ``push_goal.json``; about 2.5 CPU-minutes):
+
+    OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 3d-push-engine \
+        3d-push-solver 3d-push-robot --trials 600 \
+        --cache docs/results/fidelity/push_goal_trials.jsonl \
+        --out docs/results/fidelity/push_goal_600.json
+
+A skill that declares an outcome (the 3D push) keeps it in each trial record; its rows add
+a goal sweep (:func:`goal_sweep`: labels recomputed from the recorded outcomes at
+:data:`SWEEP_GOALS` goals per input) and the outcome differences
+(:func:`outcome_differences`). With a rare success, agreement is high whatever the settings
+do, so every row also counts the inputs where either / both settings succeed.
+
 The 2D pour's committed run (resumable: the reference trials cost 10-15 s CPU each):
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 2d-pour-reference \

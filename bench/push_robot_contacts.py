@@ -9,10 +9,10 @@ another arm link. A trial is *pad-only* when nothing but the pad touched the blo
 table gives the label agreement of free vs robot (cached labels; a rerun's score must
 reproduce its cached one) on pad-only inputs and on the others, with 95 % Wilson
 intervals, and lists the disagreements with the toucher. Written to ``--out`` (default
-``bench/results/push_robot_contacts.json``). About 0.2 s CPU per trial:
+``bench/results/push_robot_contacts.json``). About 0.2 s CPU per trial; the committed run:
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/push_robot_contacts.py \
-        --cache docs/results/fidelity/push_goal_trials.jsonl --inputs 200 \
+        --cache docs/results/fidelity/push_goal_trials.jsonl --inputs 600 \
         --out docs/results/fidelity/push_goal_robot_contacts.json
 """
 
