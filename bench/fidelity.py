@@ -529,9 +529,13 @@ def _count_reasons(records: Iterable[dict]) -> dict[str, int]:
 
 
 def print_table(summaries: list[dict], target: float) -> None:
+    """The rows as a table: ``>=T`` compares the point estimate with ``target``; ``low>=T``
+    the Wilson interval's lower end (the rule the engine choice uses,
+    ``bench.paper.pools.engine_agrees``); ``both/eith``: inputs where both / either setting
+    succeed (with rare successes agreement is high whatever the settings do)."""
     header = (f"{'row':<20} {'n':>4} {'err':>3} {'fast ok':>7} {'ref ok':>6} {'agree':>6} "
-              f"{'wilson95':>13} {'f-only':>6} {'r-only':>6} {'cpu f':>6} {'cpu r':>6} "
-              f">={target:.2f}")
+              f"{'wilson95':>13} {'f-only':>6} {'r-only':>6} {'both/eith':>9} {'cpu f':>6} "
+              f"{'cpu r':>6} >={target:.2f} low>={target:.2f}")
     print(header)
     print("-" * len(header))
     for s in summaries:
@@ -539,11 +543,13 @@ def print_table(summaries: list[dict], target: float) -> None:
             print(f"{s['row']:<20} {0:>4} {s['errors']:>3}  (no comparable trials)")
             continue
         low, high = s["wilson95"]
+        both_either = f"{s['both_success']}/{s['either_success']}"
         print(f"{s['row']:<20} {s['trials']:>4} {s['errors']:>3} {s['fast_success']:>7.2f} "
               f"{s['reference_success']:>6.2f} {s['agreement']:>6.3f} "
               f"{low:>6.3f}-{high:<6.3f} {s['fast_only']:>6} {s['reference_only']:>6} "
-              f"{s['fast_cpu_s']:>6.2f} {s['reference_cpu_s']:>6.2f} "
-              f"{'yes' if s['agreement'] >= target else 'no'}")
+              f"{both_either:>9} {s['fast_cpu_s']:>6.2f} {s['reference_cpu_s']:>6.2f} "
+              f"{'yes' if s['agreement'] >= target else 'no':>7} "
+              f"{'yes' if low >= target else 'no':>8}")
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
