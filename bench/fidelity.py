@@ -64,6 +64,21 @@ and scoop), then the summary of the cached pairs (``--settings`` naming none run
         --cache docs/results/fidelity/robot_trials.jsonl \
         --out docs/results/fidelity/robot.json
 
+The 3D push's rows in its goal parameterisation (context ``goal_x``, control ``travel``;
+``engine.json``, ``solver_push.json`` and ``robot.json`` take their rows from the 600-input
+summary; ``--trials 200`` gives ``push_goal.json``; about 2.5 CPU-minutes):
+
+    OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 3d-push-engine \
+        3d-push-solver 3d-push-robot --trials 600 \
+        --cache docs/results/fidelity/push_goal_trials.jsonl \
+        --out docs/results/fidelity/push_goal_600.json
+
+A skill that declares an outcome (the 3D push) keeps it in each trial record; its rows add
+a goal sweep (:func:`goal_sweep`: labels recomputed from the recorded outcomes at
+:data:`SWEEP_GOALS` goals per input) and the outcome differences
+(:func:`outcome_differences`). With a rare success, agreement is high whatever the settings
+do, so every row also counts the inputs where either / both settings succeed.
+
 The 2D pour's committed run (resumable: the reference trials cost 10-15 s CPU each):
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/fidelity.py --rows 2d-pour-reference \
@@ -90,6 +105,7 @@ from ltamp_cli.backends import SkillBackend, load_backend
 from ltamp_cli.backends.box2d.backend import Kitchen2DBackend
 from ltamp_cli.backends.box2d.skills.pour import REFERENCE, PourConfig
 from ltamp_cli.backends.box2d.skills.scoop import reference_config as reference_scoop
+from ltamp_cli.backends.protocol import SkillSpec
 from ltamp_cli.backends.pybullet.skills.robot import ROBOT_SETUP_VERSIONS
 from ltamp_cli.backends.pybullet.world import physics_version as pybullet_physics_version
 from ltamp_cli.backends.sapien.world import physics_version as sapien_physics_version
@@ -104,6 +120,11 @@ REFERENCE_2D_POUR = {"n_particles": REFERENCE.n_particles, "rotate_speed": REFER
 REFERENCE_SOLVER_ITERATIONS = 50
 #: Controls drawn per context when looking for one that both pre-checks accept.
 CONTROLS_PER_DRAW = 16
+#: Goals drawn (uniform over the goal dimensions' context box) per input for the goal sweep
+#: of a skill with an outcome (:func:`goal_sweep`).
+SWEEP_GOALS = 32
+#: Bootstrap resamples of the inputs for the goal sweep's interval.
+SWEEP_BOOTSTRAP = 2000
 
 
 def _box2d(**pour_changes: float) -> SkillBackend:
@@ -299,8 +320,14 @@ def run_trial(backend: SkillBackend, setting: str, skill: str, context: np.ndarr
     except ValueError as error:  # e.g. the reference's 500 particles do not fit a small cup
         return {"score": None, "valid": False, "error": str(error),
                 "cpu_s": time.process_time() - start}
-    return {"score": float(result.score), "valid": bool(result.valid), "error": None,
-            "cpu_s": time.process_time() - start, "reason": result.info.get("reason")}
+    record = {"score": float(result.score), "valid": bool(result.valid), "error": None,
+              "cpu_s": time.process_time() - start, "reason": result.info.get("reason")}
+    if result.outcome is not None:
+        # A skill with an outcome (the 3D push's end pose): disagreements can then be
+        # traced to how far apart the two settings' outcomes are, and the label at any
+        # other goal recomputed without a rerun.
+        record["outcome"] = [float(v) for v in result.outcome]
+    return record
 
 
 @contextmanager
@@ -365,11 +392,18 @@ def run_row(row: Row, n: int, seed: int, cache_path: Path, cache: dict[str, dict
                 print(f"\r{row.name}: {index + 1}/{n}", end="", file=sys.stderr, flush=True)
         if progress:
             print(file=sys.stderr)
-    return summarise(row, pairs)
+        spec = fast.skills()[row.skill]
+    return summarise(row, pairs, spec)
 
 
-def summarise(row: Row, pairs: list[list[dict]]) -> dict:
-    """Success rates, agreement with its Wilson interval, disagreements, CPU per trial."""
+def summarise(row: Row, pairs: list[list[dict]], spec: SkillSpec | None = None) -> dict:
+    """Success rates, agreement with its Wilson interval, disagreements, CPU per trial.
+
+    ``either_success`` / ``both_success``: inputs on which at least one / both settings
+    succeed (when successes are rare, agreement is high whatever the settings do; the
+    share of the first that is the second says how often a success is reproduced). With
+    ``spec`` of a skill with an outcome whose records carry outcomes, also
+    :func:`goal_sweep` (``goal_sweep``) and :func:`outcome_differences`."""
     kept = [(f, r) for f, r in pairs if f["error"] is None and r["error"] is None]
     fast_labels = np.array([is_success(f) for f, _ in kept], dtype=bool)
     ref_labels = np.array([is_success(r) for _, r in kept], dtype=bool)
@@ -389,8 +423,84 @@ def summarise(row: Row, pairs: list[list[dict]]) -> dict:
         "cpu_ratio": (float(np.mean([r["cpu_s"] for _, r in pairs])
                             / np.mean([f["cpu_s"] for f, _ in pairs])) if pairs else None),
         "reference_reasons": _count_reasons(r for _, r in kept),
+        "either_success": int((fast_labels | ref_labels).sum()),
+        "both_success": int((fast_labels & ref_labels).sum()),
         **_agreement_where_run(kept),
+        **_outcome_summaries(spec, kept),
     }
+
+
+def _outcome_summaries(spec: SkillSpec | None, kept: list[tuple[dict, dict]]) -> dict:
+    """The goal sweep and outcome differences of a skill with an outcome (else nothing)."""
+    if spec is None or spec.outcome is None:
+        return {}
+    if not any("outcome" in f or "outcome" in r for f, r in kept):
+        return {}  # records cached before outcomes were kept
+    return {"goal_sweep": goal_sweep(spec, kept),
+            "outcome_differences": outcome_differences(spec, kept)}
+
+
+def _labels_over_goals(spec: SkillSpec, record: dict, goals: np.ndarray) -> np.ndarray:
+    """The record's label (bool ``(n_goals,)``) at each of ``goals`` ``(n_goals, d_goal)``:
+    valid and the outcome's declared score > 0 at that goal. A record without an outcome
+    (not simulated, e.g. a robot that could not reach) keeps its own label at every goal."""
+    if "outcome" not in record:
+        return np.full(len(goals), is_success(record))
+    assert spec.outcome is not None
+    contexts = np.repeat(np.asarray(record["context"], dtype=float)[None], len(goals), axis=0)
+    contexts[:, list(spec.outcome.goals)] = goals
+    controls = np.repeat(np.asarray(record["control"], dtype=float)[None], len(goals), axis=0)
+    outcomes = np.repeat(np.asarray(record["outcome"], dtype=float)[None], len(goals), axis=0)
+    return bool(record["valid"]) & (spec.outcome.scores(contexts, controls, outcomes) > 0.0)
+
+
+def goal_sweep(spec: SkillSpec, kept: list[tuple[dict, dict]], n_goals: int = SWEEP_GOALS,
+               seed: int = 0) -> dict:
+    """Label agreement of the two settings at ``n_goals`` goals per input instead of the drawn
+    one (a skill with an outcome: the physics does not see the goal, so one trial's outcome
+    labels it at every goal; the label is recomputed by the declared score).
+
+    The goals are drawn uniformly over the goal dimensions' context box (one set for all
+    inputs, ``default_rng(seed)``). The input × goal units share trials, so the interval is
+    a bootstrap over inputs (95 %, :data:`SWEEP_BOOTSTRAP` resamples), not a Wilson one.
+    Returns the agreement, its interval, each setting's success rate over the units, the
+    units where either / both succeed, and the inputs with at least one disagreeing goal."""
+    assert spec.outcome is not None
+    index = list(spec.outcome.goals)
+    lows = np.asarray(spec.context.lows, dtype=float)[index]
+    highs = np.asarray(spec.context.highs, dtype=float)[index]
+    goals = np.random.default_rng(seed).uniform(lows, highs, size=(n_goals, len(index)))
+    fast = np.array([_labels_over_goals(spec, f, goals) for f, _ in kept]).reshape(-1, n_goals)
+    ref = np.array([_labels_over_goals(spec, r, goals) for _, r in kept]).reshape(-1, n_goals)
+    per_input = (fast == ref).mean(axis=1)  # (n_inputs,)
+    resampled = np.random.default_rng(seed).integers(0, len(kept),
+                                                     size=(SWEEP_BOOTSTRAP, len(kept)))
+    means = per_input[resampled].mean(axis=1) if len(kept) else np.zeros(1)
+    return {"goals_per_input": n_goals, "units": int(fast.size),
+            "agreement": float(per_input.mean()) if len(kept) else None,
+            "bootstrap95": [float(np.quantile(means, 0.025)), float(np.quantile(means, 0.975))],
+            "fast_success": float(fast.mean()) if fast.size else None,
+            "reference_success": float(ref.mean()) if ref.size else None,
+            "either_success": int((fast | ref).sum()), "both_success": int((fast & ref).sum()),
+            "inputs_with_a_disagreement": int((per_input < 1.0).sum())}
+
+
+def outcome_differences(spec: SkillSpec, kept: list[tuple[dict, dict]]) -> dict:
+    """Per outcome value (its name and unit from the spec), the median, 90th percentile and
+    maximum of ``|fast − reference|`` over the inputs both settings simulated."""
+    assert spec.outcome is not None
+    both = [(f["outcome"], r["outcome"]) for f, r in kept if "outcome" in f and "outcome" in r]
+    if not both:
+        return {"inputs": 0}
+    diff = np.abs(np.array([f for f, _ in both], dtype=float)
+                  - np.array([r for _, r in both], dtype=float))  # (n, d_outcome)
+    space = spec.outcome.space
+    units = space.units or ("",) * space.dim  # units are optional in a ParamSpace
+    return {"inputs": len(both), **{
+        f"{name} ({unit})" if unit else name: {
+            "median": float(np.median(diff[:, i])), "p90": float(np.quantile(diff[:, i], 0.9)),
+            "max": float(diff[:, i].max())}
+        for i, (name, unit) in enumerate(zip(space.names, units, strict=True))}}
 
 
 def _agreement_where_run(kept: list[tuple[dict, dict]]) -> dict:
@@ -419,9 +529,13 @@ def _count_reasons(records: Iterable[dict]) -> dict[str, int]:
 
 
 def print_table(summaries: list[dict], target: float) -> None:
+    """The rows as a table: ``>=T`` compares the point estimate with ``target``; ``low>=T``
+    the Wilson interval's lower end (the rule the engine choice uses,
+    ``bench.paper.pools.engine_agrees``); ``both/eith``: inputs where both / either setting
+    succeed (with rare successes agreement is high whatever the settings do)."""
     header = (f"{'row':<20} {'n':>4} {'err':>3} {'fast ok':>7} {'ref ok':>6} {'agree':>6} "
-              f"{'wilson95':>13} {'f-only':>6} {'r-only':>6} {'cpu f':>6} {'cpu r':>6} "
-              f">={target:.2f}")
+              f"{'wilson95':>13} {'f-only':>6} {'r-only':>6} {'both/eith':>9} {'cpu f':>6} "
+              f"{'cpu r':>6} >={target:.2f} low>={target:.2f}")
     print(header)
     print("-" * len(header))
     for s in summaries:
@@ -429,11 +543,13 @@ def print_table(summaries: list[dict], target: float) -> None:
             print(f"{s['row']:<20} {0:>4} {s['errors']:>3}  (no comparable trials)")
             continue
         low, high = s["wilson95"]
+        both_either = f"{s['both_success']}/{s['either_success']}"
         print(f"{s['row']:<20} {s['trials']:>4} {s['errors']:>3} {s['fast_success']:>7.2f} "
               f"{s['reference_success']:>6.2f} {s['agreement']:>6.3f} "
               f"{low:>6.3f}-{high:<6.3f} {s['fast_only']:>6} {s['reference_only']:>6} "
-              f"{s['fast_cpu_s']:>6.2f} {s['reference_cpu_s']:>6.2f} "
-              f"{'yes' if s['agreement'] >= target else 'no'}")
+              f"{both_either:>9} {s['fast_cpu_s']:>6.2f} {s['reference_cpu_s']:>6.2f} "
+              f"{'yes' if s['agreement'] >= target else 'no':>7} "
+              f"{'yes' if low >= target else 'no':>8}")
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:

@@ -32,15 +32,22 @@ import argparse
 import json
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from bench.lse2 import _seeds, _wilson
-from bench.paper.stats import bootstrap_interval, paired_comparison, sign_test
+from bench.paper.stats import (
+    bootstrap_interval,
+    paired_comparison,
+    sign_flip_test,
+    sign_test,
+)
 from bench.push_al import SIZES, VARIANTS
 from ltamp_cli.backends import load_backend
+from ltamp_cli.backends.protocol import SkillSpec
 from ltamp_cli.backends.sanity import run_trial_safely
 from ltamp_cli.learning.active import LearningConfig, learn_from_pool, learn_online
 from ltamp_cli.learning.metrics import SkillEvaluator
@@ -95,64 +102,68 @@ def flick_pool() -> list[TrialRecord]:
     return pool
 
 
-def run_pool_job(variant: str, seed: int, pool: list[TrialRecord]) -> dict[str, Any]:
-    """One pool-mode flick2d variant × seed job (:data:`POOL_VARIANTS`): θ* curve."""
+#: How a job learns: (backend, spec, config, evaluator, eval_every) -> learning result.
+Learn = Callable[[Any, SkillSpec, LearningConfig, SkillEvaluator, int], Any]
+
+
+def _flick_job(skill_label: str, variant: str, settings: dict[str, Any], seed: int,
+               sizes: dict[str, int], learn: Learn) -> dict[str, Any]:
+    """One flick2d job, online or pool mode: the held-out contexts (``sizes["contexts"]``
+    from ``default_rng([2024, 21])``), θ* scored by the skill's true score among
+    ``sizes["candidates"]``, ``learn`` run with ``settings`` at ``sizes``' budget and init,
+    and the job's record (θ* curve, CPU seconds, training diagnostics)."""
     backend = load_backend("synthetic")
     spec = backend.skills()[SKILL]
     rng = np.random.default_rng([2024, 21])
-    contexts = spec.context.sample_uniform(rng, SIZES["contexts"])
+    contexts = spec.context.sample_uniform(rng, sizes["contexts"])
 
     def score(c: np.ndarray, u: np.ndarray) -> np.ndarray:
         return backend.true_score(SKILL, c, u)
 
     evaluator = SkillEvaluator(spec, None, score, contexts, None, seed=seed,
-                               n_candidates=SIZES["candidates"])
-    config = LearningConfig(budget=SIZES["budget"], init=SIZES["init"], seed=seed,
-                            **POOL_VARIANTS[variant])
+                               n_candidates=sizes["candidates"])
+    config = LearningConfig(budget=sizes["budget"], init=sizes["init"], seed=seed, **settings)
     cpu0 = time.process_time()
-    result = learn_from_pool(spec, pool, config, evaluator=evaluator,
-                             eval_every=SIZES["eval_every"])
+    result = learn(backend, spec, config, evaluator, sizes["eval_every"])
     cpu = time.process_time() - cpu0
-    finals = np.array([r.outcome for r in result.records], dtype=float)
-    landings = np.vstack([np.zeros((1, 2)), finals])
-    covered = (np.linalg.norm(contexts[:, None, 1:3] - landings[None], axis=2) < 1.0).any(1)
-    return {"skill": f"{SKILL}-pool", "variant": variant, "config": POOL_VARIANTS[variant],
-            "seed": seed, "sizes": {**SIZES, "pool": POOL_SIZE}, "cpu_s": round(cpu, 1),
-            "training_successes": int(sum(r.score > 0 for r in result.records)),
-            "moved": int((np.linalg.norm(finals, axis=1) > 0.05).sum()),
-            "replay_bound": [bool(v) for v in covered],
-            "curve": [{"n_trials": p.n_trials, "success_rate": p.success_rate,
-                       "successes": list(p.successes or ())} for p in result.curve]}
-
-
-def run_job(variant: str, seed: int) -> dict[str, Any]:
-    """One flick2d variant × seed job: θ* curve and training diagnostics."""
-    backend = load_backend("synthetic")
-    spec = backend.skills()[SKILL]
-    rng = np.random.default_rng([2024, 21])
-    contexts = spec.context.sample_uniform(rng, SIZES["contexts"])
-
-    def score(c: np.ndarray, u: np.ndarray) -> np.ndarray:
-        return backend.true_score(SKILL, c, u)
-
-    evaluator = SkillEvaluator(spec, None, score, contexts, None, seed=seed,
-                               n_candidates=SIZES["candidates"])
-    config = LearningConfig(budget=SIZES["budget"], init=SIZES["init"], seed=seed,
-                            **VARIANTS[variant])
-    cpu0 = time.process_time()
-    result = learn_online(backend, SKILL, config, evaluator=evaluator,
-                          eval_every=SIZES["eval_every"])
-    cpu = time.process_time() - cpu0
-    finals = np.array([r.outcome for r in result.records], dtype=float)
+    finals = np.array([r.outcome for r in result.records], dtype=float)  # (budget, 2) landings
     moved = np.linalg.norm(finals, axis=1) > 0.05
+    # A held-out goal is within reach of replay when some landing (or the origin: no
+    # flick) is within the skill's unit tolerance of it.
     landings = np.vstack([np.zeros((1, 2)), finals])
     covered = (np.linalg.norm(contexts[:, None, 1:3] - landings[None], axis=2) < 1.0).any(1)
-    return {"skill": SKILL, "variant": variant, "config": VARIANTS[variant], "seed": seed,
-            "sizes": SIZES, "cpu_s": round(cpu, 1),
+    return {"skill": skill_label, "variant": variant, "config": settings, "seed": seed,
+            "sizes": sizes, "cpu_s": round(cpu, 1),
             "training_successes": int(sum(r.score > 0 for r in result.records)),
             "moved": int(moved.sum()), "replay_bound": [bool(v) for v in covered],
             "curve": [{"n_trials": p.n_trials, "success_rate": p.success_rate,
                        "successes": list(p.successes or ())} for p in result.curve]}
+
+
+def run_pool_job(variant: str, seed: int, pool: list[TrialRecord],
+                 sizes: dict[str, int] | None = None) -> dict[str, Any]:
+    """One pool-mode flick2d variant × seed job (:data:`POOL_VARIANTS`): θ* curve.
+    ``sizes``: default :data:`SIZES` (the al2d standard protocol's)."""
+
+    def learn(backend: Any, spec: SkillSpec, config: LearningConfig,
+              evaluator: SkillEvaluator, eval_every: int) -> Any:
+        return learn_from_pool(spec, pool, config, evaluator=evaluator, eval_every=eval_every)
+
+    sizes = dict(SIZES) if sizes is None else sizes
+    return _flick_job(f"{SKILL}-pool", variant, POOL_VARIANTS[variant], seed,
+                      {**sizes, "pool": len(pool)}, learn)
+
+
+def run_job(variant: str, seed: int, sizes: dict[str, int] | None = None) -> dict[str, Any]:
+    """One flick2d variant × seed job: θ* curve and training diagnostics. ``sizes``:
+    default :data:`SIZES` (the al2d standard protocol's)."""
+
+    def learn(backend: Any, spec: SkillSpec, config: LearningConfig,
+              evaluator: SkillEvaluator, eval_every: int) -> Any:
+        return learn_online(backend, SKILL, config, evaluator=evaluator, eval_every=eval_every)
+
+    return _flick_job(SKILL, variant, VARIANTS[variant], seed,
+                      dict(SIZES) if sizes is None else sizes, learn)
 
 
 def _read(path: Path) -> dict[tuple[str, int], dict[str, Any]]:
@@ -198,7 +209,8 @@ def _skill_report(jobs: dict[tuple[str, int], dict[str, Any]]) -> dict[str, Any]
                             "seed_level": {"differences": [round(float(v), 3) for v in per_seed],
                                            "interval": [round(low, 4), round(high, 4)],
                                            "wins": wins, "losses": losses,
-                                           "sign_p": p_seeds}})
+                                           "sign_p": p_seeds,
+                                           "sign_flip_p": sign_flip_test(per_seed)}})
     return {"variants": rows, "comparisons": comparisons}
 
 
@@ -231,7 +243,7 @@ def report(push_log: Path, flick_log: Path, out: Path,
                   f"      seed level (bootstrap over {len(comparison['seeds'])} seeds): "
                   f"[{level['interval'][0]:+.3f}, {level['interval'][1]:+.3f}], "
                   f"{level['wins']} wins / {level['losses']} losses, sign p = "
-                  f"{level['sign_p']:.3g}")
+                  f"{level['sign_p']:.3g}, exact sign-flip p = {level['sign_flip_p']:.3g}")
     return payload
 
 

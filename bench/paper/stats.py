@@ -102,6 +102,34 @@ def sign_test(differences: np.ndarray) -> tuple[float, int, int]:
     return float(binomtest(positives, positives + negatives, 0.5).pvalue), positives, negatives
 
 
+#: Largest unit count for which :func:`sign_flip_test` enumerates every sign pattern.
+SIGN_FLIP_EXACT_MAX = 16
+
+
+def sign_flip_test(differences: np.ndarray) -> float:
+    """Exact two-sided paired permutation (sign-flip) test of ``differences (n,)``: the share
+    of the ``2^n`` sign patterns whose mean is at least as far from 0 as the observed one.
+
+    Unlike :func:`sign_test` it uses the differences' sizes (under "no difference" each
+    unit's difference is as likely to have either sign), so a few small losses against
+    large wins do not hide an effect; meant for a handful of units (e.g. per-seed mean
+    differences). ``n`` above :data:`SIGN_FLIP_EXACT_MAX` raises ``ValueError`` (use the
+    unit-level :func:`paired_comparison` there). All zero: ``p = 1``.
+    """
+    values = np.asarray(differences, dtype=float).reshape(-1)
+    if values.size > SIGN_FLIP_EXACT_MAX:
+        raise ValueError(f"sign_flip_test: {values.size} units, exact up to "
+                         f"{SIGN_FLIP_EXACT_MAX}")
+    if values.size == 0 or not np.any(values):
+        return 1.0
+    # Every sign pattern as a row of ±1 ((2^n, n)), from the bits of 0 .. 2^n − 1.
+    bits = (np.arange(2 ** values.size)[:, None] >> np.arange(values.size)) & 1
+    means = np.abs(((1 - 2 * bits) * values).mean(axis=1))
+    observed = abs(values.mean())
+    # A relative tolerance so the observed pattern itself always counts despite rounding.
+    return float(np.mean(means >= observed - 1e-12 * max(1.0, observed)))
+
+
 def paired_comparison(a_name: str, a: Sequence[float] | np.ndarray, b_name: str,
                       b: Sequence[float] | np.ndarray, *, confidence: float = 0.95,
                       margin: float = 0.0, n_boot: int = 10_000, seed: int = 0) -> Comparison:

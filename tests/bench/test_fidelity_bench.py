@@ -7,6 +7,7 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from bench import fidelity
@@ -65,6 +66,10 @@ def test_a_row_runs_real_trials_and_a_rerun_reuses_them(
     agreement = sum(p["pybullet"] == p["sapien"] for p in by_input.values()) / 4
     first = json.loads(out.read_text())["rows"][0]
     assert first["trials"] == 4 and first["agreement"] == pytest.approx(agreement)
+    # The push declares an outcome: each record keeps it, and the row sweeps the goal.
+    assert all(len(r["outcome"]) == 3 for r in records)
+    assert first["goal_sweep"]["units"] == 4 * fidelity.SWEEP_GOALS
+    assert first["outcome_differences"]["inputs"] == 4
     assert "3d-push-engine" in capsys.readouterr().out
 
     with cache.open("a") as torn:
@@ -126,3 +131,66 @@ def test_the_placed_spoon_row_is_its_own_setting_with_its_own_keys() -> None:
     key = fidelity.trial_key("sapien-placed-spoon", "scoop", [0.2] * 4, [0.0] * 5, 7)
     assert key.startswith("sapien-placed-spoon@v3|scoop|7|")
     assert key != fidelity.trial_key("sapien", "scoop", [0.2] * 4, [0.0] * 5, 7)
+
+
+def _push_record(final_x: float, rotation: float = 0.0, goal_x: float = 0.15,
+                 outcome: bool = True) -> dict:
+    """A push trial record: context (side, mass, friction, goal), control, its outcome."""
+    from ltamp_cli.backends.skills3d.push import PUSH_SPEC
+
+    context, control = [0.06, 0.3, 0.5, goal_x], [0.5, 0.1, 0.0, 0.1]
+    score = float(PUSH_SPEC.outcome.scores(np.array([context]), np.array([control]),
+                                           np.array([[final_x, 0.0, rotation]]))[0])
+    record = {"score": score, "valid": True, "error": None, "cpu_s": 0.03,
+              "context": context, "control": control}
+    if outcome:
+        record["outcome"] = [final_x, 0.0, rotation]
+    return record
+
+
+def test_goal_sweep_relabels_each_outcome_at_every_goal() -> None:
+    from ltamp_cli.backends.skills3d.push import PUSH_SPEC, PUSH_TOLERANCE_M
+
+    n = 64
+    goals = np.random.default_rng(0).uniform(0.05, 0.25, size=n)
+    same = [(_push_record(0.12), _push_record(0.12))]
+    sweep = fidelity.goal_sweep(PUSH_SPEC, same, n_goals=n)
+    assert sweep["agreement"] == 1.0 and sweep["inputs_with_a_disagreement"] == 0
+    near = int((np.abs(goals - 0.12) < PUSH_TOLERANCE_M).sum())
+    assert 0 < near < n and sweep["both_success"] == near
+
+    # 6 cm apart: each end is a success only at the goals within 2.5 cm of it.
+    apart = [(_push_record(0.10), _push_record(0.16))]
+    sweep = fidelity.goal_sweep(PUSH_SPEC, apart, n_goals=n)
+    fast = np.abs(goals - 0.10) < PUSH_TOLERANCE_M
+    ref = np.abs(goals - 0.16) < PUSH_TOLERANCE_M
+    assert sweep["both_success"] == 0 and sweep["either_success"] == int((fast | ref).sum())
+    assert sweep["agreement"] == pytest.approx(float((fast == ref).mean()))
+    assert sweep["fast_success"] == pytest.approx(float(fast.mean()))
+
+    # A turned block fails at every goal; a record without an outcome keeps its own label.
+    turned = [(_push_record(0.12), _push_record(0.12, rotation=0.2)),
+              (_push_record(0.12), {**_push_record(0.12, outcome=False), "score": -1.0})]
+    sweep = fidelity.goal_sweep(PUSH_SPEC, turned, n_goals=n)
+    assert sweep["reference_success"] == 0.0 and sweep["both_success"] == 0
+    assert sweep["inputs_with_a_disagreement"] == 2
+
+
+def test_outcome_differences_per_declared_value_and_only_for_outcome_skills() -> None:
+    from ltamp_cli.backends.skills3d.push import PUSH_SPEC
+
+    kept = [(_push_record(0.10), _push_record(0.13, rotation=0.05)),
+            (_push_record(0.20), _push_record(0.20)),
+            (_push_record(0.20), _push_record(0.20, outcome=False))]  # not compared
+    diff = fidelity.outcome_differences(PUSH_SPEC, kept)
+    assert diff["inputs"] == 2
+    assert diff["final_x (m)"]["max"] == pytest.approx(0.03)
+    assert diff["final_x (m)"]["median"] == pytest.approx(0.015)
+    assert diff["rotation (rad)"]["max"] == pytest.approx(0.05)
+    row = fidelity.Row("r", "push", "a", "b")
+    summary = fidelity.summarise(row, [list(pair) for pair in kept], PUSH_SPEC)
+    # At the drawn goal (0.15 m) only the block that ended at 0.13 m succeeds.
+    assert summary["either_success"] == 1 and summary["both_success"] == 0
+    assert summary["goal_sweep"]["units"] == 3 * fidelity.SWEEP_GOALS
+    plain = [[_record(0.5), _record(0.2)]]  # cached before outcomes, or a skill without one
+    assert "goal_sweep" not in fidelity.summarise(row, plain, PUSH_SPEC)
