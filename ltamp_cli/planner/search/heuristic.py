@@ -159,6 +159,9 @@ class FFHeuristic:
         self.multi_ach_original = self.order[self.multi_ach]
         self.multi_ach_counts = np.array([len(x) for x in lists], dtype=np.int64)
         self.multi_ach_segment = np.repeat(np.arange(len(lists)), self.multi_ach_counts)
+        # Supporters of the facts with one achiever, the same in every state.
+        self._supporter_base = np.full(self.num_facts, -1, dtype=np.int64)
+        self._supporter_base[self.single_facts] = self.single_ach_original
         self._cost_of = np.array([INFINITY, 0.0])  # by whether a fact holds
 
     @staticmethod
@@ -278,15 +281,16 @@ class FFHeuristic:
             fact_cost[facts] = current
         if fact_cost[task.goal] == INFINITY:
             return HeuristicResult(INFINITY, [])
-        return self._relaxed_plan(fact_cost, candidate_costs, best)
+        # Facts of cost 0 hold already (or are reached by cost-0 axioms from what holds).
+        return self._relaxed_plan(self._best_supporters(candidate_costs, best).tolist(),
+                                  (fact_cost == 0.0).tolist())
 
     def _best_supporters(self, candidate_costs: np.ndarray, best: np.ndarray) -> np.ndarray:
         """Per fact, its first achiever of minimal cost (-1: none), as ``(num_facts,)``
         original relaxed-operator numbers. ``best``: the last round's cheapest achiever
         cost per achieved fact (in :attr:`fact_order`); ``candidate_costs``: the costs of
         the achievers of the facts with several."""
-        supporters = np.full(self.num_facts, -1, dtype=np.int64)
-        supporters[self.single_facts] = self.single_ach_original
+        supporters = self._supporter_base.copy()
         if len(self.multi_ach_starts):
             hits = np.flatnonzero(candidate_costs == np.repeat(best[self.num_single_ach:],
                                                                self.multi_ach_counts))
@@ -297,11 +301,9 @@ class FFHeuristic:
                 hits[first]]
         return supporters
 
-    def _relaxed_plan(self, fact_cost: np.ndarray, candidate_costs: np.ndarray,
-                      best: np.ndarray) -> HeuristicResult:
-        # Facts of cost 0 hold already (or are reached by cost-0 axioms from what holds).
-        supporters = self._best_supporters(candidate_costs, best).tolist()
-        zero = (fact_cost == 0.0).tolist()
+    def _relaxed_plan(self, supporters: list[int], zero: list[bool]) -> HeuristicResult:
+        """The relaxed plan of the goal from each fact's best supporter (``supporters``,
+        relaxed-operator numbers by fact) and which facts cost nothing (``zero``)."""
         chosen: set[int] = set()
         marked: set[int] = set()
         stack = [self.task.goal]
