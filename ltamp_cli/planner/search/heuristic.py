@@ -159,6 +159,8 @@ class FFHeuristic:
         self.multi_ach_original = self.order[self.multi_ach]
         self.multi_ach_counts = np.array([len(x) for x in lists], dtype=np.int64)
         self.multi_ach_segment = np.repeat(np.arange(len(lists)), self.multi_ach_counts)
+        # Position in ``best`` (fact_order) of the fact each multi_ach entry achieves.
+        self._multi_best = self.num_single_ach + self.multi_ach_segment
         # Supporters of the facts with one achiever, the same in every state.
         self._supporter_base = np.full(self.num_facts, -1, dtype=np.int64)
         self._supporter_base[self.single_facts] = self.single_ach_original
@@ -275,7 +277,7 @@ class FFHeuristic:
             if has_multi_ach:
                 candidate_costs = op_cost[multi_ach]
                 np.minimum.reduceat(candidate_costs, multi_starts, out=best[split:])
-            if not (best < current).any():
+            if not np.count_nonzero(best < current):  # a C call, unlike ndarray.any()
                 break
             current = np.minimum(best, base)
             fact_cost[facts] = current
@@ -292,8 +294,7 @@ class FFHeuristic:
         the achievers of the facts with several."""
         supporters = self._supporter_base.copy()
         if len(self.multi_ach_starts):
-            hits = np.flatnonzero(candidate_costs == np.repeat(best[self.num_single_ach:],
-                                                               self.multi_ach_counts))
+            hits = np.flatnonzero(candidate_costs == best[self._multi_best])
             segments = self.multi_ach_segment[hits]
             first = np.ones(len(hits), dtype=bool)
             first[1:] = segments[1:] != segments[:-1]
@@ -318,11 +319,11 @@ class FFHeuristic:
             chosen.add(supporter)
             stack.extend(self.preconditions[supporter])
         costs = self._cost_list
-        value = float(sum(costs[i] for i in chosen))
-        preferred = sorted({
-            self.origin[i] for i in chosen
-            if self.origin[i] >= 0 and all(zero[f] for f in self.preconditions[i])
-        })
+        value = float(sum(map(costs.__getitem__, chosen)))  # the set's order, as before
+        holds = zero.__getitem__
+        origin, preconditions = self.origin, self.preconditions
+        preferred = sorted({origin[i] for i in chosen
+                            if origin[i] >= 0 and all(map(holds, preconditions[i]))})
         return HeuristicResult(value, preferred)
 
 
