@@ -187,9 +187,7 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
     the highest real level), also ``least_cut``: the least complexity by PDDLStream's rule
     (:func:`instance_level`) of an instance left out, so that an "infeasible" answer never
     rests on the sum."""
-    index = FactIndex()
-    for fact in sorted(state.facts.members):  # a hash-independent order
-        index.add(fact)
+    index = FactIndex.of_sorted(sorted(state.facts.members))  # a hash-independent order
     evaluation = OptimisticEvaluation(index, dict(state.function_values),
                                       dict(state.object_types))
     done: set[InstanceKey] = set()

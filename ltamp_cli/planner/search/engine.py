@@ -205,9 +205,9 @@ def enforced_hill_climbing(task: Task, deadline: float, unit_costs: bool = False
                 raise SearchTimeout
             parent, parent_vector, helpful, ops = queue.popleft()
             expanded += 1
-            # Relaxed plans ignore negative preconditions: keep only really applicable ones.
-            applicable = set(task.applicable(parent_vector).tolist())
-            for op in (op for op in helpful if op in applicable):
+            # Relaxed plans ignore negative preconditions: keep only really applicable ones
+            # (checked per helpful operator: a few, where the task has hundreds).
+            for op in (op for op in helpful if is_applicable(task, parent_vector, op)):
                 child = task.successor(parent, parent_vector, op)
                 if child in seen:
                     continue

@@ -89,6 +89,18 @@ class FactIndex:
         self._indexes: dict[tuple[str, tuple[int, ...]], dict[tuple[str, ...], list]] = {}
         self._indexes_by_predicate: dict[str, list[tuple[int, ...]]] = defaultdict(list)
 
+    @classmethod
+    def of_sorted(cls, facts: Sequence[Fact]) -> FactIndex:
+        """An index of ``facts`` (sorted, no duplicates), as adding them one by one would
+        make it (no argument index exists yet, so none is updated): a bulk load, since
+        every grounding and optimistic evaluation starts with thousands of facts."""
+        index = cls()
+        index.members.update(facts)
+        by_predicate = index.by_predicate
+        for fact in facts:
+            by_predicate[fact[0]].append(fact[1:])
+        return index
+
     def add(self, fact: Fact) -> bool:
         if fact in self.members:
             return False
@@ -385,12 +397,9 @@ def ground_task(
     ``time.perf_counter()`` passes ``deadline``)."""
     derived = {axiom.predicate for axiom in axioms}
     fluent = static_predicates(actions, derived)  # predicates that are *not* static
-    index = FactIndex()
     init_facts = set(init)
     # Sorted: string hashing varies between processes, and order decides tie-breaking later.
-    ordered_init = sorted(init_facts)
-    for fact in ordered_init:
-        index.add(fact)
+    index = FactIndex.of_sorted(sorted(init_facts))
     rule_set = RuleSet(actions, axioms)
 
     seen: set[tuple[int, tuple[str, ...]]] = set()

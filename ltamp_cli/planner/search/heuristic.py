@@ -7,6 +7,7 @@ Relaxed operators are the task's operators (one per conditional effect too) and 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,7 +38,8 @@ class FFHeuristic:
     m)`` — compiled to ``not aux`` — would look satisfied to the relaxation.
     """
 
-    def __init__(self, task: Task, cost_bias: float = 1.0, unit_costs: bool = False) -> None:
+    def __init__(self, task: Task, cost_bias: float = 1.0, unit_costs: bool = False,
+                 relevant_only: bool = True) -> None:
         self.task = task
         preconditions: list[list[int]] = []
         self.effects: list[list[int]] = []
@@ -89,9 +91,13 @@ class FFHeuristic:
         self.pre_flat, self.pre_starts = _flatten(preconditions, TRUE_FACT)
         self.costs = np.asarray(costs, dtype=float)
         self._cost_list = self.costs.tolist()  # per-element reads are faster from a list
+        # Cost propagation runs over the relaxed operators that can support the goal (see
+        # goal_relevant); the lists above keep every relaxed operator, numbered as built.
+        self.relevant = (goal_relevant(task.goal, preconditions, self.effects)
+                         if relevant_only else list(range(len(preconditions))))
         achievers: dict[int, list[int]] = {}
-        for op_index, adds in enumerate(self.effects):
-            for fact in adds:
+        for op_index in self.relevant:
+            for fact in self.effects[op_index]:
                 achievers.setdefault(fact, []).append(op_index)
         self.achiever_facts = np.array(sorted(achievers), dtype=np.int64)
         self.achievers = achievers
@@ -102,7 +108,7 @@ class FFHeuristic:
         counts = np.diff(np.append(self.ach_starts, len(self.ach_flat)))
         self.ach_segment = np.repeat(np.arange(len(lists)), counts)
         self.ach_counts = counts
-        self.has_ops = len(preconditions) > 0
+        self.has_ops = len(self.relevant) > 0
         self._compile_layout()
         self._memo: dict[bytes, HeuristicResult] = {}
 
@@ -115,17 +121,18 @@ class FFHeuristic:
         first (their cost is one gather, ``single_pre``), then the others, whose
         preconditions are a ``(width, n)`` matrix padded with the always-true fact (cost 0)
         and summed along axis 0 (row by row, so in the same order as a ``reduceat`` over
-        the lists: the same floats). Achieved facts are reordered likewise: facts with one
+        the lists: the same floats). Only the goal-relevant operators (:attr:`relevant`)
+        get an internal number. Achieved facts are reordered likewise: facts with one
         achiever first (a gather, ``single_ach``), then the others (a ``minimum.reduceat``
         over their achievers, each list in its original order, so that the first achiever
         of minimal cost is the same operator). ``order`` maps internal operator numbers to
         the original ones; ``fact_order`` lists the achieved facts in internal order."""
         lengths = [len(p) for p in self.preconditions]
-        order = [i for i, n in enumerate(lengths) if n <= 1]
+        order = [i for i in self.relevant if lengths[i] <= 1]
         self.num_single_pre = len(order)
-        order += [i for i, n in enumerate(lengths) if n > 1]
+        order += [i for i in self.relevant if lengths[i] > 1]
         self.order = np.asarray(order, dtype=np.int64)
-        internal = np.empty(len(order), dtype=np.int64)
+        internal = np.full(len(lengths), -1, dtype=np.int64)
         internal[self.order] = np.arange(len(order), dtype=np.int64)
         self.single_pre = np.array(
             [self.preconditions[i][0] if self.preconditions[i] else TRUE_FACT
@@ -152,6 +159,11 @@ class FFHeuristic:
         self.multi_ach_original = self.order[self.multi_ach]
         self.multi_ach_counts = np.array([len(x) for x in lists], dtype=np.int64)
         self.multi_ach_segment = np.repeat(np.arange(len(lists)), self.multi_ach_counts)
+        # Position in ``best`` (fact_order) of the fact each multi_ach entry achieves.
+        self._multi_best = self.num_single_ach + self.multi_ach_segment
+        # Supporters of the facts with one achiever, the same in every state.
+        self._supporter_base = np.full(self.num_facts, -1, dtype=np.int64)
+        self._supporter_base[self.single_facts] = self.single_ach_original
         self._cost_of = np.array([INFINITY, 0.0])  # by whether a fact holds
 
     @staticmethod
@@ -265,24 +277,24 @@ class FFHeuristic:
             if has_multi_ach:
                 candidate_costs = op_cost[multi_ach]
                 np.minimum.reduceat(candidate_costs, multi_starts, out=best[split:])
-            if not (best < current).any():
+            if not np.count_nonzero(best < current):  # a C call, unlike ndarray.any()
                 break
             current = np.minimum(best, base)
             fact_cost[facts] = current
         if fact_cost[task.goal] == INFINITY:
             return HeuristicResult(INFINITY, [])
-        return self._relaxed_plan(fact_cost, candidate_costs, best)
+        # Facts of cost 0 hold already (or are reached by cost-0 axioms from what holds).
+        return self._relaxed_plan(self._best_supporters(candidate_costs, best).tolist(),
+                                  (fact_cost == 0.0).tolist())
 
     def _best_supporters(self, candidate_costs: np.ndarray, best: np.ndarray) -> np.ndarray:
         """Per fact, its first achiever of minimal cost (-1: none), as ``(num_facts,)``
         original relaxed-operator numbers. ``best``: the last round's cheapest achiever
         cost per achieved fact (in :attr:`fact_order`); ``candidate_costs``: the costs of
         the achievers of the facts with several."""
-        supporters = np.full(self.num_facts, -1, dtype=np.int64)
-        supporters[self.single_facts] = self.single_ach_original
+        supporters = self._supporter_base.copy()
         if len(self.multi_ach_starts):
-            hits = np.flatnonzero(candidate_costs == np.repeat(best[self.num_single_ach:],
-                                                               self.multi_ach_counts))
+            hits = np.flatnonzero(candidate_costs == best[self._multi_best])
             segments = self.multi_ach_segment[hits]
             first = np.ones(len(hits), dtype=bool)
             first[1:] = segments[1:] != segments[:-1]
@@ -290,11 +302,9 @@ class FFHeuristic:
                 hits[first]]
         return supporters
 
-    def _relaxed_plan(self, fact_cost: np.ndarray, candidate_costs: np.ndarray,
-                      best: np.ndarray) -> HeuristicResult:
-        # Facts of cost 0 hold already (or are reached by cost-0 axioms from what holds).
-        supporters = self._best_supporters(candidate_costs, best).tolist()
-        zero = (fact_cost == 0.0).tolist()
+    def _relaxed_plan(self, supporters: list[int], zero: list[bool]) -> HeuristicResult:
+        """The relaxed plan of the goal from each fact's best supporter (``supporters``,
+        relaxed-operator numbers by fact) and which facts cost nothing (``zero``)."""
         chosen: set[int] = set()
         marked: set[int] = set()
         stack = [self.task.goal]
@@ -309,9 +319,42 @@ class FFHeuristic:
             chosen.add(supporter)
             stack.extend(self.preconditions[supporter])
         costs = self._cost_list
-        value = float(sum(costs[i] for i in chosen))
-        preferred = sorted({
-            self.origin[i] for i in chosen
-            if self.origin[i] >= 0 and all(zero[f] for f in self.preconditions[i])
-        })
+        value = float(sum(map(costs.__getitem__, chosen)))  # the set's order, as before
+        holds = zero.__getitem__
+        origin, preconditions = self.origin, self.preconditions
+        preferred = sorted({origin[i] for i in chosen
+                            if origin[i] >= 0 and all(map(holds, preconditions[i]))})
         return HeuristicResult(value, preferred)
+
+
+def goal_relevant(goal: int, preconditions: Sequence[Sequence[int]],
+                  effects: Sequence[Sequence[int]]) -> list[int]:
+    """Relaxed operators (ascending numbers) that can support ``goal``: those adding the
+    goal or a precondition of one that can, found backwards from the goal (relevance
+    analysis of the relaxed task).
+
+    h_FF is the same over these alone: a relevant fact's achievers are all relevant (they
+    add it) and so are their preconditions, so the relevant facts get the same h_add costs
+    and the same first cheapest achievers (the achiever lists keep their order), and the
+    relaxed plan, which only visits relevant facts, is the same, with the same operator
+    numbers (its cost is summed in the same order). Only irrelevant facts' costs, which
+    nothing reads, are no longer computed. kitchen_fluent: 5-10 % of the relaxed operators
+    and ~30 % of the facts are irrelevant (facts of placeholders that no goal-relevant
+    action takes, deleters of negated facts no relevant condition reads)."""
+    achievers: dict[int, list[int]] = {}
+    for index, adds in enumerate(effects):
+        for fact in adds:
+            achievers.setdefault(fact, []).append(index)
+    relevant = bytearray(len(preconditions))
+    seen = {goal}
+    stack = [goal]
+    while stack:
+        for index in achievers.get(stack.pop(), ()):
+            if relevant[index]:
+                continue
+            relevant[index] = 1
+            for fact in preconditions[index]:
+                if fact not in seen:
+                    seen.add(fact)
+                    stack.append(fact)
+    return [index for index, flag in enumerate(relevant) if flag]

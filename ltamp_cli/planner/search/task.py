@@ -112,12 +112,13 @@ class Task:
 
     def _operator(self, action: GroundAction) -> Operator:
         adds, deletes, conditional = [], [], []
+        fact_id = self.fact_id
         for effect in action.effects:
-            fact = self.fact_id(effect.fact)
+            fact = fact_id(effect.fact)
             if effect.condition_pos or effect.condition_neg:
                 conditional.append(ConditionalEffect(
-                    tuple(self.fact_id(f) for f in effect.condition_pos),
-                    tuple(self.fact_id(f) for f in effect.condition_neg),
+                    tuple(map(fact_id, effect.condition_pos)),
+                    tuple(map(fact_id, effect.condition_neg)),
                     fact, effect.positive))
             elif effect.positive:
                 adds.append(fact)
@@ -125,8 +126,8 @@ class Task:
                 deletes.append(fact)
         return Operator(
             action,
-            tuple(self.fact_id(f) for f in action.pre_pos),
-            tuple(self.fact_id(f) for f in action.pre_neg),
+            tuple(map(fact_id, action.pre_pos)),  # map: no generator frame per fact
+            tuple(map(fact_id, action.pre_neg)),
             tuple(dict.fromkeys(adds)),
             tuple(dict.fromkeys(d for d in deletes if d not in adds)),
             tuple(conditional),
