@@ -191,3 +191,11 @@ def test_restored_and_left_absent_lists_are_disjoint_and_unique() -> None:
     names = [legacy.name for legacy in LEGACY]
     assert len(names) == len(set(names))
     assert not set(names) & set(NOT_RESTORED)
+
+
+def test_porting_doc_lists_every_name() -> None:
+    """docs/porting-from-pddlstream.md names every restored and every left-absent name."""
+    page = (REPO / "docs" / "porting-from-pddlstream.md").read_text(encoding="utf-8")
+    section = page[page.index("### NumPy 1 names"):page.index("## Running PDDLStream's own")]
+    for name in [legacy.name for legacy in LEGACY] + list(NOT_RESTORED):
+        assert f"`{name}`" in section or f"`{name}(" in section, name
