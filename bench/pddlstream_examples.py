@@ -16,11 +16,13 @@ solves it with ``adaptive`` whatever algorithm the example asks for (with its pl
 constraints), recording load and
 solve times and the outcome of each call. Examples that need modules not installed here
 (pybullet, tkinter displays, Gurobi) or PDDLStream names ltamp does not provide are
-reported as not loaded, with the runner's one-line reason.
+reported as not loaded, with the runner's one-line reason. The runner adds back the
+NumPy-1 names NumPy 2 removed (``np.mat``, ``np.product``, ...; see
+:mod:`ltamp_cli.pddlstream.numpy_compat`) unless ``--no-numpy-compat``.
 
     .venv/bin/python bench/pddlstream_examples.py PATH/TO/pddlstream [--max-time 60]
         [--only continuous_tamp,advanced/wild] [--example-args '-n 4 -p blocked']
-        [--out bench/results/pddlstream_examples.json]
+        [--out bench/results/pddlstream_examples.json] [--no-numpy-compat]
 
 Without a checkout at PATH it prints why and exits 0 (never part of the tests or CI).
 """
@@ -131,14 +133,15 @@ class Recorder:
         return served
 
 
-def child(module: str, example_args: Sequence[str], max_time: float, record: Path) -> int:
+def child(module: str, example_args: Sequence[str], max_time: float, record: Path,
+          numpy_compat: bool = True) -> int:
     """In the child process (cwd = the checkout): run ``module`` through the runner with the
     recording ``solve``; the runner's one-line errors and the script's output go to this
     process's stderr/stdout (the parent keeps their last lines)."""
     recorder = Recorder(max_time, record)
     recorder.save()
     code = run_target(module, example_args, module=True, force=True,
-                      overrides=recorder.overrides())
+                      numpy_compat=numpy_compat, overrides=recorder.overrides())
     data = json.loads(record.read_text())
     data["exit_code"] = code
     record.write_text(json.dumps(data, default=str))
@@ -175,7 +178,7 @@ def _error_line(stderr: str) -> str:
 
 
 def run_example(checkout: Path, path: Path, max_time: float,
-                example_args: Sequence[str] = ()) -> dict[str, Any]:
+                example_args: Sequence[str] = (), numpy_compat: bool = True) -> dict[str, Any]:
     """Run one example in a child process; summarise its first ``solve``."""
     name = module_name(checkout, path)
     row: dict[str, Any] = {"example": str(path.relative_to(checkout / "examples")),
@@ -190,6 +193,8 @@ def run_example(checkout: Path, path: Path, max_time: float,
         command = [sys.executable, str(Path(__file__).resolve()), "--child", name,
                    "--record", str(record), "--max-time", str(max_time),
                    f"--example-args={' '.join(example_args)}"]  # '=': args may start with '-'
+        if not numpy_compat:
+            command.append("--no-numpy-compat")
         before = os.times()
         try:
             done = subprocess.run(command, cwd=checkout, env=env, input=STDIN_LINES,
@@ -227,11 +232,14 @@ def main() -> int:
     parser.add_argument("--example-args", default="",
                         help="command line given to every example, e.g. '-n 4 -p blocked'")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
+    parser.add_argument("--no-numpy-compat", action="store_true",
+                        help="run without the runner's NumPy-1 names (numpy as installed)")
     parser.add_argument("--child", metavar="MODULE", help=argparse.SUPPRESS)
     parser.add_argument("--record", type=Path, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
-        return child(args.child, args.example_args.split(), args.max_time, args.record)
+        return child(args.child, args.example_args.split(), args.max_time, args.record,
+                     not args.no_numpy_compat)
     if args.checkout is None:
         parser.error("the checkout is required")
     checkout = args.checkout.resolve()
@@ -244,7 +252,8 @@ def main() -> int:
         relative = str(path.relative_to(checkout / "examples"))
         if only and not any(relative.startswith(prefix) for prefix in only):
             continue
-        rows.append(run_example(checkout, path, args.max_time, args.example_args.split()))
+        rows.append(run_example(checkout, path, args.max_time, args.example_args.split(),
+                                not args.no_numpy_compat))
         row = rows[-1]
         print(f"{row['example']:<40} loaded={row['loaded']!s:<5} solved={row['solved']!s:<5} "
               f"load={row.get('load_s', float('nan')):.3f}s "
@@ -255,6 +264,7 @@ def main() -> int:
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps({"checkout": str(checkout), "max_time": args.max_time,
                                     "runner": "ltamp_cli.pddlstream.run (alias, --force)",
+                                    "numpy_compat": not args.no_numpy_compat,
                                     "examples": rows}, indent=2, default=str))
     print(f"{sum(r['loaded'] for r in rows)}/{len(rows)} loaded, "
           f"{sum(r['solved'] for r in rows)}/{len(rows)} solved; wrote {args.out}")

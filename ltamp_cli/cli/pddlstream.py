@@ -12,7 +12,9 @@ RUN_HELP = (
     "\n\n"
     "Options go before SCRIPT; everything after it is the script's own command line. Exit "
     "code: the script's; 2 with one line if it needs a PDDLStream name ltamp lacks or ltamp "
-    "rejects its problem; 1 with its traceback if it fails in its own code."
+    "rejects its problem; 1 with its traceback if it fails in its own code. NumPy-1 names "
+    "that NumPy 2 removed and that have an exact NumPy 2 equivalent (np.mat, np.product, "
+    "np.float_, np.NaN, ...) are added back for the script unless --no-numpy-compat."
 )
 
 
@@ -40,6 +42,10 @@ def run_command(
         "--force", help="Shadow a real PDDLStream that is importable.")] = False,
     strict: Annotated[bool, typer.Option(
         "--strict", help="PDDLStream names ltamp lacks fail at import, not at use.")] = False,
+    no_numpy_compat: Annotated[bool, typer.Option(
+        "--no-numpy-compat", help="Do not add back the NumPy-1 names NumPy 2 removed "
+        "(np.mat, np.product, np.float_, np.NaN, ...: those with an exact NumPy 2 "
+        "equivalent, see docs/porting-from-pddlstream.md).")] = False,
     as_json: Annotated[bool, typer.Option(
         "--json", help="After the script's own output, print one JSON object: script, "
         "exit_code, cpu_s, error (the runner's one-line reason, if any).")] = False,
@@ -55,7 +61,7 @@ def run_command(
     errors = _Tee(sys.stderr, io.StringIO())
     start = time.process_time()
     code = run_target(script, list(ctx.args), module=module, force=force, strict=strict,
-                      stderr=errors)
+                      numpy_compat=not no_numpy_compat, stderr=errors)
     if as_json:
         lines = errors.copy.getvalue().splitlines()
         error = next((line.removeprefix("ltamp: error: ") for line in reversed(lines)

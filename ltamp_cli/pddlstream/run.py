@@ -3,7 +3,9 @@
 
 The script runs as ``__main__`` with :mod:`ltamp_cli.pddlstream.alias` installed, its own
 folder first on ``sys.path`` and ``sys.argv == [SCRIPT, *ARGS]``, as ``python SCRIPT.py``
-would run it. ``-m MODULE`` runs a module instead, with the current folder first on
+would run it, and with the NumPy-1 names NumPy 2 removed added back where NumPy 2 has an
+exact equivalent (:mod:`ltamp_cli.pddlstream.numpy_compat`; ``--no-numpy-compat`` leaves
+``numpy`` as installed). ``-m MODULE`` runs a module instead, with the current folder first on
 ``sys.path`` (as ``python -m MODULE``: PDDLStream's examples are run as
 ``python -m examples.continuous_tamp.run`` from its checkout).
 
@@ -33,16 +35,21 @@ from ltamp_cli.pddlstream.alias import (
     install,
     uninstall,
 )
+from ltamp_cli.pddlstream.numpy_compat import install as install_numpy_compat
+from ltamp_cli.pddlstream.numpy_compat import uninstall as uninstall_numpy_compat
 
 EXIT_SCRIPT_ERROR = 1
 EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
 
-USAGE = ("usage: ltamp pddlstream run [--force] [--strict] (SCRIPT.py | -m MODULE) [ARGS...]\n"
+USAGE = ("usage: ltamp pddlstream run [--force] [--strict] [--no-numpy-compat] "
+         "(SCRIPT.py | -m MODULE) [ARGS...]\n"
          "Run a PDDLStream script unmodified: its `pddlstream.*` imports are served by\n"
          "ltamp_cli.pddlstream. ARGS go to the script (sys.argv[1:]).\n"
          "  --force   shadow a real PDDLStream that is importable\n"
          "  --strict  PDDLStream names ltamp lacks fail at import, not at use\n"
+         "  --no-numpy-compat  do not add back the NumPy-1 names NumPy 2 removed (np.mat,\n"
+         "            np.product, np.float_, np.NaN, ...; see docs/porting-from-pddlstream.md)\n"
          "  -m MODULE run a module (current folder first on sys.path), as python -m")
 
 class Writer(Protocol):
@@ -90,7 +97,7 @@ def _check_module(name: str) -> None:
 
 
 def run_target(target: str, argv: Sequence[str] = (), *, module: bool = False,
-               force: bool = False, strict: bool = False,
+               force: bool = False, strict: bool = False, numpy_compat: bool = True,
                overrides: Mapping[str, Any] | None = None,
                stderr: Writer | None = None) -> int:
     """Run the script at path ``target`` (or the module named ``target`` if ``module``) as
@@ -98,7 +105,9 @@ def run_target(target: str, argv: Sequence[str] = (), *, module: bool = False,
     code (see the module docstring). ``sys.argv``, ``sys.path`` and the import system are
     restored afterwards (the modules the script imported, other than ``pddlstream.*``, stay
     in ``sys.modules`` as after any import). Raises :class:`InputError` if ``target`` is no
-    script, or the alias cannot be installed. ``overrides``: as in
+    script, or the alias cannot be installed. ``numpy_compat``: add back, while the script
+    runs, the NumPy-1 names NumPy 2 removed that have an exact equivalent
+    (:mod:`~ltamp_cli.pddlstream.numpy_compat`; removed again afterwards). ``overrides``: as in
     :func:`~ltamp_cli.pddlstream.alias.install`; ``stderr``: where the runner's messages go.
     """
     err: Writer = stderr if stderr is not None else sys.stderr
@@ -122,7 +131,10 @@ def run_target(target: str, argv: Sequence[str] = (), *, module: bool = False,
         sys.path[:] = saved_path
         raise
     sys.argv = [argv0, *argv]
+    compat = None
     try:
+        if numpy_compat:
+            compat = install_numpy_compat()
         if module:
             _check_module(target)
             runpy.run_module(target, run_name="__main__", alter_sys=True)
@@ -149,15 +161,19 @@ def run_target(target: str, argv: Sequence[str] = (), *, module: bool = False,
     finally:
         sys.argv = saved_argv
         sys.path[:] = saved_path
+        if compat is not None:
+            uninstall_numpy_compat(compat)
         uninstall(finder)
     return 0
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m ltamp_cli.pddlstream [--force] [--strict] (SCRIPT | -m MODULE) [ARGS...]``;
+    """``python -m ltamp_cli.pddlstream [--force] [--strict] [--no-numpy-compat]
+    (SCRIPT | -m MODULE) [ARGS...]``;
     returns the exit code."""
     args = list(sys.argv[1:] if argv is None else argv)
     force = strict = module = False
+    numpy_compat = True
     while args and args[0].startswith("-"):
         option = args.pop(0)
         if option in ("-h", "--help"):
@@ -167,6 +183,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             force = True
         elif option == "--strict":
             strict = True
+        elif option == "--no-numpy-compat":
+            numpy_compat = False
         elif option == "-m":
             module = True
             break
@@ -181,7 +199,8 @@ def main(argv: Sequence[str] | None = None) -> int:
               + ("-m MODULE" if module else "SCRIPT.py or -m MODULE") + ")", file=sys.stderr)
         return EXIT_BAD_INPUT
     try:
-        return run_target(args[0], args[1:], module=module, force=force, strict=strict)
+        return run_target(args[0], args[1:], module=module, force=force, strict=strict,
+                          numpy_compat=numpy_compat)
     except InputError as error:
         print(f"ltamp: error: {error}", file=sys.stderr)
         return EXIT_BAD_INPUT
