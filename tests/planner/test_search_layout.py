@@ -280,3 +280,27 @@ def test_state_vectors_equal_a_plain_fixpoint_per_stratum() -> None:
                                 if task.is_derived[i])
     assert {(True, False, True), (False, True, True), (False, False, False)} <= kinds
     assert derived_true > 500
+
+
+def test_one_long_precondition_list_does_not_pad_every_operator() -> None:
+    """A negated derived fact blocked by many rules gives one relaxed operator with hundreds
+    of preconditions; the others (two each) must not be padded to its length (PDDLStream's
+    discrete_belief: 4,200 preconditions padded 2,736 columns to 91 MB per search)."""
+    basic = [("p", str(i)) for i in range(400)]
+    long_action = GroundAction("long", (), tuple(basic), (), (GroundEffect((), (), ("g",), True),),
+                               1.0)
+    short = [GroundAction(f"s{i}", (), (basic[i], basic[i + 1]), (),
+                          (GroundEffect((), (), basic[i + 2], True),), 1.0)
+             for i in range(200)]
+    goal = GroundAxiom(("%goal",), (("g",),), ())
+    grounding = Grounding([long_action, *short], [goal], set(basic) | {("g",), ("%goal",)},
+                          frozenset(), frozenset({"%goal"}))
+    task = Task(grounding, {basic[0], basic[1]} | set(basic[202:]))
+    heuristic = FFHeuristic(task, cost_bias=1.0, unit_costs=False)
+    lengths = sum(len(p) for p in heuristic.preconditions if len(p) > 1)
+    padded = sum(matrix.size for _, _, matrix in heuristic.multi_pre_blocks)
+    assert lengths <= padded < 2 * lengths
+    vector = task.state_vector(task.init)
+    got, expected = heuristic._evaluate(vector), reference_ff(heuristic, vector)
+    assert (got.value, got.preferred) == (expected.value, expected.preferred)
+    assert 0.0 < got.value < INFINITY

@@ -7,6 +7,7 @@ Relaxed operators are the task's operators (one per conditional effect too) and 
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -119,7 +120,8 @@ class FFHeuristic:
 
         Relaxed operators are renumbered internally: those with at most one precondition
         first (their cost is one gather, ``single_pre``), then the others, whose
-        preconditions are a ``(width, n)`` matrix padded with the always-true fact (cost 0)
+        preconditions are ``(width, n)`` matrices, one per width class (up to 2, 4, 8, ...),
+        padded with the always-true fact (cost 0)
         and summed along axis 0 (row by row, so in the same order as a ``reduceat`` over
         the lists: the same floats). Only the goal-relevant operators (:attr:`relevant`)
         get an internal number. Achieved facts are reordered likewise: facts with one
@@ -130,18 +132,30 @@ class FFHeuristic:
         lengths = [len(p) for p in self.preconditions]
         order = [i for i in self.relevant if lengths[i] <= 1]
         self.num_single_pre = len(order)
-        order += [i for i in self.relevant if lengths[i] > 1]
+        # Longer precondition lists grouped by width class (up to 2, 4, 8, ...
+        # preconditions), one padded matrix per class: one very long list (a negated derived
+        # fact blocked by thousands of rules) must not pad every column to its length, while
+        # padding stays below 2x the lists' total length.
+        multi = sorted((i for i in self.relevant if lengths[i] > 1),
+                       key=lambda i: (lengths[i] - 1).bit_length())
+        order += multi
         self.order = np.asarray(order, dtype=np.int64)
         internal = np.full(len(lengths), -1, dtype=np.int64)
         internal[self.order] = np.arange(len(order), dtype=np.int64)
         self.single_pre = np.array(
             [self.preconditions[i][0] if self.preconditions[i] else TRUE_FACT
              for i in order[:self.num_single_pre]], dtype=np.int64)
-        multi = order[self.num_single_pre:]
-        width = max((lengths[i] for i in multi), default=0)
-        self.multi_pre = np.full((width, len(multi)), TRUE_FACT, dtype=np.int64)
-        for column, i in enumerate(multi):
-            self.multi_pre[:lengths[i], column] = self.preconditions[i]
+        # (first, end, matrix): internal operators first..end-1 sum the matrix's columns.
+        self.multi_pre_blocks: list[tuple[int, int, np.ndarray]] = []
+        first = self.num_single_pre
+        for _, members in itertools.groupby(multi, key=lambda i: (lengths[i] - 1).bit_length()):
+            group = list(members)
+            matrix = np.full((max(lengths[i] for i in group), len(group)), TRUE_FACT,
+                             dtype=np.int64)
+            for column, i in enumerate(group):
+                matrix[:lengths[i], column] = self.preconditions[i]
+            self.multi_pre_blocks.append((first, first + len(group), matrix))
+            first += len(group)
         self.internal_costs = self.costs[self.order]
         facts = self.achiever_facts.tolist()
         singles = [f for f in facts if len(self.achievers[f]) == 1]
@@ -261,17 +275,18 @@ class FFHeuristic:
         facts, split, singles = self.fact_order, self.num_single_ach, self.num_single_pre
         base = fact_cost[facts]
         current = base
-        single_pre, multi_pre, costs = self.single_pre, self.multi_pre, self.internal_costs
+        single_pre, multi_pre_blocks, costs = (self.single_pre, self.multi_pre_blocks,
+                                               self.internal_costs)
         single_ach, multi_ach = self.single_ach, self.multi_ach
         multi_starts = self.multi_ach_starts
-        has_multi_pre, has_multi_ach = multi_pre.shape[1] > 0, len(multi_starts) > 0
+        has_multi_ach = len(multi_starts) > 0
         op_cost = np.empty(len(costs))
         best = np.empty(len(facts))
         candidate_costs = op_cost[multi_ach]
         for _ in range(self.num_facts + 1):
             fact_cost.take(single_pre, out=op_cost[:singles])
-            if has_multi_pre:
-                np.add.reduce(fact_cost[multi_pre], axis=0, out=op_cost[singles:])
+            for first, end, matrix in multi_pre_blocks:
+                np.add.reduce(fact_cost[matrix], axis=0, out=op_cost[first:end])
             op_cost += costs
             op_cost.take(single_ach, out=best[:split])
             if has_multi_ach:
