@@ -44,7 +44,7 @@ from ltamp_cli.backends import load_backend
 from ltamp_cli.backends.sanity import run_trial_safely
 from ltamp_cli.learning.active import LearningConfig, learn_from_pool, learn_online
 from ltamp_cli.learning.metrics import SkillEvaluator
-from ltamp_cli.trials.record import TrialRecord
+from ltamp_cli.trials.record import TrialRecord, is_success
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "docs" / "results" / "push"
@@ -118,7 +118,7 @@ def run_pool_job(variant: str, seed: int, pool: list[TrialRecord]) -> dict[str, 
     covered = (np.linalg.norm(contexts[:, None, 1:3] - landings[None], axis=2) < 1.0).any(1)
     return {"skill": f"{SKILL}-pool", "variant": variant, "config": POOL_VARIANTS[variant],
             "seed": seed, "sizes": {**SIZES, "pool": POOL_SIZE}, "cpu_s": round(cpu, 1),
-            "training_successes": int(sum(r.score > 0 for r in result.records)),
+            "training_successes": int(sum(is_success(r) for r in result.records)),
             "moved": int((np.linalg.norm(finals, axis=1) > 0.05).sum()),
             "replay_bound": [bool(v) for v in covered],
             "curve": [{"n_trials": p.n_trials, "success_rate": p.success_rate,
@@ -149,7 +149,7 @@ def run_job(variant: str, seed: int) -> dict[str, Any]:
     covered = (np.linalg.norm(contexts[:, None, 1:3] - landings[None], axis=2) < 1.0).any(1)
     return {"skill": SKILL, "variant": variant, "config": VARIANTS[variant], "seed": seed,
             "sizes": SIZES, "cpu_s": round(cpu, 1),
-            "training_successes": int(sum(r.score > 0 for r in result.records)),
+            "training_successes": int(sum(is_success(r) for r in result.records)),
             "moved": int(moved.sum()), "replay_bound": [bool(v) for v in covered],
             "curve": [{"n_trials": p.n_trials, "success_rate": p.success_rate,
                        "successes": list(p.successes or ())} for p in result.curve]}
