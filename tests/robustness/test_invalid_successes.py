@@ -118,7 +118,7 @@ def test_invalid_outcome_is_not_relabelled() -> None:
                          outcome=outcome)
     learner = learner_from_records(spec, LearningConfig(strategy="gp", hindsight=True),
                                    [record], np.random.default_rng(0))
-    x, y = learner.training_set()
+    _x, y = learner.training_set()
     assert len(y) == 1 and y[0] <= 0.0  # no relabelled "reached its own end" success
 
 
