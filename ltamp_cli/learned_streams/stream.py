@@ -310,6 +310,16 @@ class LearnedStream:
                 f"{spec.context.dim} ({', '.join(spec.context.names) or 'none'}): is "
                 "world.learned_streams pointing at the right model?")
         context = context.reshape(self.model.spec.context.dim)
+        if not np.all(np.isfinite(context)):
+            # a NaN/inf value (e.g. an object `1e400` the bindings read with float()) lies in
+            # no range: "no samples" would turn it into a wrong "infeasible"
+            spec = self.model.spec
+            values = ", ".join(f"{n}={v:g}" for n, v in zip(spec.context.names, context,
+                                                            strict=True))
+            raise InputError(
+                f"learned stream over {self.config.model_dir}: the bindings give the "
+                f"non-finite context ({values}) for the inputs {inputs!r:.80}: check the "
+                "problem's object values")
         if not self.config.extrapolate:
             outside = outside_trained_range(self.model.spec, context)
             if outside:

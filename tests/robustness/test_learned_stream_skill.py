@@ -115,3 +115,25 @@ def test_cli_twin_refuses_in_one_line(tmp_path: Path) -> None:
     three = STREAMS.replace("TO_OUTPUTS", "lambda c, t: ((float(c[2]), 0.0),)")
     code, lines = _solve(tmp_path / "b", three.replace(", SKILL)", ")"))
     assert code == 2 and len(lines) == 1 and "IndexError" in lines[0], lines
+
+
+def test_a_non_finite_context_is_one_line_not_infeasible(tmp_path: Path) -> None:
+    """Before: an object `t1: 1e400` (a YAML string the bindings read with float(): inf)
+    got "context outside the trained range, no samples" and the task was "infeasible"
+    (exit 1); with `extrapolate: true` a ValueError traceback."""
+    for value in (float("inf"), float("nan")):
+        stream = LearnedStream(LearnedStreamConfig(MODEL, "adaptive", extrapolate=True),
+                               lambda phase, v=value: [v], lambda c, p: (tuple(c),),
+                               np.random.default_rng(0))
+        with pytest.raises(InputError, match="non-finite context"):
+            next(stream(0.2))
+    problem = (REPO / "problems/examples/synthetic_goodregion.yaml").read_text()
+    path = tmp_path / "problem.yaml"
+    path.write_text(problem.replace("../../domains", str(REPO / "domains"))
+                    .replace("t1: 0.15", "t1: 1e400").replace("diverse-lk", "adaptive"))
+    out, err = io.StringIO(), io.StringIO()
+    with redirect_stdout(out), redirect_stderr(err), pytest.raises(SystemExit) as done:
+        main(["solve", str(path), "--max-time", "20", "--no-stats"])
+    lines = [line for line in err.getvalue().splitlines() if line]
+    assert done.value.code == 2 and len(lines) == 1, lines
+    assert "non-finite context (phase=inf)" in lines[0]
