@@ -52,6 +52,7 @@ paper's discrete active learning, section 6.2).
 
 from __future__ import annotations
 
+import logging
 import math
 import sys
 import time
@@ -91,6 +92,7 @@ from ltamp_cli.trials.record import (
     TrialRecord,
     check_against_spec,
     training_score,
+    without_duplicates,
 )
 from ltamp_cli.writer_lock import exclusive_writer
 
@@ -676,6 +678,13 @@ def learn_from_pool(
     pool = [r for r in pool if r.skill == spec.name]
     if not pool:
         raise ValueError(f"the pool has no trials of skill {spec.name!r}")
+    # as `ltamp train --data` reads its file: a trial repeated (two writers once shared the
+    # file) is used once, else it would be chosen, and weigh, twice
+    pool, repeats = without_duplicates(pool)
+    if repeats:
+        logging.getLogger("ltamp").warning(
+            "the pool repeats %d trial record(s) with the same (seed, index); each trial is "
+            "used once", repeats)
     check_against_spec(pool, spec)  # wrong lengths, far-off values: one ValueError
     rng = np.random.default_rng(config.seed)
     template = RandomModel(spec, 0.0)
