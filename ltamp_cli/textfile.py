@@ -8,6 +8,8 @@ most ``limit + 1`` bytes are read; a larger input is one :class:`InputError` lin
 
 from __future__ import annotations
 
+import errno
+import os
 from pathlib import Path
 
 from ltamp_cli.errors import InputError, SourceLocation
@@ -63,3 +65,25 @@ def decoded_text(data: bytes, path: str, what: str) -> str:
         column = start - (data.rfind(b"\n", 0, start) + 1) + 1
         raise InputError(f"cannot read {what}: byte 0x{data[start]:02x} is not UTF-8 text "
                          "(save the file as UTF-8)", SourceLocation(path, line, column)) from None
+
+
+def not_a_file(path: str | Path) -> str:
+    """Why ``path`` is no readable regular file, as the words of an error line: a directory,
+    a symbolic-link loop or a dangling link read better than the "no such file" that
+    ``Path.is_file()`` alone suggests."""
+    path = Path(path)
+    try:
+        os.stat(path)
+    except OSError as error:
+        if error.errno == errno.ELOOP:
+            return f"{path} is a symbolic-link loop"
+        if path.is_symlink():
+            return f"{path} is a dangling symbolic link"
+        if error.errno == errno.ENOENT:
+            return f"no such file {path}"
+        return f"{path}: {error.strerror or error}"
+    if path.is_dir():
+        return f"{path} is a directory, expected a file"
+    if not path.is_file():
+        return f"{path} is not a regular file"
+    return f"{path} is not readable" if not os.access(path, os.R_OK) else f"{path} is a file"

@@ -38,10 +38,11 @@ def heldout_from_records(records: list[Any], spec: Any) -> Any:
 
 
 def read_records(path: Path, option: str) -> list[Any]:
+    from ltamp_cli.textfile import not_a_file
     from ltamp_cli.trials.record import TrialDataset, without_duplicates
 
     if not path.is_file():
-        raise InputError(f"{option}: no such file {path}")
+        raise InputError(f"{option}: {not_a_file(path)}")
     records, repeats = without_duplicates(TrialDataset(path).read())
     if repeats:
         typer.echo(f"ltamp: warning: {option}: {path} repeats {repeats} trial record(s) with the "

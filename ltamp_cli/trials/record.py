@@ -153,7 +153,11 @@ class TrialDataset:
         if not self.path.exists():
             return
         with self.path.open("rb") as handle:
-            lines = handle.read().split(b"\n")
+            data = handle.read()
+        if data.startswith(b"\x1f\x8b"):  # e.g. a pool archive (.jsonl.gz) given as is
+            raise InputError("a gzip-compressed file, not JSON lines: decompress it first "
+                             "(gunzip -k FILE)", location_in(self.path, 1, 1))
+        lines = data.split(b"\n")
         # After the final newline split() yields b"". Any other last piece was torn by a
         # crash while writing, unless it is one whole record (a file written by another
         # tool, or saved by an editor, without a final newline).
