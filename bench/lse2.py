@@ -55,6 +55,7 @@ from ltamp_cli.backends.protocol import ParamSpace, SkillBackend, SkillSpec
 from ltamp_cli.backends.synthetic import AnalyticSkill, SyntheticBackend, _unit
 from ltamp_cli.learning.active import LearningConfig, learn_online
 from ltamp_cli.learning.metrics import SkillEvaluator, wilson_interval
+from ltamp_cli.trials.record import is_success
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_LOG = REPO / "docs" / "results" / "learning" / "lse2-runs.jsonl"
@@ -200,7 +201,7 @@ def run_job(skill: str, learner: str, seed: int,
             "lengthscale_prior_sd": prior_sd, "cpu_s": round(cpu, 1),
             **({"lse2_uniform_if_classified": uniform_if_classified} if learner == "lse2"
                else {}),
-            "training_successes": sum(1 for r in result.records if r.score > 0),
+            "training_successes": sum(1 for r in result.records if is_success(r)),
             "curve": [{"n_trials": p.n_trials, "success_rate": p.success_rate,
                        "successes": list(p.successes or ())} for p in result.curve]}
 

@@ -51,7 +51,7 @@ from ltamp_cli.backends.protocol import SkillSpec
 from ltamp_cli.backends.sanity import run_trial_safely
 from ltamp_cli.learning.active import LearningConfig, learn_from_pool, learn_online
 from ltamp_cli.learning.metrics import SkillEvaluator
-from ltamp_cli.trials.record import TrialRecord
+from ltamp_cli.trials.record import TrialRecord, is_success
 
 REPO = Path(__file__).resolve().parents[1]
 RESULTS = REPO / "docs" / "results" / "push"
@@ -134,7 +134,7 @@ def _flick_job(skill_label: str, variant: str, settings: dict[str, Any], seed: i
     covered = (np.linalg.norm(contexts[:, None, 1:3] - landings[None], axis=2) < 1.0).any(1)
     return {"skill": skill_label, "variant": variant, "config": settings, "seed": seed,
             "sizes": sizes, "cpu_s": round(cpu, 1),
-            "training_successes": int(sum(r.score > 0 for r in result.records)),
+            "training_successes": int(sum(is_success(r) for r in result.records)),
             "moved": int(moved.sum()), "replay_bound": [bool(v) for v in covered],
             "curve": [{"n_trials": p.n_trials, "success_rate": p.success_rate,
                        "successes": list(p.successes or ())} for p in result.curve]}

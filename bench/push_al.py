@@ -60,6 +60,7 @@ from ltamp_cli.backends import load_backend
 from ltamp_cli.learning.active import LearningConfig, learn_online
 from ltamp_cli.learning.metrics import SkillEvaluator
 from ltamp_cli.learning.model import LevelSetModel
+from ltamp_cli.trials.record import is_success
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_LOG = REPO / "docs" / "results" / "learning" / "pushal-runs.jsonl"
@@ -270,7 +271,7 @@ def run_check(skill: str, variant: str, seed: int) -> dict[str, Any]:
         backend.close()
     return {"skill": skill, "variant": variant, "config": VARIANTS[variant], "seed": seed,
             "sizes": sizes, "cpu_s": round(cpu, 1),
-            "training_successes": sum(1 for r in result.records if r.score > 0),
+            "training_successes": sum(1 for r in result.records if is_success(r)),
             "curve": [{"n_trials": p.n_trials, "success_rate": p.success_rate,
                        "successes": list(p.successes or ())} for p in result.curve]}
 

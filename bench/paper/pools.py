@@ -44,7 +44,7 @@ from bench.paper.common import Context
 from ltamp_cli.backends.protocol import SkillBackend, SkillSpec
 from ltamp_cli.learning.metrics import HeldOutSet
 from ltamp_cli.trials.collect import CollectJob, collect
-from ltamp_cli.trials.record import TrialDataset, TrialRecord
+from ltamp_cli.trials.record import TrialDataset, TrialRecord, is_success, training_score
 
 POOL_SEED = 10_000
 #: The agreement the fast engine's labels must reach with the reference engine's, as the
@@ -143,16 +143,16 @@ class Pool:
         return HeldOutSet(
             np.array([r.context for r in self.test], dtype=float),
             np.array([r.control for r in self.test], dtype=float),
-            np.array([r.score if np.isfinite(r.score) else -1.0 for r in self.test]),
+            np.array([training_score(r) for r in self.test]),  # invalid: never a success
         )
 
     def stats(self) -> dict[str, float | int]:
-        scores = np.array([r.score for r in self.train + self.test], dtype=float)
+        scores = np.array([training_score(r) for r in self.train + self.test], dtype=float)
         valid = np.array([r.valid for r in self.train + self.test], dtype=bool)
         return {"n_train": len(self.train), "n_test": len(self.test),
                 "valid_fraction": float(valid.mean()) if len(valid) else 0.0,
                 "positive_fraction": float(np.mean(scores > 0)) if len(scores) else 0.0,
-                "test_positives": int(sum(r.score > 0 for r in self.test)),
+                "test_positives": int(sum(is_success(r) for r in self.test)),
                 "valid_only": self.valid_only}
 
 

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from ltamp_cli.backends.synthetic import SyntheticBackend
 from ltamp_cli.errors import InputError
 from ltamp_cli.learned_streams.stream import LearnedStream, learned_stream_configs
 from ltamp_cli.planner.streams import Binding, StreamInfo
@@ -44,7 +45,10 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
     def to_outputs(control: np.ndarray, phase: float) -> tuple[tuple[float, float]]:
         return ((float(control[0]), float(control[1])),)
 
-    learned = LearnedStream(configs[STREAM], to_context, to_outputs, rng)
+    # skill=: a model of another skill, or one trained on other bounds, is refused in one
+    # line when the stream is built (without it only the sizes are checked, on first use)
+    learned = LearnedStream(configs[STREAM], to_context, to_outputs, rng,
+                            skill=SyntheticBackend().skills()["moving2d"])
 
     def test_clear(phase: float, control: tuple[float, float]) -> bool:
         return not low <= control[0] <= high

@@ -204,6 +204,13 @@ class SkillSpec:
                     raise ValueError(f"skill {self.name!r}: {part} {name!r:.40} has bounds "
                                      f"[{low}, {high}]: expected finite numbers with a "
                                      "finite width")
+        score = self.invalid_score
+        if (isinstance(score, bool) or not isinstance(score, int | float | np.number)
+                or not math.isfinite(score) or score > 0):
+            # an invalid trial never succeeds (score > 0 is success), and a NaN/inf label
+            # would poison every GP fitted to the skill's trials
+            raise ValueError(f"skill {self.name!r}: invalid_score must be a finite number "
+                             f"<= 0, not {score!r:.40}")
         if self.outcome is not None and max(self.outcome.goals) >= self.context.dim:
             raise ValueError(f"skill {self.name!r}: outcome goal index "
                              f"{max(self.outcome.goals)} is not a context dimension "

@@ -68,7 +68,7 @@ def evaluate_command(
                 physics, skill, n_test, max(trials, 0), seed + 12345
             )
             if data is not None:
-                evaluator.heldout = heldout_from_records(read_records(data, "--data"), skill)
+                evaluator.heldout = heldout_from_records(read_records(data, "--data"), model.spec)
             result = evaluator.evaluate(model, int(metadata.get("training", {}).get("n_trials", 0)))
             report.update(
                 f1=result.f1,
@@ -82,7 +82,7 @@ def evaluate_command(
         else:
             f1 = None
             if data is not None:
-                heldout = heldout_from_records(read_records(data, "--data"), skill)
+                heldout = heldout_from_records(read_records(data, "--data"), model.spec)
                 f1 = heldout.f1(model)
                 report["n_test"] = len(heldout.scores)
             report["f1"] = f1

@@ -12,6 +12,7 @@ import os
 from pathlib import Path
 
 from ltamp_cli.errors import InputError
+from ltamp_cli.textfile import not_a_file
 
 
 def _component_problem(path: Path) -> str | None:
@@ -47,7 +48,7 @@ def existing_input_file(path: Path, option: str) -> Path:
     if problem is not None:
         raise InputError(f"{option}: {str(path)[:120]!r}: {problem}")
     if not path.is_file():
-        raise InputError(f"{option}: no such file {path}")
+        raise InputError(f"{option}: {not_a_file(path)}")
     if not os.access(path, os.R_OK):
         raise InputError(f"{option}: {path} is not readable")
     return path

@@ -18,25 +18,31 @@ def register(app: typer.Typer) -> None:
     app.command(name="train")(train_command)
 
 
-def heldout_from_records(records: list[Any], skill: str) -> Any:
-    """A :class:`~ltamp_cli.learning.metrics.HeldOutSet` from the trial records of ``skill``."""
-    import numpy as np
-
+def heldout_from_records(records: list[Any], spec: Any) -> Any:
+    """A :class:`~ltamp_cli.learning.metrics.HeldOutSet` from the trial records of skill
+    ``spec`` (a :class:`~ltamp_cli.backends.protocol.SkillSpec`), labelled as training labels
+    them (an invalid trial is never a success); records of wrong lengths or far outside the
+    skill's bounds are refused in one line."""
     from ltamp_cli.learning.metrics import HeldOutSet
-    from ltamp_cli.trials.record import records_to_arrays
+    from ltamp_cli.trials.record import check_against_spec, records_to_arrays
 
-    records = [r for r in records if r.skill == skill]
+    records = [r for r in records if r.skill == spec.name]
     if not records:
-        raise InputError(f"the held-out data has no trials of skill {skill!r}")
-    contexts, controls, scores, _valid = records_to_arrays(records)
-    return HeldOutSet(contexts, controls, np.nan_to_num(scores, nan=-1.0))
+        raise InputError(f"the held-out data has no trials of skill {spec.name!r}")
+    try:
+        check_against_spec(records, spec)
+    except ValueError as error:
+        raise InputError(f"held-out data: {error}") from None
+    contexts, controls, scores, _valid = records_to_arrays(records, spec.invalid_score)
+    return HeldOutSet(contexts, controls, scores)
 
 
 def read_records(path: Path, option: str) -> list[Any]:
+    from ltamp_cli.textfile import not_a_file
     from ltamp_cli.trials.record import TrialDataset, without_duplicates
 
     if not path.is_file():
-        raise InputError(f"{option}: no such file {path}")
+        raise InputError(f"{option}: {not_a_file(path)}")
     records, repeats = without_duplicates(TrialDataset(path).read())
     if repeats:
         typer.echo(f"ltamp: warning: {option}: {path} repeats {repeats} trial record(s) with the "
@@ -140,7 +146,7 @@ def train_command(
     from ltamp_cli.learning.curves import plot_curves
     from ltamp_cli.learning.metrics import SkillEvaluator
     from ltamp_cli.threads import use_one_thread
-    from ltamp_cli.trials.record import TrialDataset
+    from ltamp_cli.trials.record import TrialDataset, is_success
 
     use_one_thread()
     if refit:
@@ -200,7 +206,7 @@ def train_command(
         evaluator = None
         if eval_every > 0:
             if test_data is not None:
-                heldout = heldout_from_records(read_records(test_data, "--test-data"), skill)
+                heldout = heldout_from_records(read_records(test_data, "--test-data"), spec)
                 evaluator = SkillEvaluator(spec, heldout)
             elif hasattr(physics, "true_score"):
                 evaluator = SkillEvaluator.synthetic(physics, skill, seed=seed + 12345)
@@ -239,7 +245,7 @@ def train_command(
             "mode": "pool" if data is not None else "online",
             "n_trials": len(result.records),
             "n_valid": sum(r.valid for r in result.records),
-            "n_success": sum(r.score > 0 for r in result.records),
+            "n_success": sum(is_success(r) for r in result.records),
             "budget": budget,
             "init": init,
             "seed": seed,

@@ -211,6 +211,24 @@ def _check_model_shape(spec: SkillSpec, model_dir: Path, context_names: Sequence
         "pointing at the right model?")
 
 
+def _check_model_bounds(model: SkillSpec, skill: SkillSpec, model_dir: Path) -> None:
+    """The model must have been trained on ``skill``'s boxes: a control box that has since
+    changed would hand the stream controls the skill no longer accepts (or never explore
+    the new part), a context box a range the stream's contexts do not have."""
+    for part, trained, declared in (("context", model.context, skill.context),
+                                    ("control", model.control, skill.control)):
+        for name, low, high, want_low, want_high in zip(
+                trained.names, trained.lows, trained.highs, declared.lows, declared.highs,
+                strict=True):
+            tolerance = 1e-9 * max(1.0, abs(want_high - want_low))
+            if abs(low - want_low) > tolerance or abs(high - want_high) > tolerance:
+                raise InputError(
+                    f"learned stream over {model_dir}: the model was trained on {part} "
+                    f"{name} in [{low:g}, {high:g}], but skill {skill.name!r} declares "
+                    f"[{want_low:g}, {want_high:g}]: retrain it (ltamp train) or point "
+                    "world.learned_streams at a model of the current skill")
+
+
 class LearnedStream:
     """A planner stream drawing controls of a learned skill.
 
@@ -224,6 +242,13 @@ class LearnedStream:
     β and the proposals are built over valid controls only, not filtered afterwards. A
     call whose set shows no valid member (θ* invalid and none of the sampler's first uniform
     proposals valid) ends at once.
+
+    Pass the skill's :class:`SkillSpec` as ``skill`` (or at least its ``context_names`` and
+    ``control_names``) so that a model of another skill, or one trained on other bounds, is
+    refused in one line when the stream is built. Without them only the sizes can be checked,
+    on the stream's first call: a context of the wrong size, or a ``to_outputs`` that fails
+    on the model's controls (e.g. indexes a value the model does not have), is one
+    :class:`InputError` line naming the model's parameters.
     """
 
     def __init__(
@@ -238,6 +263,7 @@ class LearnedStream:
         *,
         context_names: Sequence[str] | None = None,
         control_names: Sequence[str] | None = None,
+        skill: SkillSpec | None = None,
     ) -> None:
         self.config = config
         self.to_context = to_context
@@ -246,7 +272,19 @@ class LearnedStream:
         self.is_valid = is_valid
         self.validity_for = validity_for
         self.model = (models or ModelCache()).get(config.model_dir)
+        if skill is not None:
+            if not isinstance(skill, SkillSpec):
+                raise InputError(f"LearnedStream(skill=...) expects the skill's SkillSpec, "
+                                 f"got {type(skill).__name__}")
+            for given, own, part in ((context_names, skill.context.names, "context"),
+                                     (control_names, skill.control.names, "control")):
+                if given is not None and tuple(given) != own:
+                    raise InputError(f"LearnedStream: {part}_names {tuple(given)} differ from "
+                                     f"skill {skill.name!r}'s {own}")
+            context_names, control_names = skill.context.names, skill.control.names
         _check_model_shape(self.model.spec, config.model_dir, context_names, control_names)
+        if skill is not None:
+            _check_model_bounds(self.model.spec, skill, config.model_dir)
         self.kernel: DiversityKernel | None = None
         if config.sampler == "diverse-lk":
             self.kernel = load_kernel(config.kernel_path, self.model.spec)
@@ -272,6 +310,16 @@ class LearnedStream:
                 f"{spec.context.dim} ({', '.join(spec.context.names) or 'none'}): is "
                 "world.learned_streams pointing at the right model?")
         context = context.reshape(self.model.spec.context.dim)
+        if not np.all(np.isfinite(context)):
+            # a NaN/inf value (e.g. an object `1e400` the bindings read with float()) lies in
+            # no range: "no samples" would turn it into a wrong "infeasible"
+            spec = self.model.spec
+            values = ", ".join(f"{n}={v:g}" for n, v in zip(spec.context.names, context,
+                                                            strict=True))
+            raise InputError(
+                f"learned stream over {self.config.model_dir}: the bindings give the "
+                f"non-finite context ({values}) for the inputs {inputs!r:.80}: check the "
+                "problem's object values")
         if not self.config.extrapolate:
             outside = outside_trained_range(self.model.spec, context)
             if outside:
@@ -318,13 +366,28 @@ class LearnedStream:
             control = next(sampler, None)
             if control is None:
                 return
-            outputs = self.to_outputs(control, *inputs)
+            outputs = self._outputs(control, inputs)
             if outputs is None:
                 continue
             outputs = tuple(outputs)
             self.n_samples += 1
             self._issued[(frozen_inputs, _freeze(outputs))] = (sampler, control)
             yield outputs
+
+    def _outputs(self, control: np.ndarray, inputs: tuple[Any, ...]
+                 ) -> tuple[Any, ...] | None:
+        """``to_outputs(control, *inputs)``; an indexing or shape error there means the
+        bindings expect other controls than this model's (a model of another skill, when
+        the stream knows no parameter names): one line naming both, not a traceback."""
+        try:
+            return self.to_outputs(control, *inputs)
+        except (IndexError, ValueError, TypeError) as error:
+            spec = self.model.spec
+            raise InputError(
+                f"learned stream over {self.config.model_dir}: its bindings could not use a "
+                f"control of this {spec.name!r} model ({spec.control.dim} value(s): "
+                f"{', '.join(spec.control.names)}): {type(error).__name__}: {error}: is "
+                "world.learned_streams pointing at the right model?") from None
 
     def on_unusable(self, inputs: tuple[Any, ...], outputs: tuple[Any, ...]) -> None:
         """Planner feedback: ``outputs`` (made for ``inputs``) failed downstream."""

@@ -52,6 +52,7 @@ paper's discrete active learning, section 6.2).
 
 from __future__ import annotations
 
+import logging
 import math
 import sys
 import time
@@ -86,7 +87,13 @@ from ltamp_cli.learning.outcomes import (
 )
 from ltamp_cli.seeds import usable_seed
 from ltamp_cli.threads import limits_threads
-from ltamp_cli.trials.record import TrialDataset, TrialRecord, check_against_spec
+from ltamp_cli.trials.record import (
+    TrialDataset,
+    TrialRecord,
+    check_against_spec,
+    training_score,
+    without_duplicates,
+)
 from ltamp_cli.writer_lock import exclusive_writer
 
 #: Upper bound of the GP's noise variance (in RMS-scaled score units) for a skill whose
@@ -325,6 +332,8 @@ def _trial_seed(seed: int, index: int) -> int:
 
 
 def _training_score(spec: SkillSpec, score: float) -> float:
+    """A bare score's training value (non-finite: the skill's invalid score); records go
+    through :func:`~ltamp_cli.trials.record.training_score`, which also knows validity."""
     return score if math.isfinite(score) else spec.invalid_score
 
 
@@ -358,12 +367,15 @@ class _Learner:
         self.relabeller = config.relabeller(spec)
         self._outcome: OutcomeModel | None = None
 
-    def add(self, x: np.ndarray, score: float, record: TrialRecord | None = None) -> None:
-        """One trial: normalised ``x (d,)`` and its score; ``record`` (its physical values
-        and outcome) feeds the relabeller when the skill declares an outcome."""
+    def add(self, x: np.ndarray, record: TrialRecord) -> None:
+        """One trial: its normalised inputs ``x (d,)`` and its record, labelled by
+        :func:`~ltamp_cli.trials.record.training_score` (an invalid trial is never a
+        success). A valid record's outcome feeds the relabeller when the skill declares one
+        (an invalid trial's "outcome" was never observed to its end)."""
         self.x.append(np.asarray(x, dtype=float))
-        self.y.append(_training_score(self.spec, score))
-        if self.relabeller is not None and record is not None and record.outcome is not None:
+        self.y.append(training_score(record, self.spec.invalid_score))
+        if (self.relabeller is not None and record.valid and record.outcome is not None
+                and math.isfinite(record.score)):
             self.relabeller.add(np.asarray(record.context), np.asarray(record.control),
                                 np.asarray(record.outcome))
 
@@ -412,7 +424,7 @@ def learner_from_records(spec: SkillSpec, config: LearningConfig,
     learner = _Learner(spec, config, rng)
     template = RandomModel(spec, 0.0)  # coordinates only
     for record in records:
-        learner.add(template.to_unit(record.context, record.control)[0], record.score, record)
+        learner.add(template.to_unit(record.context, record.control)[0], record)
     return learner
 
 
@@ -557,7 +569,7 @@ def _learn_online(
             if dataset is not None:
                 dataset.append(record)
             records.append(record)
-            learner.add(template.to_unit(context, control)[0], record.score, record)
+            learner.add(template.to_unit(context, control)[0], record)
             curve.maybe(learner)
             bar.update(1)
     return LearningResult(learner.final(), records, curve.points)
@@ -666,13 +678,19 @@ def learn_from_pool(
     pool = [r for r in pool if r.skill == spec.name]
     if not pool:
         raise ValueError(f"the pool has no trials of skill {spec.name!r}")
+    # as `ltamp train --data` reads its file: a trial repeated (two writers once shared the
+    # file) is used once, else it would be chosen, and weigh, twice
+    pool, repeats = without_duplicates(pool)
+    if repeats:
+        logging.getLogger("ltamp").warning(
+            "the pool repeats %d trial record(s) with the same (seed, index); each trial is "
+            "used once", repeats)
     check_against_spec(pool, spec)  # wrong lengths, far-off values: one ValueError
     rng = np.random.default_rng(config.seed)
     template = RandomModel(spec, 0.0)
     x_pool = np.array([template.to_unit(r.context, r.control)[0] for r in pool]).reshape(
         len(pool), -1
     )
-    y_pool = np.array([_training_score(spec, r.score) for r in pool])
     budget = min(config.budget, len(pool))
     order = rng.permutation(len(pool))
     available = np.ones(len(pool), dtype=bool)
@@ -700,7 +718,7 @@ def learn_from_pool(
                 index = int(order[cursor])
             available[index] = False
             chosen.append(index)
-            learner.add(x_pool[index], y_pool[index], pool[index])
+            learner.add(x_pool[index], pool[index])
             curve.maybe(learner)
             bar.update(1)
     return LearningResult(learner.final(), [pool[i] for i in chosen], curve.points)

@@ -49,6 +49,7 @@ from ltamp_cli.trials.record import (
     TrialDataset,
     TrialRecord,
     check_against_spec,
+    is_success,
 )
 from ltamp_cli.writer_lock import exclusive_writer
 
@@ -280,7 +281,7 @@ def _tell_locked(directory: Path, score: float, valid: bool,
             "mode": "ask-tell",
             "n_trials": len(records),
             "n_valid": sum(r.valid for r in records),
-            "n_success": sum(r.score > 0 for r in records),
+            "n_success": sum(is_success(r) for r in records),
             "init": config.init,
             "seed": config.seed,
             "trials_file": TRIALS_FILE,

@@ -335,6 +335,19 @@ def checked_spec(data: Any) -> SkillSpec:
             if name in seen:  # --context name=value would be ambiguous
                 raise ValueError(f"skill {part!r}: the name {name!r:.40} is used twice")
             seen.add(name)
+        units = space.get("units", [])
+        if not isinstance(units, list) or not all(isinstance(u, str) for u in units):
+            raise ValueError(f"skill {part!r} units must be a list of strings")
+    # the skill's own fields keep their JSON types: "deterministic": "false" is no boolean
+    # (bool("false") is True), "name": 5 no skill name
+    if not isinstance(data.get("name"), str) or not data["name"]:
+        raise ValueError(f"skill 'name' must be a non-empty string, not {data.get('name')!r:.40}")
+    if not isinstance(data.get("description", ""), str):
+        raise ValueError("skill 'description' must be a string")
+    if not isinstance(data.get("deterministic", False), bool):
+        raise ValueError(f"skill 'deterministic' must be true or false, not "
+                         f"{data.get('deterministic')!r:.40}")
+    _finite_number(data.get("invalid_score", -1.0), "invalid_score")
     return spec_from_json(data)
 
 
@@ -344,6 +357,12 @@ def _gaussian_process(metadata: dict[str, Any], arrays: dict[str, np.ndarray],
     kernel = metadata["kernel"]
     if kernel not in KERNEL_NAMES:
         raise ValueError(f"unknown kernel {kernel!r}")
+    # theta of rbf and matern52 have the same length: a "kernel" edited by hand would
+    # silently give other predictions from the same weights
+    fitted = metadata["hyperparameters"].get("kernel", kernel)
+    if fitted != kernel:
+        raise ValueError(f"'kernel' is {kernel!r} but the hyperparameters were fitted with "
+                         f"{fitted!r:.40}")
     mean_mode = metadata["hyperparameters"].get("mean_mode", "constant")
     if mean_mode not in MEAN_MODES:
         raise ValueError(f"'mean_mode' must be one of {', '.join(MEAN_MODES)}, not "

@@ -46,7 +46,7 @@ from ltamp_cli.learning.model_dir import (
     save_model,
     spec_to_json,
 )
-from ltamp_cli.trials.record import TrialDataset, without_duplicates
+from ltamp_cli.trials.record import TrialDataset, is_success, without_duplicates
 
 #: Keys :func:`~.model_dir.save_model` writes itself: never copied from the old metadata.
 _WRITTEN_BY_SAVE = frozenset({
@@ -153,7 +153,7 @@ def refit_model_dir(
     kept["training"] = {**training, **training_metadata(spec, config),
                         "n_trials": len(records),
                         "n_valid": sum(bool(r.valid) for r in records),
-                        "n_success": sum(r.score > 0 for r in records)}
+                        "n_success": sum(is_success(r) for r in records)}
     kept["refit"] = {
         "at": datetime.now(UTC).isoformat(timespec="seconds"),
         "lengthscale_prior_sd": lengthscale_prior_sd,

@@ -22,6 +22,7 @@ from typing import Any
 
 from ltamp_cli.backends.protocol import ParamSpace, SkillSpec
 from ltamp_cli.errors import InputError, location_in
+from ltamp_cli.textfile import not_a_file
 from ltamp_cli.trials.record import MAX_SCORE_MAGNITUDE, TrialDataset, TrialRecord
 from ltamp_cli.writer_lock import exclusive_writer
 
@@ -47,7 +48,7 @@ def read_rows(path: Path) -> Iterator[tuple[int, Mapping[str, Any]]]:
     """``(line number, row)`` for every data row of a ``.csv`` or ``.jsonl`` file."""
     suffix = path.suffix.lower()
     if not path.is_file():
-        raise InputError("no such file", location_in(path))
+        raise InputError(not_a_file(path))
     if suffix == ".csv":
         yield from _csv_rows(path)
     elif suffix in (".jsonl", ".ndjson"):

@@ -153,7 +153,11 @@ class TrialDataset:
         if not self.path.exists():
             return
         with self.path.open("rb") as handle:
-            lines = handle.read().split(b"\n")
+            data = handle.read()
+        if data.startswith(b"\x1f\x8b"):  # e.g. a pool archive (.jsonl.gz) given as is
+            raise InputError("a gzip-compressed file, not JSON lines: decompress it first "
+                             "(gunzip -k FILE)", location_in(self.path, 1, 1))
+        lines = data.split(b"\n")
         # After the final newline split() yields b"". Any other last piece was torn by a
         # crash while writing, unless it is one whole record (a file written by another
         # tool, or saved by an editor, without a final newline).
@@ -304,14 +308,37 @@ def check_against_spec(records: Sequence[TrialRecord], spec: SkillSpec) -> None:
             raise ValueError(f"{where}: score {record.score:g} is beyond ±{MAX_SCORE_MAGNITUDE:g}")
 
 
+def training_score(record: TrialRecord, invalid_score: float = -1.0) -> float:
+    """The score every learner, evaluator and pool reader takes from ``record``: its own
+    score for a valid trial with a finite one; ``invalid_score`` (the skill's, ≤ 0) for a
+    non-finite score, and for an *invalid* trial whose score claims a success (> 0).
+
+    An invalid trial never ran to its end (colliding start, diverged physics, a raising
+    plugin), so it is never a success whatever its score says. ltamp writes such trials with
+    the skill's invalid score (``backends.sanity``), and ``import``/``tell`` refuse one that
+    claims success, but other tools write JSONL files too; they are read as they are (nothing
+    in the file is changed or lost) and labelled here. An invalid trial's score ≤ 0 is kept,
+    as a live one's is."""
+    if not math.isfinite(record.score) or (not record.valid and record.score > 0):
+        return float(invalid_score)
+    return float(record.score)
+
+
+def is_success(record: TrialRecord) -> bool:
+    """Whether ``record`` counts as a success: a valid trial with a finite score > 0."""
+    return training_score(record) > 0
+
+
 def records_to_arrays(
-    records: Sequence[TrialRecord],
+    records: Sequence[TrialRecord], invalid_score: float = -1.0,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Stack records into ``(contexts (n, dc), controls (n, dθ), scores (n,), valid (n,))``."""
+    """Stack records into ``(contexts (n, dc), controls (n, dθ), scores (n,), valid (n,))``;
+    the scores are :func:`training_score`'s (the skill's ``invalid_score`` for invalid
+    successes and non-finite scores), so ``scores > 0`` are exactly the successes."""
     if not records:
         raise ValueError("no trial records")
     contexts = np.array([record.context for record in records], dtype=float)
     controls = np.array([record.control for record in records], dtype=float)
-    scores = np.array([record.score for record in records], dtype=float)
+    scores = np.array([training_score(record, invalid_score) for record in records], dtype=float)
     valid = np.array([record.valid for record in records], dtype=bool)
     return contexts, controls, scores, valid

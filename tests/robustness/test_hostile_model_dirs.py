@@ -67,7 +67,30 @@ def _mean_mode(directory: Path) -> None:
     _write_metadata(directory, metadata)
 
 
+def _set(*path: str, value: Any) -> Callable[[Path], None]:
+    """Set ``model.json``'s field at ``path`` to ``value`` (a hand edit)."""
+    def mutate(directory: Path) -> None:
+        metadata = _metadata(directory)
+        target = metadata
+        for key in path[:-1]:
+            target = target[key]
+        target[path[-1]] = value
+        _write_metadata(directory, metadata)
+    return mutate
+
+
 HOSTILE: dict[str, tuple[Callable[[Path], None], str]] = {
+    # round 5 (before: loaded, and the first one predicted with another kernel's formula)
+    "kernel edited (same theta length)": (_set("kernel", value="rbf"),
+                                          "hyperparameters were fitted with 'matern52'"),
+    "deterministic as a string": (_set("skill", "deterministic", value="false"),
+                                  "'deterministic' must be true or false"),
+    "skill name a number": (_set("skill", "name", value=5), "'name' must be a non-empty"),
+    "description a list": (_set("skill", "description", value=[1]), "'description'"),
+    "units not strings": (_set("skill", "control", "units", value=[1, 2]), "units"),
+    "invalid score a success": (_set("skill", "invalid_score", value=5), "invalid_score"),
+    "invalid score a string": (_set("skill", "invalid_score", value="x"), "invalid_score"),
+
     "bounds whose width overflows": (_huge_bounds, "finite width"),
     "complex weights": (_complex_x, "dtype complex"),
     "names that are not strings": (_names([1, None]), "names"),

@@ -75,3 +75,33 @@ def test_metric_maximize_is_refused(tmp_path: Path) -> None:
         solve_from_pddl((BLOCKS / "domain.pddl").read_text(), text)
     code, lines = _cli("solve", str(problem), "--domain", str(BLOCKS), "--no-stats")
     assert code == 2 and len(lines) == 1 and "metric" in lines[0], lines
+
+
+# Round 5. Before: a UTF-16 or UTF-32 file with its byte-order mark (Windows Notepad's
+# "Unicode"; YAML allows both) was refused ("'utf-8' codec can't decode byte 0xff"), and a
+# Latin-1 byte was reported without its line and column.
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-be", "utf-32"])
+@pytest.mark.parametrize("name", ["problem.yaml", "domain/domain.pddl", "domain/stream.pddl"])
+def test_utf16_and_utf32_files_with_a_byte_order_mark(tmp_path: Path, encoding: str,
+                                                      name: str) -> None:
+    path = problems.write_yaml_problem(tmp_path, "conveyor")
+    target = path if name == "problem.yaml" else tmp_path / name
+    text = target.read_text()
+    bom = "\ufeff" if encoding == "utf-16-be" else ""  # utf-16/utf-32 write their own
+    target.write_bytes((bom + text).encode(encoding))
+    assert load_problem(path).goal is not None
+    code, lines = _cli("check", str(path))
+    assert code == 0, lines
+
+
+def test_a_byte_that_is_not_utf8_is_located(tmp_path: Path) -> None:
+    path = problems.write_yaml_problem(tmp_path, "conveyor")
+    lines = path.read_text().splitlines()
+    lines[2] = lines[2] + "  # caf\xe9"
+    path.write_bytes("\n".join(lines).encode("latin-1"))
+    column = len(lines[2])
+    with pytest.raises(InputError, match="byte 0xe9 is not UTF-8") as error:
+        load_problem(path)
+    assert str(error.value).startswith(f"{path}:3:{column}: ")
+    code, out = _cli("solve", str(path), "--max-time", "5", "--no-stats")
+    assert code == 2 and len(out) == 1 and f"{path}:3:{column}: " in out[0], out

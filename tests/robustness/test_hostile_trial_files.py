@@ -97,3 +97,30 @@ def test_good_file_still_trains(tmp_path: Path) -> None:
     code, lines = _train(path, tmp_path / "model")
     assert code == 0, lines
     assert json.loads((tmp_path / "model" / "model.json").read_text())["n_train"] == 12
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("evaluate") / "model"
+    stdout, stderr = io.StringIO(), io.StringIO()
+    with redirect_stdout(stdout), redirect_stderr(stderr), pytest.raises(SystemExit) as done:
+        main(["train", "moving2d", "--strategy", "gp", "--budget", "8", "--init", "8",
+              "--out", str(out)])
+    assert not done.value.code, stderr.getvalue()
+    return out
+
+
+@pytest.mark.parametrize("label", sorted(AGAINST_SKILL))
+def test_held_out_record_that_does_not_fit_the_skill_is_refused(tmp_path: Path, trained: Path,
+                                                                label: str) -> None:
+    """Round 5: `ltamp evaluate --data` (and `train --test-data`) did not check held-out
+    records against the skill: a context of the wrong length was a numpy ValueError
+    traceback ("inhomogeneous shape"), a control of 1e300 was scored without a word."""
+    line, expected = AGAINST_SKILL[label]
+    path = tmp_path / "test.jsonl"
+    path.write_text("\n".join([*_good_lines(), line]) + "\n")
+    stdout, stderr = io.StringIO(), io.StringIO()
+    with redirect_stdout(stdout), redirect_stderr(stderr), pytest.raises(SystemExit) as done:
+        main(["evaluate", str(trained), "--data", str(path), "--trials", "0"])
+    lines = stderr.getvalue().strip().splitlines()
+    assert done.value.code == 2 and len(lines) == 1 and expected in lines[0], lines
