@@ -45,9 +45,10 @@ arm-object contact as a collision, which issue #20 counts as a failure; the refe
 (LTAMP's ``sample_push_contact``) likewise backs the gripper off until none of its links
 collides with the block and tilts the gripper by up to π/4. So the pad is held with the
 hand leaning back by ``push_pitch`` = π/4 (the palm stays behind and above the block's
-face for every block of the context box on a straight push), and an arm link touching the
-block — which now happens only after an off-centre push has turned the block far past
-the 0.1 rad tolerance, into the leaning hand — is a ``"collision"`` failure.
+face on a straight push), and an arm link touching the block is a ``"collision"`` failure:
+on those 600 inputs the hand then touched the block only after the pad, as an off-centre
+push turned it into the leaning hand, and only on inputs the free pad fails too (label
+agreement 0.968 → 0.980, ``docs/results/push/README.md``).
 
 The backend turns a :class:`RobotFailure` into the skill's failure score (a valid trial:
 the control was executed and failed). Units: metres, radians, seconds, newtons.
