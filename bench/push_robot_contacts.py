@@ -5,15 +5,20 @@ fingertip pad with the Panda holding it. This reruns the row's robot trials (inp
 seeds read from the fidelity cache, ``--cache``; inputs ``< --inputs``) and counts, per
 trial, the simulated steps on which each robot body touches the block: the held pad, the
 hand (link 8: the palm, which the push's grasp does not filter out, unlike the fingers) or
-another arm link. A trial is *pad-only* when nothing but the pad touched the block. The
-table gives the label agreement of free vs robot (cached labels; a rerun's score must
-reproduce its cached one) on pad-only inputs and on the others, with 95 % Wilson
+another arm link. Since robot push setup 3 an arm link touching the block ends the trial
+as a ``"collision"`` (so a count of ``hand`` is its first contact), and the hand leans back
+by ``RobotSettings.push_pitch`` (π/4; ``--push-pitch 0`` reruns setup 2's straight-down
+grasp, whose palm pushed tall blocks: the trials then fail at the palm's first touch). A
+trial is *pad-only* when nothing but the pad touched the block. The table gives the label
+agreement of free vs robot (cached labels of the current setup's keys; a rerun's score
+must reproduce its cached one) on pad-only inputs and on the others, with 95 % Wilson
 intervals, and lists the disagreements with the toucher. Written to ``--out`` (default
-``bench/results/push_robot_contacts.json``). About 0.2 s CPU per trial; the committed run:
+``bench/results/push_robot_contacts.json``). About 0.2 s CPU per trial; the committed runs
+(setup 2's is ``push_goal_robot_contacts.json``):
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/push_robot_contacts.py \
         --cache docs/results/fidelity/push_goal_trials.jsonl --inputs 600 \
-        --out docs/results/fidelity/push_goal_robot_contacts.json
+        --out docs/results/fidelity/push_goal_robot_contacts_setup3.json
 """
 
 from __future__ import annotations
@@ -30,10 +35,11 @@ from pathlib import Path
 import numpy as np
 import pybullet as p
 
-from bench.fidelity import RESULTS_DIR, is_success, load_cache
+from bench.fidelity import RESULTS_DIR, is_success, load_cache, trial_key
 from ltamp_cli.backends import load_backend
 from ltamp_cli.backends.pybullet.robot.arm import PANDA_HAND_LINK
 from ltamp_cli.backends.pybullet.skills import robot as robot_skill
+from ltamp_cli.backends.pybullet.skills.robot import RobotSettings
 from ltamp_cli.learning.metrics import wilson_interval
 
 SKILL = "push"
@@ -67,13 +73,21 @@ def contact_counting(counts: collections.Counter[str]) -> Iterator[None]:
         robot_skill.RobotTrialPhysics._check = original  # type: ignore[method-assign]
 
 
+def setting_name(setting: str) -> str:
+    """The versioned name a push trial of ``setting`` has in the fidelity cache's keys now
+    (e.g. ``pybullet-panda@v1.1r3``): records of older physics or robot setups are skipped."""
+    return trial_key(setting, SKILL, np.zeros(0), np.zeros(0), 0).split("|")[0]
+
+
 def cached_pairs(cache_path: Path, n_inputs: int) -> list[tuple[dict, dict]]:
     """(free ``pybullet``, robot ``pybullet-panda``) push records of inputs ``< n_inputs``
-    (trial seed = input index for the fidelity bench's seed 0), in input order."""
+    (trial seed = input index for the fidelity bench's seed 0) of the current physics and
+    robot setup versions, in input order."""
+    names = {setting_name(setting): setting for setting in ("pybullet", "pybullet-panda")}
     by_seed: dict[int, dict[str, dict]] = collections.defaultdict(dict)
     for key, record in load_cache(cache_path).items():
-        setting = key.split("|")[0].split("@")[0]
-        if record["skill"] == SKILL and setting in ("pybullet", "pybullet-panda"):
+        setting = names.get(key.split("|")[0])
+        if record["skill"] == SKILL and setting is not None:
             by_seed[record["seed"]][setting] = record
     return [(pair["pybullet"], pair["pybullet-panda"]) for seed, pair in sorted(by_seed.items())
             if seed < n_inputs and len(pair) == 2]
@@ -93,11 +107,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--cache", type=Path, required=True, help="the fidelity trial cache")
     parser.add_argument("--inputs", type=int, default=200, help="inputs 0..N-1 of the row")
     parser.add_argument("--out", type=Path, default=RESULTS_DIR / "push_robot_contacts.json")
+    parser.add_argument("--push-pitch", type=float, default=RobotSettings().push_pitch,
+                        help="lean of the hand holding the pad (rad; 0: setup 2's grasp, "
+                             "whose reruns then need not reproduce the cached scores)")
     args = parser.parse_args(argv)
     pairs = cached_pairs(args.cache, args.inputs)
     if not pairs:
         parser.error(f"--cache {args.cache}: no push input has both a free and a robot trial")
-    backend = load_backend("pybullet", robot="panda")
+    backend = load_backend("pybullet", robot="panda",
+                           robot_settings=RobotSettings(push_pitch=args.push_pitch))
     rows, cpu = [], 0.0
     try:
         for free, robot in pairs:
@@ -109,6 +127,7 @@ def main(argv: list[str] | None = None) -> int:
             cpu += time.process_time() - start
             rows.append({"input": robot["seed"], "touchers": dict(sorted(counts.items())),
                          "reproduced": float(result.score) == float(robot["score"]),
+                         "reason": result.info.get("reason"),
                          "free": is_success(free), "robot": is_success(robot),
                          "free_outcome": free.get("outcome"), "robot_outcome": robot.get("outcome"),
                          "control": robot["control"], "context": robot["context"]})
@@ -121,6 +140,8 @@ def main(argv: list[str] | None = None) -> int:
         "+".join(sorted(r["touchers"])) or "nothing" for r in rows)
     report = {
         "skill": SKILL, "cache": str(args.cache), "inputs": len(rows),
+        "push_pitch": args.push_pitch, "robot_setup": setting_name("pybullet-panda"),
+        "failures": dict(collections.Counter(r["reason"] for r in rows if r["reason"])),
         "reproduced": sum(r["reproduced"] for r in rows),
         "touchers": dict(sorted(toucher_sets.items())),
         "all": _agreement(pairs), "pad_only": _agreement(pad_only),

@@ -14,6 +14,7 @@ from ltamp_cli.backends import load_backend
 from ltamp_cli.backends.kitchenware_geometry import SpoonDims, spoon_geometry
 from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial
 from ltamp_cli.backends.pybullet.paths import PosePath, rotation_about_axis, timed_poses
+from ltamp_cli.backends.pybullet.robot.arm import PANDA_HAND_LINK
 from ltamp_cli.backends.pybullet.robot.cartesian import CartesianConfig, densify_tool_path
 from ltamp_cli.backends.pybullet.robot.grasps import rim_grasps
 from ltamp_cli.backends.pybullet.robot.pose import Pose
@@ -183,3 +184,26 @@ def test_a_free_floating_success_succeeds_with_the_robot(skill: str) -> None:
     finally:
         free.close()
         robot.close()
+
+
+def test_the_palm_touching_a_tall_block_is_a_collision_and_the_lean_clears_it() -> None:
+    # The push's input above (fidelity input 7): the cube's top is 4.6 cm above the pad's
+    # centre, above the palm of a hand held straight down (~3.45 cm). Held straight down
+    # (push_pitch 0) the palm touches the block: an arm collision, a failed trial. Held
+    # leaning back (the default) the palm clears it and the pad alone pushes it to its goal.
+    context, control, seed = (np.asarray(v) if i < 2 else v
+                              for i, v in enumerate(SUCCEEDED_FREE["push"]))
+    assert context[0] * (1.0 - control[0]) > 0.04
+    straight = load_backend("pybullet", robot="panda",
+                            robot_settings=RobotSettings(push_pitch=0.0))
+    leaning = load_backend("pybullet", robot="panda")
+    try:
+        failed = straight.run_trial("push", context, control, seed)
+        assert failed.valid and failed.info.get("reason") == "collision", failed.info
+        assert failed.info["robot_detail"].startswith(f"arm link {PANDA_HAND_LINK} touched")
+        assert failed.score == straight.skills()["push"].invalid_score
+        carried = leaning.run_trial("push", context, control, seed)
+        assert "reason" not in carried.info and carried.score > 0, carried.info
+    finally:
+        straight.close()
+        leaning.close()

@@ -28,8 +28,27 @@ like :class:`~.physics.BulletTrialPhysics`, except that the *tool* is not moved 
    ``joint_speed`` rad/s); :meth:`hold` keeps commanding the current configuration.
 4. After every simulated step the trial fails with :class:`RobotFailure` when the arm (any
    link but its fixed base) touches the table or the bowl, a link other than the hand touches
-   the tool (``"collision"``), or the tool is more than ``slip_position_m`` /
+   the tool, any arm link touches a free body (the manipulated object: the pushed block,
+   the stirred cup) (``"collision"``), or the tool is more than ``slip_position_m`` /
    ``slip_angle_rad`` from where the grasp should hold it (``"slip"``).
+
+Why a hand touching the manipulated object fails the trial, and why the push's hand leans
+back (issue #20; setup versions push 3, stir 4): the skill's control names the contact —
+the push's fingertip pad at ``contact_height`` and ``lateral_offset`` — and the free-floating
+trial simulates exactly that contact. Held straight down, the Panda's palm (link 8, ~6 cm
+deep, ~20 cm wide) sits ~3.45 cm above the pad's centre, so on blocks taller than that
+above the contact (129 of the fidelity bench's 600 push inputs) the palm pushed the block
+(on 95 of them the pad never touched it) and pushed it straight where the 2 cm pad alone
+turns it: a different, unplanned contact that made 12 robot-only "successes". A roboticist
+holds a pusher so that the hand stays clear of the object and counts an unplanned
+arm-object contact as a collision, which issue #20 counts as a failure; the reference push
+(LTAMP's ``sample_push_contact``) likewise backs the gripper off until none of its links
+collides with the block and tilts the gripper by up to π/4. So the pad is held with the
+hand leaning back by ``push_pitch`` = π/4 (the palm stays behind and above the block's
+face on a straight push), and an arm link touching the block is a ``"collision"`` failure:
+on those 600 inputs the hand then touched the block only after the pad, as an off-centre
+push turned it into the leaning hand, and only on inputs the free pad fails too (label
+agreement 0.968 → 0.980, ``docs/results/push/README.md``).
 
 The backend turns a :class:`RobotFailure` into the skill's failure score (a valid trial:
 the control was executed and failed). Units: metres, radians, seconds, newtons.
@@ -79,9 +98,11 @@ ROBOTS = ("none", "panda")
 #: (pour only); 2: rim grasps straight down, per-skill base bearings, the skill's own
 #: timing, every skill; 3 (pour): rim grasps leaning out by π/4; 3 (stir): the planner's
 #: collision check places the held tool at its centre of mass (it was displaced by the
-#: kitchenware's com_offset: the stirrer rod 10 cm into the table, a cup or spoon ~2 mm).
+#: kitchenware's com_offset: the stirrer rod 10 cm into the table, a cup or spoon ~2 mm);
+#: 3 (push) / 4 (stir): an arm link touching a free body (the pushed block, the stirred
+#: cup) is a collision, and the push's hand leans back by π/4 (the palm pushed tall blocks).
 ROBOT_SETUP_VERSIONS: Mapping[str, int] = MappingProxyType(
-    {"pour": 3, "scoop": 2, "push": 2, "stir": 3})
+    {"pour": 3, "scoop": 2, "push": 3, "stir": 4})
 #: Why a robot trial failed (``info["reason"]``).
 FAILURE_REASONS = ("reach", "collision", "slip", "grasp")
 
@@ -115,9 +136,10 @@ class RobotSettings:
     side, top or edge), the hand leaning out by each of ``rim_leans`` (radians; π/4: on
     5 bench pours that collided with the hand straight down, 3 were carried out, as with
     1.1 rad; with (π/4, 0) 2). ``push_pitch`` (rad): how far the hand holding the push's
-    fingertip pad leans back from vertical (``0``, the default: straight down; the palm
-    then reaches 2.8 cm past the pad and can touch a tall block pushed low; ``π/4`` agreed
-    with the free pad on 54 of the fidelity bench's first 60 push inputs, ``0`` on 55).
+    fingertip pad leans back from vertical (π/4, the default and the reference's largest
+    gripper tilt: the palm stays behind the block's face; ``0``, straight down, puts the
+    palm ~3.45 cm above the pad's centre, where it touches blocks taller than that above
+    the contact: 129 of the fidelity bench's 600 push inputs, now collisions).
     ``max_grasps``: grasps tried per base bearing (those whose hand
     is nearest the base, its palm not facing the base). ``skill_timing``: the arm follows
     the skill's own timing of the tool path (its speeds; ``False``: a rest-to-rest
@@ -136,7 +158,7 @@ class RobotSettings:
     grasp_heights: tuple[float, ...] = (0.45, 0.3, 0.15)
     rim_grasps: bool = True
     rim_leans: tuple[float, ...] = (np.pi / 4,)
-    push_pitch: float = 0.0
+    push_pitch: float = np.pi / 4
     max_grasps: int = 6
     skill_timing: bool = True
     joint_speed: float = 2.0
@@ -588,7 +610,8 @@ class RobotTrialPhysics(BulletTrialPhysics):
         return self.run_steps(count, command, checked, 0)
 
     def _check(self, step: int) -> None:
-        """Raise :class:`RobotFailure` on an arm collision or a slipped tool."""
+        """Raise :class:`RobotFailure` on an arm collision (with the table, a fixed body, the
+        tool other than by the hand, or a free body) or a slipped tool."""
         arm, plan, tool = self.state.arm, self.state.plan, self.state.tool
         assert arm is not None and plan is not None and tool is not None
         client, robot = self.world.client, arm.body_id
@@ -602,6 +625,14 @@ class RobotTrialPhysics(BulletTrialPhysics):
             if contact[3] not in PANDA_HAND_LINKS and contact[8] <= depth:
                 raise RobotFailure("collision", f"arm link {contact[3]} hit the tool at "
                                    f"step {step}")
+        # Only the held tool may touch the manipulated object: the control names the tool's
+        # contact, and the arm pushing the object instead is an unplanned contact. (The
+        # fingers of a fingertip grasp are filtered out: the pad is their contact shape.)
+        for body in self.state.free:
+            for contact in p.getContactPoints(robot, body.body, physicsClientId=client):
+                if contact[8] <= depth:
+                    raise RobotFailure("collision", f"arm link {contact[3]} touched the "
+                                       f"{body.geometry.kind} at step {step}")
         held = arm.end_effector_pose() @ plan.grasp.tool_in_gripper
         position, quaternion = tool.pose()
         actual = Pose(position, quaternion)
