@@ -11,7 +11,9 @@ score, the cached PyBullet score) to ``--out`` (resumable):
 * ``none``: as shipped (a check that the cache reproduces);
 * ``heavy``: the spoon's mass × 1000 (its load no longer pushes it; gravity still does);
 * ``weightless``: an upward force of the spoon's weight every step (no gravity sag; the
-  load still pushes it).
+  load still pushes it);
+* ``solver50``: the spoon as shipped, the solver at the reference implementation's 50
+  iterations (shipped: 5), so bead-on-bead contacts are solved stiffly.
 
 If the spoonful grows towards SAPIEN's with either, that part of the placement is what makes
 PyBullet spill more during the lift than SAPIEN's kinematic spoon.
@@ -49,11 +51,13 @@ from bench.fidelity import load_cache, trial_key
 from ltamp_cli.backends.kitchenware_geometry import KitchenwareGeometry
 from ltamp_cli.backends.pybullet.kitchenware import BodyMaterial, KitchenwareBody
 from ltamp_cli.backends.pybullet.skills.physics import BulletTrialPhysics
-from ltamp_cli.backends.pybullet.world import PhysicsWorld, skill_world_config
+from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig, skill_world_config
 from ltamp_cli.backends.skills3d.physics import IDENTITY_QUAT, BodyRole, StepCallback
 from ltamp_cli.backends.skills3d.scoop import SCOOP_TAU, run_scoop
 
-VARIANTS = ("none", "heavy", "weightless")
+VARIANTS = ("none", "heavy", "weightless", "solver50")
+#: The Kitchen3D reference implementation's PyBullet solver iterations (field facts).
+REFERENCE_SOLVER_ITERATIONS = 50
 HEAVY_FACTOR = 1000.0
 GRAVITY_M_S2 = 9.81
 
@@ -174,7 +178,9 @@ def main(argv: list[str] | None = None) -> int:
         for line in args.out.open():
             row = json.loads(line)
             done.add((row["index"], row["variant"]))
-    physics = SpoonVariantPhysics(PhysicsWorld(skill_world_config("scoop")), args.variant)
+    base = WorldConfig(solver_iterations=REFERENCE_SOLVER_ITERATIONS) if (
+        args.variant == "solver50") else None
+    physics = SpoonVariantPhysics(PhysicsWorld(skill_world_config("scoop", base)), args.variant)
     for index in args.indices:
         if (index, args.variant) in done:
             continue
