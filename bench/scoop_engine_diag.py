@@ -31,6 +31,16 @@ check (are the cached labels what today's code gives?):
         --cache docs/results/fidelity/engine_scoop_bed_trials.jsonl --engines pybullet \
         --indices $(seq 0 5 195) --out docs/results/fidelity/scoop_rerun_pybullet.jsonl
 
+``--fit-summary RERUN.jsonl ...`` summarises ``--rerun`` lines per SAPIEN setting against
+the cached PyBullet and SAPIEN v3 labels (:func:`fit_summary`): issue #21's third attempt,
+the engine settings screened on 32 borderline inputs of the fit set 0-199:
+
+    OMP_NUM_THREADS=1 .venv/bin/python bench/scoop_engine_diag.py --fit-summary \
+        docs/results/fidelity/scoop_fit_engine_settings.jsonl \
+        --capacities docs/results/fidelity/scoop_capacity_pybullet_borderline.jsonl \
+        --cache docs/results/fidelity/engine_scoop_bed_trials.jsonl \
+        --out docs/results/fidelity/scoop_fit_engine_settings_summary.json
+
 ``--compare-sets 0 200 400 ...`` compares the cached pairs of consecutive index ranges
 (:func:`compare_sets`: successes, disagreements, KS per input and latent dimension, a
 two-sample classifier, a logistic model of disagreement with a set indicator) and writes
@@ -220,6 +230,83 @@ def rerun_rows(inputs_path: Path, cache: Path, indices: list[int], engine: str,
         backend.close()
 
 
+def _cached_by_seed(cache: Path, prefix: str) -> dict[int, dict]:
+    """The cache's scoop records whose key starts with ``prefix`` (e.g. ``sapien@v3|``), by
+    trial seed (= input index)."""
+    records: dict[int, dict] = {}
+    for line in cache.open():
+        try:
+            record = json.loads(line)
+        except json.JSONDecodeError:
+            continue
+        if record["skill"] == "scoop" and record["key"].startswith(prefix):
+            records[record["seed"]] = record
+    return records
+
+
+def fit_summary(reruns: list[Path], cache: Path, capacities: Path | None) -> list[dict]:
+    """Per SAPIEN setting (``cfg``) of ``--rerun`` lines: on its inputs, how many labels
+    agree with PyBullet's (cached) for that setting and for the cached SAPIEN v3, the mean
+    clipped fraction-of-capacity bias over PyBullet (both), and, with PyBullet capacities
+    (``--capacity --engines pybullet`` lines), the mean SAPIEN/PyBullet capacity ratio and
+    the mean spoonful difference (beads; PyBullet's spoonful = its clipped fraction × its
+    capacity, so spoonfuls above capacity count as full); ``_v3`` keys: the same for the
+    re-run of SAPIEN v3 (``cfg`` ``{}``); both on the inputs that re-run covers."""
+    pybullet = _cached_by_seed(cache, f"pybullet@v{setting_version('pybullet', 'scoop')}|")
+    sapien_v3 = _cached_by_seed(cache, "sapien@v3|")
+    capacity = {}
+    if capacities is not None:
+        for line in capacities.open():
+            row = json.loads(line)
+            capacity[row["index"]] = row["capacity"]
+    groups: dict[str, dict[int, dict]] = {}
+    for path in reruns:
+        for line in path.open():
+            row = json.loads(line)
+            groups.setdefault(json.dumps(row["cfg"], sort_keys=True), {})[row["index"]] = row
+
+    def label(score: float, valid: bool) -> bool:
+        return bool(valid) and score > 0
+
+    def fraction(score: float, valid: bool) -> float:
+        return fraction_from_score(score) if valid else 0.0
+
+    out = []
+    for cfg, rows in groups.items():
+        indices = sorted(i for i in rows if i in pybullet and i in sapien_v3)
+        ref = [pybullet[i] for i in indices]
+        old = [sapien_v3[i] for i in indices]
+        new = [rows[i] for i in indices]
+        summary: dict[str, Any] = {
+            "cfg": json.loads(cfg), "inputs": len(indices),
+            "agree_new": sum(label(n["score"], n["valid"]) == label(r["score"], r["valid"])
+                             for n, r in zip(new, ref, strict=True)),
+            "agree_v3": sum(label(o["score"], o["valid"]) == label(r["score"], r["valid"])
+                            for o, r in zip(old, ref, strict=True)),
+            "fraction_bias_new": float(np.mean([
+                fraction(n["score"], n["valid"]) - fraction(r["score"], r["valid"])
+                for n, r in zip(new, ref, strict=True)])) if indices else None,
+            "fraction_bias_v3": float(np.mean([
+                fraction(o["score"], o["valid"]) - fraction(r["score"], r["valid"])
+                for o, r in zip(old, ref, strict=True)])) if indices else None,
+        }
+        # The same measures for SAPIEN v3 (the re-run of cfg {}) on the same inputs.
+        v3_rows = groups.get("{}", {})
+        for name, source in (("", rows), ("_v3", v3_rows)):
+            measured = [i for i in indices if i in capacity and i in source
+                        and (not v3_rows or i in v3_rows)]
+            if measured:
+                summary[f"capacity_inputs{name}"] = len(measured)
+                summary[f"capacity_ratio{name}"] = float(np.mean(
+                    [source[i]["info"]["spoon_capacity"] / capacity[i] for i in measured]))
+                summary[f"spoonful_diff_beads{name}"] = float(np.mean(
+                    [source[i]["info"]["beads_in_spoon_end"]
+                     - fraction(pybullet[i]["score"], pybullet[i]["valid"]) * capacity[i]
+                     for i in measured]))
+        out.append(summary)
+    return out
+
+
 #: The latent draws of a scoop trial compared across input sets (:func:`compare_sets`).
 LATENT_NAMES = ("bead_count", "bead_radius_m", "bead_mass_kg", "bead_friction",
                 "bead_restitution", "bowl_friction", "spoon_mass_kg", "spoon_friction",
@@ -328,10 +415,22 @@ def main(argv: list[str] | None = None) -> int:
                         "BOUND[0]..BOUND[1]-1, BOUND[1]..BOUND[2]-1, ... (needs --rerun's "
                         "inputs file as --inputs); writes JSON to --out")
     parser.add_argument("--inputs", type=Path, default=None, help="stored inputs (JSON)")
+    parser.add_argument("--fit-summary", type=Path, nargs="+", default=None,
+                        metavar="RERUN_JSONL", help="summarise --rerun lines per SAPIEN "
+                        "setting against the cache's PyBullet and SAPIEN v3 labels "
+                        "(:func:`fit_summary`; PyBullet capacities from --capacities)")
+    parser.add_argument("--capacities", type=Path, default=None,
+                        help="PyBullet --capacity lines for --fit-summary")
     parser.add_argument("--sapien-version", default=None,
                         help="pair the cache's SAPIEN trials of this physics version "
                              "(default: the current one), e.g. 3 for the v3 row")
     args = parser.parse_args(argv)
+    if args.fit_summary is not None:
+        summaries = fit_summary(args.fit_summary, args.cache, args.capacities)
+        args.out.write_text(json.dumps(summaries, indent=1))
+        for row in summaries:
+            print(json.dumps(row))
+        return 0
     if args.compare_sets is not None:
         if args.inputs is None or len(args.compare_sets) < 3:
             parser.error("--compare-sets needs --inputs and at least 3 bounds")

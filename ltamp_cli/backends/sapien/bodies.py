@@ -273,6 +273,8 @@ def spawn_beads(world: SapienWorld, spec: BeadSpec, positions_world: np.ndarray)
         )
         component.solver_position_iterations = config.solver_position_iterations
         component.solver_velocity_iterations = config.solver_velocity_iterations
+        component.max_angular_velocity = config.bead_max_angular_velocity
+        component.sleep_threshold = config.bead_sleep_threshold
         entity = sapien.Entity()
         entity.name = "bead"
         entity.add_component(component)
