@@ -166,15 +166,7 @@ def capacity_rows(cache: Path, first: int, last: int, engine: str, config: dict[
     (indices = trial seeds of seed 0; ``indices``: these instead) on ``engine``, measured as
     in the trial (same latents and draws), with the spoon and bead masses (kg) and the bead
     radius (m), one row per input as soon as it is measured."""
-    prefix = f"pybullet@v{setting_version('pybullet', 'scoop')}|"
-    by_index = {}
-    for line in cache.open():
-        try:
-            record = json.loads(line)
-        except json.JSONDecodeError:
-            continue
-        if record["skill"] == "scoop" and record["key"].startswith(prefix):
-            by_index[record["seed"]] = record
+    by_index = _cached_by_seed(cache, f"pybullet@v{setting_version('pybullet', 'scoop')}|")
     physics = engine_physics(engine, **config)
     settings = ScoopSettings()
     for index in (range(first, last) if indices is None else indices):

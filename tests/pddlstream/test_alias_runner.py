@@ -13,21 +13,10 @@ from pathlib import Path
 
 import pytest
 from alias_scripts import write_courier
+from runner_subprocess import run_runner as run
 
 REPO = Path(__file__).resolve().parents[2]
 PLAN = ["1) drive", "2) load", "3) drive", "4) unload"]
-
-
-def run(args: list[str], cwd: Path, cli: bool = True) -> subprocess.CompletedProcess[str]:
-    """``ltamp pddlstream run ARGS`` (``python -m ltamp_cli.pddlstream ARGS`` if not
-    ``cli``) in ``cwd``, with ltamp importable and nothing else of this process."""
-    env = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "PYTHONPATH": str(REPO),
-           "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-           "XDG_CACHE_HOME": str(cwd / "cache")}
-    command = ([sys.executable, "-m", "ltamp_cli", "pddlstream", "run"] if cli
-               else [sys.executable, "-m", "ltamp_cli.pddlstream"])
-    return subprocess.run([*command, *args], capture_output=True, text=True, timeout=180,
-                          cwd=cwd, env=env)
 
 
 def plan_lines(stdout: str) -> list[str]:

@@ -5,7 +5,6 @@ compute exactly what NumPy 1 computed."""
 
 from __future__ import annotations
 
-import os
 import subprocess
 import sys
 import types
@@ -14,24 +13,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 from numpy1_scripts import write_shelf
+from runner_subprocess import run_runner as run
 
 from ltamp_cli.pddlstream import numpy_compat
 from ltamp_cli.pddlstream.numpy_compat import LEGACY, NOT_RESTORED, installed
 
 REPO = Path(__file__).resolve().parents[2]
 PLAN_LINE = "1) store crate [1.5 2.5 3. ]"
-
-
-def run(args: list[str], cwd: Path, cli: bool) -> subprocess.CompletedProcess[str]:
-    """``ltamp pddlstream run ARGS`` (``python -m ltamp_cli.pddlstream ARGS`` if not
-    ``cli``) in a fresh interpreter."""
-    env = {"PATH": os.environ.get("PATH", "/usr/bin:/bin"), "PYTHONPATH": str(REPO),
-           "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
-           "XDG_CACHE_HOME": str(cwd / "cache")}
-    command = ([sys.executable, "-m", "ltamp_cli", "pddlstream", "run"] if cli
-               else [sys.executable, "-m", "ltamp_cli.pddlstream"])
-    return subprocess.run([*command, *args], capture_output=True, text=True, timeout=180,
-                          cwd=cwd, env=env)
 
 
 def numpy_lacks(name: str) -> bool:
