@@ -23,6 +23,8 @@ so a crafted directory gives one ``InputError`` line, never a payload or a trace
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import hashlib
 import io
 import json
@@ -31,7 +33,7 @@ import os
 import threading
 import time
 import zipfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from importlib import metadata as package_metadata
@@ -59,6 +61,11 @@ METADATA_FILE = "model.json"
 # apart, before it reports the mismatch: the save's window is one digest and one small write.
 _READ_ATTEMPTS = 6
 _READ_RETRY_S = 0.05
+# Saves hold this file's lock exclusively for their two renames and readers share it while
+# they read both files, so that a reader never pairs one save's weights with another's
+# model.json however fast saves follow each other (retries alone cannot promise that).
+# Readers never create it (model folders may be read-only or shipped without it).
+SWAP_LOCK_FILE = ".ltamp-swap.lock"
 
 
 def space_to_json(space: ParamSpace) -> dict[str, Any]:
@@ -154,8 +161,9 @@ def save_model(model: SkillModel, directory: str | Path, **metadata: Any) -> Pat
         meta = _write_temporary(directory / METADATA_FILE,
                                 lambda handle: handle.write(text.encode()))
         try:
-            weights.replace(directory / "weights.npz")
-            meta.replace(directory / METADATA_FILE)
+            with _swap_lock(directory, fcntl.LOCK_EX, create=True):
+                weights.replace(directory / "weights.npz")
+                meta.replace(directory / METADATA_FILE)
         finally:
             meta.unlink(missing_ok=True)
     finally:
@@ -175,6 +183,24 @@ def _write_temporary(path: Path, write: Callable[[BinaryIO], Any]) -> Path:
         raise InputError(f"{path.parent}: could not save the model ({path.name}: "
                          f"{error.strerror or error}); the directory is unchanged") from None
     return temporary
+
+
+@contextlib.contextmanager
+def _swap_lock(directory: Path, operation: int, *, create: bool) -> Iterator[None]:
+    """Hold ``directory``'s swap lock (``fcntl.LOCK_EX`` or ``LOCK_SH``) for the body; without
+    a lock file (or one that cannot be opened) the body runs unlocked: readers then rely on
+    their retries, as for folders written before the lock existed."""
+    flags = os.O_RDONLY | (os.O_CREAT if create else 0)
+    try:
+        fd = os.open(directory / SWAP_LOCK_FILE, flags, 0o644)
+    except OSError:
+        yield
+        return
+    try:
+        fcntl.flock(fd, operation)
+        yield
+    finally:
+        os.close(fd)
 
 
 def _sha256(path: Path) -> str:
@@ -227,19 +253,22 @@ def load_model(directory: str | Path) -> LoadedModel:
     path = directory / METADATA_FILE
     data: bytes | None = None
     for attempt in range(_READ_ATTEMPTS):
-        metadata = load_metadata(directory)
-        if (directory / "weights.pkl").exists() and not (directory / "weights.npz").exists():
-            raise InputError("weights.pkl is a pickle, which ltamp no longer loads (it can run "
-                             "code): train the model again to write weights.npz",
-                             location_in(path))
-        # Another process may be saving this directory (new weights renamed in, model.json
-        # next): the weights read on the previous attempt often belong to the model.json
-        # read now, so they are tried before reading the weights again.
-        if attempt > 0 and _matches(metadata, data):
-            break
-        data = _weights_bytes(directory)
-        if _matches(metadata, data):
-            break
+        with _swap_lock(directory, fcntl.LOCK_SH, create=False):
+            metadata = load_metadata(directory)
+            if ((directory / "weights.pkl").exists()
+                    and not (directory / "weights.npz").exists()):
+                raise InputError("weights.pkl is a pickle, which ltamp no longer loads (it can "
+                                 "run code): train the model again to write weights.npz",
+                                 location_in(path))
+            # Without the swap lock another process may be saving this directory (new
+            # weights renamed in, model.json next): the weights read on the previous attempt
+            # often belong to the model.json read now, so they are tried before reading the
+            # weights again.
+            if attempt > 0 and _matches(metadata, data):
+                break
+            data = _weights_bytes(directory)
+            if _matches(metadata, data):
+                break
         if attempt + 1 == _READ_ATTEMPTS:  # a save interrupted for good
             raise InputError(f"weights.npz does not match {METADATA_FILE} (a save was "
                              "interrupted?): train again to rewrite the model", location_in(path))
