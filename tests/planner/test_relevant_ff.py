@@ -10,12 +10,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_search_layout import random_task
+from test_search_layout import random_task, recorded_evaluations
 
-from ltamp_cli.planner.algorithms.common import PlannerConfig
-from ltamp_cli.planner.api import solve
-from ltamp_cli.planner.problem import load_problem
-from ltamp_cli.planner.search import heuristic as heuristic_module
 from ltamp_cli.planner.search.heuristic import INFINITY, FFHeuristic, HeuristicResult
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "problems" / "examples"
@@ -50,21 +46,7 @@ def test_pruned_ff_equals_ff_over_every_operator_on_random_tasks(unit_costs: boo
 
 def test_pruned_ff_equals_ff_over_every_operator_on_kitchen_fluent(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    recorded: list[tuple[FFHeuristic, np.ndarray]] = []
-    original = FFHeuristic._evaluate
-
-    def spy(self: FFHeuristic, vector: np.ndarray) -> HeuristicResult:
-        recorded.append((self, vector.copy()))
-        return original(self, vector)
-
-    monkeypatch.setattr(heuristic_module.FFHeuristic, "_evaluate", spy)
-    problem = load_problem(EXAMPLES / "kitchen_fluent.yaml")
-    options = {k: v for k, v in problem.planner_options.items()
-               if k in PlannerConfig.__dataclass_fields__}
-    config = PlannerConfig(**{**options, "algorithm": "adaptive", "seed": 0,
-                              "max_time": 60.0, "statistics_dir": None})
-    assert solve(problem, config).solved
-    monkeypatch.setattr(heuristic_module.FFHeuristic, "_evaluate", original)
+    recorded = recorded_evaluations(monkeypatch, "kitchen_fluent", "adaptive", seed=0)
     assert len(recorded) >= 100
     full_by_task: dict[int, FFHeuristic] = {}
     fewer = 0

@@ -151,11 +151,10 @@ def test_ff_layout_equals_plain_bellman_ford_on_random_tasks(unit_costs: bool,
     assert compared == 750 and finite > 200  # most states need a relaxed plan
 
 
-@pytest.mark.parametrize("example,algorithm", [("kitchen_fluent", "adaptive"),
-                                               ("kitchen_symbolic", "adaptive"),
-                                               ("tamp2d_uniform_tight_4", "binding")])
-def test_ff_layout_equals_plain_bellman_ford_on_solved_examples(
-        monkeypatch: pytest.MonkeyPatch, example: str, algorithm: str) -> None:
+def recorded_evaluations(monkeypatch: pytest.MonkeyPatch, example: str, algorithm: str,
+                         seed: int) -> list[tuple[FFHeuristic, np.ndarray]]:
+    """Solve ``example`` with its own planner options (``algorithm``, ``seed``) and return
+    every FF evaluation made, as (heuristic, state vector) pairs."""
     recorded: list[tuple[FFHeuristic, np.ndarray]] = []
     original = FFHeuristic._evaluate
 
@@ -167,13 +166,22 @@ def test_ff_layout_equals_plain_bellman_ford_on_solved_examples(
     problem = load_problem(EXAMPLES / f"{example}.yaml")
     options = {k: v for k, v in problem.planner_options.items()
                if k in PlannerConfig.__dataclass_fields__}
-    config = PlannerConfig(**{**options, "algorithm": algorithm, "seed": 1, "max_time": 60.0,
-                              "statistics_dir": None})
-    result = solve(problem, config)
-    assert result.solved
+    config = PlannerConfig(**{**options, "algorithm": algorithm, "seed": seed,
+                              "max_time": 60.0, "statistics_dir": None})
+    assert solve(problem, config).solved
+    monkeypatch.setattr(heuristic_module.FFHeuristic, "_evaluate", original)
+    return recorded
+
+
+@pytest.mark.parametrize("example,algorithm", [("kitchen_fluent", "adaptive"),
+                                               ("kitchen_symbolic", "adaptive"),
+                                               ("tamp2d_uniform_tight_4", "binding")])
+def test_ff_layout_equals_plain_bellman_ford_on_solved_examples(
+        monkeypatch: pytest.MonkeyPatch, example: str, algorithm: str) -> None:
+    recorded = recorded_evaluations(monkeypatch, example, algorithm, seed=1)
     assert len(recorded) >= 10
     for heuristic, vector in recorded[::3]:
-        got, expected = original(heuristic, vector), reference_ff(heuristic, vector)
+        got, expected = heuristic._evaluate(vector), reference_ff(heuristic, vector)
         assert (got.value, got.preferred) == (expected.value, expected.preferred)
 
 
