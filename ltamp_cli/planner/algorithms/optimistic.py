@@ -691,8 +691,36 @@ def contextual_stream_plan(state: PlannerState, evaluation: OptimisticEvaluation
             for step in used_at:
                 name, args = steps[step]
                 steps[step] = (name, tuple(rename.get(x, x) for x in args))
+    entries = _after_their_contexts(entries)
     return ContextualStreamPlan(tuple(e[0] for e in entries), tuple(e[1] for e in entries),
                                 tuple(e[2] for e in entries), tuple(steps))
+
+
+def _after_their_contexts(entries: list[list]) -> list[list]:
+    """``entries`` ([instance key, outputs, context]) reordered, stably, so that each one
+    comes after the entries whose outputs its inputs or its context's facts hold: the
+    earliest entry (in the given order) whose placeholders are all bound goes next.
+
+    The effort order (:func:`stream_plan`) knows an instance's inputs and domain, not the
+    placeholders of the state it is used in, so a cheap-to-fail ``:fluents`` instance over
+    real configurations could come before the samplers of the poses standing in its state;
+    binding then stops at it with the context unbound (``bind_context`` is ``None``), the
+    skeleton dies without a call and the next search finds the same plan again
+    (kitchen_fluent adaptive: 3 of 116 skeletons in seeds 0-29, each costing searches up to
+    the next complexity bound). Given a valid order this returns it unchanged."""
+    made: set[str] = {x for entry in entries for x in entry[1]}
+    bound: set[str] = set()
+    remaining = list(entries)
+    ordered: list[list] = []
+    while remaining:
+        index = next((i for i, entry in enumerate(remaining)
+                      if all(x in bound or x not in made
+                             for x in (*entry[0][1], *(a for f in entry[2] for a in f[1:])))),
+                     0)  # a cycle cannot come from a plan: keep the given order
+        ready = remaining.pop(index)
+        ordered.append(ready)
+        bound.update(ready[1])
+    return ordered
 
 
 def bind_context(context: tuple[Fact, ...], binding: dict[str, str]) -> tuple[Fact, ...] | None:
