@@ -36,7 +36,13 @@ import heapq
 import itertools
 from dataclasses import dataclass, field
 
-from ltamp_cli.planner.algorithms.common import PlannerState, bound_plan, instantiate_atoms
+from ltamp_cli.planner.algorithms.common import (
+    PlannerState,
+    bound_plan,
+    external_domain,
+    external_inputs,
+    instantiate_atoms,
+)
 from ltamp_cli.planner.algorithms.effort import observed_cheap
 from ltamp_cli.planner.algorithms.optimistic import (
     MAX_LOCAL_REPAIRS,
@@ -51,6 +57,7 @@ from ltamp_cli.planner.algorithms.optimistic import (
     repairable,
     report_unusable,
     sampled_inputs,
+    stream_plan,
     within_limit,
 )
 from ltamp_cli.planner.algorithms.preimage import plan_preimage
@@ -407,6 +414,98 @@ def probe_siblings(state: PlannerState, failed: Binding) -> None:
             state.record_failure(instance)
 
 
+# When a plan's shared placeholders are refined (the search runs again), the plan's cheap
+# generators over real inputs are first tried with the plan's tests, up to this many
+# outputs each (0: off); see probe_refined_plan.
+REFINEMENT_PROBE_OUTPUTS = 4
+
+
+def probe_refined_plan(state: PlannerState, evaluation: OptimisticEvaluation,
+                       needed: set[Fact]) -> None:
+    """Before the search that follows a refinement: each generator of the refined plan's
+    stream plan whose inputs are real and whose outputs are its own (not shared), never
+    called, without ``:fluents`` and observed cheap, is called and its outputs checked by
+    the stream plan's tests that take them and otherwise real values, until one passes,
+    it runs out, or :data:`REFINEMENT_PROBE_OUTPUTS` were tried.
+
+    The refined task differs from the one searched only in the refined instances'
+    placeholders, so its search usually plans with the same unshared instances again, and
+    the queue would call them first thing; their failures then cost that search.
+    kitchen_fluent: the first plan serves the mug on a fresh coaster pose from shared
+    configurations; the coaster's one slot holds the saucer, so the refined plan's stream
+    plan died on it and a third plan (move the saucer first) was searched every seed.
+    A probe certifies real facts only and marks a generator exhausted only when it ran out,
+    so the next search stays sound; the calls are cheap ones the plan asked for."""
+    plan = stream_plan(state, evaluation, needed)
+    for key in plan:
+        name, inputs = key
+        external = state.externals[name]
+        if (not isinstance(external, Stream) or external.is_test or external.fluents
+                or any(x.startswith("#") for x in inputs)):
+            continue
+        outputs = evaluation.outputs.get(key, ())
+        if not outputs or outputs in evaluation.sharing:
+            continue
+        if not _cheap_or_unmeasured(state, name):
+            continue
+        instance = state.instance(name, inputs)
+        if instance.num_calls or instance.exhausted:
+            continue
+        tests = []
+        for test, test_inputs in plan:
+            test_external = state.externals[test]
+            if (isinstance(test_external, Stream) and test_external.is_test
+                    and not test_external.fluents and set(test_inputs) & set(outputs)
+                    and all(x in outputs or not x.startswith("#") for x in test_inputs)):
+                tests.append((test, test_inputs))
+        _probe(state, instance, outputs, tests, {}, REFINEMENT_PROBE_OUTPUTS)
+
+
+def _cheap_or_unmeasured(state: PlannerState, name: str) -> bool:
+    """Whether stream ``name`` was observed cheap (:func:`.effort.observed_cheap`) or
+    has no observed call yet (this run or the history): one call then measures it."""
+    stats = state.stream_stats.get(name)
+    if not (stats is not None and stats.calls) and not state.history.get(name, {}).get("calls"):
+        return True
+    return observed_cheap(state.history.get(name), stats)
+
+
+def _probe(state: PlannerState, instance: StreamInstance, outputs: tuple[str, ...],
+           tests: list[tuple[str, tuple[str, ...]]], mapping: dict[str, str],
+           limit: int) -> None:
+    """Call the generator ``instance`` until an output (bound to the placeholders
+    ``outputs``, over ``mapping``) passes every one of ``tests`` (stream name, inputs), it
+    runs out, or ``limit`` outputs were tried; a test whose domain facts are not all real
+    is not called. A run-out instance is recorded as failed."""
+    for index in range(limit):
+        if index >= len(instance.results):
+            if instance.exhausted or (instance.num_calls and not observed_cheap(
+                    state.history.get(instance.name), state.stream_stats.get(instance.name))):
+                break
+            state.call(instance)
+            if index >= len(instance.results):
+                break
+        bound = {**mapping, **dict(zip(outputs, instance.results[index], strict=True))}
+        accepted = True
+        for test, test_inputs in tests:
+            inputs = tuple(bound.get(x, x) for x in test_inputs)
+            external = state.externals[test]
+            domain = instantiate_atoms(external_domain(external), dict(
+                zip(external_inputs(external), inputs, strict=True)))
+            if not all(fact in state.facts.members for fact in domain):
+                continue
+            checked = state.instance(test, inputs)
+            if checked.num_calls == 0:
+                state.call(checked)
+            if not checked.value:
+                accepted = False
+                break
+        if accepted:
+            break
+    if instance.exhausted:
+        state.record_failure(instance)
+
+
 def state_dependent(instance: StreamInstance) -> bool:
     """Whether ``instance``'s stream declares ``:fluents``: its failure is one in the state
     it was called in (a route blocked by debris, a motion blocked by the objects standing
@@ -549,6 +648,8 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                                                  placeholders)
                     if found is None:
                         refining = not speculative  # shared placeholders refined
+                        if REFINEMENT_PROBE_OUTPUTS:
+                            probe_refined_plan(state, evaluation, facts | terms)
                         refined_expansions = max(
                             discrete.outcome.expanded if discrete.outcome else 0,
                             solved_expansions if discrete.outcome is None
