@@ -424,9 +424,10 @@ def probe_refined_plan(state: PlannerState, evaluation: OptimisticEvaluation,
                        needed: set[Fact]) -> None:
     """Before the search that follows a refinement: each generator of the refined plan's
     stream plan whose inputs are real and whose outputs are its own (not shared), never
-    called, without ``:fluents`` and observed cheap, is called and its outputs checked by
-    the stream plan's tests that take them and otherwise real values, until one passes,
-    it runs out, or :data:`REFINEMENT_PROBE_OUTPUTS` were tried.
+    called, without ``:fluents`` and observed cheap (or not measured yet: its first call
+    measures it, and a call found costly ends its probe), is called and its outputs checked
+    by the stream plan's tests (cheap or unmeasured too) that take them and otherwise real
+    values, until one passes, it runs out, or :data:`REFINEMENT_PROBE_OUTPUTS` were tried.
 
     The refined task differs from the one searched only in the refined instances'
     placeholders, so its search usually plans with the same unshared instances again, and
@@ -456,9 +457,10 @@ def probe_refined_plan(state: PlannerState, evaluation: OptimisticEvaluation,
             test_external = state.externals[test]
             if (isinstance(test_external, Stream) and test_external.is_test
                     and not test_external.fluents and set(test_inputs) & set(outputs)
-                    and all(x in outputs or not x.startswith("#") for x in test_inputs)):
+                    and all(x in outputs or not x.startswith("#") for x in test_inputs)
+                    and _cheap_or_unmeasured(state, test)):
                 tests.append((test, test_inputs))
-        _probe(state, instance, outputs, tests, {}, REFINEMENT_PROBE_OUTPUTS)
+        _probe(state, instance, outputs, tests, REFINEMENT_PROBE_OUTPUTS)
 
 
 def _cheap_or_unmeasured(state: PlannerState, name: str) -> bool:
@@ -471,10 +473,10 @@ def _cheap_or_unmeasured(state: PlannerState, name: str) -> bool:
 
 
 def _probe(state: PlannerState, instance: StreamInstance, outputs: tuple[str, ...],
-           tests: list[tuple[str, tuple[str, ...]]], mapping: dict[str, str],
-           limit: int) -> None:
+           tests: list[tuple[str, tuple[str, ...]]], limit: int) -> None:
     """Call the generator ``instance`` until an output (bound to the placeholders
-    ``outputs``, over ``mapping``) passes every one of ``tests`` (stream name, inputs), it
+    ``outputs``) passes every one of ``tests`` (stream name, inputs over those placeholders
+    and real values), it
     runs out, or ``limit`` outputs were tried; a test whose domain facts are not all real
     is not called. A run-out instance is recorded as failed."""
     for index in range(limit):
@@ -485,7 +487,7 @@ def _probe(state: PlannerState, instance: StreamInstance, outputs: tuple[str, ..
             state.call(instance)
             if index >= len(instance.results):
                 break
-        bound = {**mapping, **dict(zip(outputs, instance.results[index], strict=True))}
+        bound = dict(zip(outputs, instance.results[index], strict=True))
         accepted = True
         for test, test_inputs in tests:
             inputs = tuple(bound.get(x, x) for x in test_inputs)
