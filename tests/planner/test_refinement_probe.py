@@ -54,9 +54,9 @@ def test_refined_plans_generators_are_probed_before_the_next_search(
     probes: list[int] = []
     probe = skeletons.probe_refined_plan
 
-    def recorded(state: Any, evaluation: Any, needed: Any) -> None:
+    def recorded(state: Any, evaluation: Any, needed: Any, refined: Any) -> None:
         before = len(state.instances)
-        probe(state, evaluation, needed)
+        probe(state, evaluation, needed, refined)
         probes.append(len(state.instances) - before)
 
     monkeypatch.setattr(skeletons, "probe_refined_plan", recorded)

@@ -47,7 +47,11 @@ def run(algorithm: str, seed: int) -> Any:
 @pytest.mark.parametrize("algorithm", ["adaptive", "binding"])
 def test_exhausted_siblings_are_learned_before_the_next_search(
         algorithm: str, monkeypatch: pytest.MonkeyPatch) -> None:
-    seeds = [1, 2]  # seeds whose plans park several objects on the coaster on the way
+    seeds = [1, 6]  # seeds whose plans park several objects on the coaster on the way
+    # The refinement probe learns the mug's coaster pose before these plans are searched
+    # (adaptive then finds the saucer's detour at once): the sibling probe is measured
+    # without it.
+    monkeypatch.setattr(skeletons, "REFINEMENT_PROBE_OUTPUTS", 0)
     with monkeypatch.context() as patch:
         patch.setattr(skeletons, "SIBLING_PROBE_OUTPUTS", 0)
         without = [run(algorithm, seed) for seed in seeds]

@@ -282,11 +282,8 @@ class BindingQueue:
             heapq.heappop(heap)
 
 
-def advance(state: PlannerState, binding: Binding, adaptive: bool = False
-            ) -> list[Binding] | None:
-    """Process one step of ``binding``: the bindings to queue, or ``None`` when complete.
-    ``adaptive``: a retry made at a step whose retries the cheap bonus allows is also
-    counted in ``cheap_attempts``."""
+def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
+    """Process one step of ``binding``: the bindings to queue, or ``None`` when complete."""
     plan = binding.skeleton.stream_plan
     if binding.step >= len(plan):
         return None
@@ -316,8 +313,6 @@ def advance(state: PlannerState, binding: Binding, adaptive: bool = False
         return []  # a local repair or an ordinary alternative took this branch already
     if binding.output_index >= len(instance.results) and not instance.exhausted:
         state.call(instance)
-    cheap_retry = int(adaptive and SEPARATE_CHEAP_RETRIES and binding.skeleton.retries.cheap
-                      and cheap_step(state, binding))
     if binding.output_index < len(instance.results):
         binding.skeleton.tried.add(key)
         output = instance.results[binding.output_index]
@@ -328,8 +323,7 @@ def advance(state: PlannerState, binding: Binding, adaptive: bool = False
                         binding.attempts, binding, binding.repairs, binding.cheap_attempts)
         alternative = Binding(binding.skeleton, binding.step, binding.mapping,
                               binding.made_by, binding.output_index + 1, binding.attempts + 1,
-                              binding.parent, binding.repairs,
-                              binding.cheap_attempts + cheap_retry)
+                              binding.parent, binding.repairs, binding.cheap_attempts)
         return [child, alternative]
     if instance.exhausted:
         state.record_failure(instance)
@@ -339,7 +333,6 @@ def advance(state: PlannerState, binding: Binding, adaptive: bool = False
             probe_siblings(state, binding)
         return []
     binding.attempts += 1  # nothing this call: retry later
-    binding.cheap_attempts += cheap_retry
     return [binding]
 
 
@@ -435,7 +428,7 @@ REFINEMENT_PROBE_OUTPUTS = 4
 
 
 def probe_refined_plan(state: PlannerState, evaluation: OptimisticEvaluation,
-                       needed: set[Fact]) -> None:
+                       needed: set[Fact], refined: set[InstanceKey]) -> None:
     """Before the search that follows a refinement: each generator of the refined plan's
     stream plan whose inputs are real and whose outputs are its own (not shared), never
     called, without ``:fluents`` and observed cheap (or not measured yet: its first call
@@ -450,7 +443,16 @@ def probe_refined_plan(state: PlannerState, evaluation: OptimisticEvaluation,
     configurations; the coaster's one slot holds the saucer, so the refined plan's stream
     plan died on it and a third plan (move the saucer first) was searched every seed.
     A probe certifies real facts only and marks a generator exhausted only when it ran out,
-    so the next search stays sound; the calls are cheap ones the plan asked for."""
+    so the next search stays sound; the calls are cheap ones the plan asked for.
+
+    Only generators that some such test checks (a probe with nothing to check learns little
+    and still makes real values), and not when a ``refined`` instance's stream has an
+    explicit sharing policy (``StreamInfo(opt_gen_fn=PartialInputs(...))``): the refined
+    instances take the probed outputs as inputs, and once those are real values they are
+    other instances, which such a policy makes share again (one more refinement and
+    search); by default instances over real values keep their own outputs."""
+    if any(state.bindings[name].info.opt_gen_fn is not None for name, _ in refined):
+        return
     plan = stream_plan(state, evaluation, needed)
     for key in plan:
         name, inputs = key
@@ -474,7 +476,8 @@ def probe_refined_plan(state: PlannerState, evaluation: OptimisticEvaluation,
                     and all(x in outputs or not x.startswith("#") for x in test_inputs)
                     and _cheap_or_unmeasured(state, test)):
                 tests.append((test, test_inputs))
-        _probe(state, instance, outputs, tests, REFINEMENT_PROBE_OUTPUTS)
+        if tests:
+            _probe(state, instance, outputs, tests, REFINEMENT_PROBE_OUTPUTS)
 
 
 def _cheap_or_unmeasured(state: PlannerState, name: str) -> bool:
@@ -660,12 +663,14 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                 state.diagnose(discrete, evaluation.index.members)
                 if discrete.solved:
                     facts, terms = plan_preimage(discrete)
+                    unique_before = set(placeholders.unique)
                     found = bindable_stream_plan(state, evaluation, facts | terms,
                                                  placeholders)
                     if found is None:
                         refining = not speculative  # shared placeholders refined
                         if REFINEMENT_PROBE_OUTPUTS:
-                            probe_refined_plan(state, evaluation, facts | terms)
+                            probe_refined_plan(state, evaluation, facts | terms,
+                                               set(placeholders.unique) - unique_before)
                         refined_expansions = max(
                             discrete.outcome.expanded if discrete.outcome else 0,
                             solved_expansions if discrete.outcome is None
@@ -849,7 +854,16 @@ def _process_one(state: PlannerState, queue: BindingQueue, binding: Binding,
                  sampling: SamplingRound, adaptive: bool) -> PlanResult | None:
     """Advance ``binding`` one step and queue what follows; a complete binding's plan is
     checked over the real facts (the result when it is a plan)."""
-    children = advance(state, binding, adaptive)
+    # Whether a retry made at this step is one the cheap bonus allowed (see
+    # over_retry_limit): the alternative output, or the same binding after an empty call.
+    cheap_retry = (adaptive and SEPARATE_CHEAP_RETRIES and binding.skeleton.retries.cheap
+                   and cheap_step(state, binding))
+    attempts, step = binding.attempts, binding.step
+    children = advance(state, binding)
+    if cheap_retry and children:
+        for child in children:
+            if child.step == step and child.attempts == attempts + 1:
+                child.cheap_attempts += 1
     if children is not None and (not children
                                  or (len(children) == 1 and children[0] is binding)):
         sampling.failures += 1  # a dead end, or nothing this call (a local repair and
