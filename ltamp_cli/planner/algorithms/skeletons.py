@@ -856,8 +856,8 @@ def _process_one(state: PlannerState, queue: BindingQueue, binding: Binding,
     checked over the real facts (the result when it is a plan)."""
     # Whether a retry made at this step is one the cheap bonus allowed (see
     # over_retry_limit): the alternative output, or the same binding after an empty call.
-    cheap_retry = (adaptive and SEPARATE_CHEAP_RETRIES and binding.skeleton.retries.cheap
-                   and cheap_step(state, binding))
+    cheap_retry = (adaptive and SEPARATE_CHEAP_RETRIES and not binding.skeleton.action_costs
+                   and binding.skeleton.retries.cheap and cheap_step(state, binding))
     attempts, step = binding.attempts, binding.step
     children = advance(state, binding)
     if cheap_retry and children:
