@@ -25,7 +25,11 @@ cheap generator of the later one for its next value at once (local repair, see
 
 Both learn several conflicts from one failed stream plan: when a cheap generator of it runs
 out, its siblings in the plan are tried at once with the plan's tests
-(:func:`probe_siblings`). The full search after a plan whose shared placeholders were
+(:func:`probe_siblings`); and when a plan's shared placeholders are refined, its cheap
+unshared generators over real inputs are tried with its tests before the search that
+follows (:func:`probe_refined_plan`). Adaptive does not count the retries its cheap bonus
+allowed against a later costly step of a skeleton without action costs
+(:func:`over_retry_limit`). The full search after a plan whose shared placeholders were
 refined may be bounded by the effort of the search that found it (opt-in,
 :data:`REFINED_SEARCH_FACTOR`).
 """
