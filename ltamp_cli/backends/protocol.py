@@ -261,6 +261,29 @@ class SkillBackend(Protocol):
         ...
 
 
+def trial_setup(backend: SkillBackend, skill: str) -> str | None:
+    """The versioned setup of ``backend``'s ``skill`` trials, which their records carry
+    (:attr:`~ltamp_cli.trials.record.TrialRecord.setup`), or ``None`` (the backend has none).
+
+    Optional part of the protocol: a backend whose trials depend on a setup that changes
+    between releases without changing its name (PyBullet with the Panda: grasps, base
+    placement, timing, ``ROBOT_SETUP_VERSIONS``) defines ``trial_setup(skill) -> str | None``.
+    A plugin's answer that is neither ``None`` nor a non-empty string is one
+    :class:`~ltamp_cli.errors.InputError` line naming the backend.
+    """
+    method = getattr(backend, "trial_setup", None)
+    if method is None:
+        return None
+    setup = method(skill)
+    if setup is None or (isinstance(setup, str) and setup.strip()):
+        return setup
+    from ltamp_cli.errors import InputError
+
+    raise InputError(f"backend {getattr(backend, 'name', '?')!r} ({type(backend).__module__}): "
+                     f"trial_setup({skill!r}) returned {setup!r:.40}: expected None or a "
+                     "non-empty string")
+
+
 def skill_spec(backend: SkillBackend, skill: str) -> SkillSpec:
     """Look a skill up by name, or raise ``KeyError`` naming the known ones."""
     specs = backend.skills()
