@@ -130,3 +130,28 @@ def test_a_plugins_bad_setup_is_one_line(answer: object) -> None:
 def test_a_plugin_without_setups_writes_none() -> None:
     assert trial_setup(_OddSetupBackend(None), "pour") is None  # type: ignore[arg-type]
     assert trial_setup(object(), "pour") is None  # type: ignore[arg-type]
+
+
+def test_ask_and_tell_record_the_setup_they_proposed_for(tmp_path: Path) -> None:
+    from ltamp_cli.learning.ask_tell import ask, tell
+
+    backend = load_backend("pybullet", robot="panda")
+    try:
+        config = LearningConfig(budget=5, init=5, seed=0)
+        proposal = ask(backend, "pour", config, tmp_path)
+        assert proposal.setup == "panda-r3" and proposal.to_json()["setup"] == "panda-r3"
+        record = tell(tmp_path, -1.0)
+        assert record.setup == "panda-r3"
+        # the told trial resumes with live Panda trials of the same setup (it was refused
+        # as "no recorded setup" while proposals did not carry it)
+        result = learn_online(backend, "pour", LearningConfig(budget=1, init=5, seed=0),
+                              TrialDataset(tmp_path / "trials.jsonl"))
+        assert len(result.records) == 1
+    finally:
+        backend.close()
+    free = load_backend("pybullet")
+    try:
+        assert "setup" not in ask(free, "pour", LearningConfig(budget=5, init=5),
+                                  tmp_path / "free").to_json()
+    finally:
+        free.close()
