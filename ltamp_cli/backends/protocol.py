@@ -271,17 +271,23 @@ def trial_setup(backend: SkillBackend, skill: str) -> str | None:
     A plugin's answer that is neither ``None`` nor a non-empty string is one
     :class:`~ltamp_cli.errors.InputError` line naming the backend.
     """
+    from ltamp_cli.errors import InputError
+
     method = getattr(backend, "trial_setup", None)
     if method is None:
         return None
-    setup = method(skill)
+    where = f"backend {getattr(backend, 'name', '?')!r} ({type(backend).__module__})"
+    try:
+        setup = method(skill)
+    except KeyError:
+        raise  # an unknown skill, as skill_spec reports it
+    except Exception as error:  # a plugin's bug: one line naming it, not a traceback
+        raise InputError(f"{where}: trial_setup({skill!r}) raised "
+                         f"{type(error).__name__}: {error}") from None
     if setup is None or (isinstance(setup, str) and setup.strip()):
         return setup
-    from ltamp_cli.errors import InputError
-
-    raise InputError(f"backend {getattr(backend, 'name', '?')!r} ({type(backend).__module__}): "
-                     f"trial_setup({skill!r}) returned {setup!r:.40}: expected None or a "
-                     "non-empty string")
+    raise InputError(f"{where}: trial_setup({skill!r}) returned {setup!r:.40}: expected None "
+                     "or a non-empty string")
 
 
 def skill_spec(backend: SkillBackend, skill: str) -> SkillSpec:

@@ -118,10 +118,12 @@ class _OddSetupBackend:
         self.answer = answer
 
     def trial_setup(self, skill: str) -> object:
+        if isinstance(self.answer, Exception):
+            raise self.answer
         return self.answer
 
 
-@pytest.mark.parametrize("answer", ["", "  ", 3, ["r1"]])
+@pytest.mark.parametrize("answer", ["", "  ", 3, ["r1"], RuntimeError("no robot file")])
 def test_a_plugins_bad_setup_is_one_line(answer: object) -> None:
     with pytest.raises(InputError, match="trial_setup"):
         trial_setup(_OddSetupBackend(answer), "pour")  # type: ignore[arg-type]
