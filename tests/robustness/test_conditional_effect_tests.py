@@ -121,3 +121,45 @@ def test_ltamp_solve_certifies_a_conditional_effects_test(tmp_path: Path,
     report = validate_plan(loaded, result)
     assert report.valid, report  # before: move(q0, q0), the vase not broken
     sys.modules.pop("streams", None)
+
+
+NEGATED_DOMAIN = """(define (domain spare)
+  (:requirements :strips :conditional-effects :negative-preconditions)
+  (:predicates (Conf ?q) (Sampled ?q) (AtConf ?q) (Vase ?v) (Hits ?q ?v) (Intact ?v))
+  (:action move :parameters (?a ?b)
+    :precondition (and (AtConf ?a) (Sampled ?b))
+    :effect (and (AtConf ?b) (not (AtConf ?a))
+                 (forall (?v) (when (and (Vase ?v) (not (Hits ?b ?v))) (Intact ?v))))))
+"""
+NEGATED_STREAM = """(define (stream spare)
+  (:stream sample :inputs () :domain () :outputs (?q) :certified (and (Conf ?q) (Sampled ?q)))
+  (:stream hits :inputs (?q ?v) :domain (and (Conf ?q) (Vase ?v)) :certified (Hits ?q ?v)))
+"""
+
+
+@pytest.mark.parametrize("algorithm", ALGORITHMS)
+def test_a_negated_test_in_a_when_is_certified(algorithm: str) -> None:
+    """``(when (not (Hits ?b ?v)) (Intact ?v))`` is compiled to the negated test's fact
+    ``(~hits ?b ?v)``, static in the condition: before, focused and binding moved onto the
+    vase (5.0) and adaptive to 9.0 without calling the test; now every plan's move target
+    was tested clear of the vase."""
+    calls: list[float] = []
+
+    def samples() -> Any:
+        yield from ((x,) for x in (VASE_X, 1.0, 9.0))
+
+    def hits(q: float, v: Any) -> bool:
+        calls.append(q)
+        return _hits(q, v)
+
+    problem = PDDLProblem(NEGATED_DOMAIN, {}, NEGATED_STREAM,
+                          {"sample": from_gen_fn(samples), "hits": from_test(hits)},
+                          [("Conf", 0.0), ("AtConf", 0.0), ("Vase", "v1")], ("Intact", "v1"))
+    solution = solve(problem, algorithm=algorithm, max_time=20, verbose=False)
+    assert solution.plan is not None, algorithm
+    (step,) = solution.plan
+    target = float(step.args[1])
+    assert not _hits(target, "v1") and target in calls, (target, calls)
+    planning = to_planning_problem(problem)
+    result = plan(planning, PlannerConfig(algorithm=algorithm, max_time=20))
+    assert result.solved and validate_plan(planning, result).valid
