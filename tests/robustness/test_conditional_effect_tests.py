@@ -163,3 +163,27 @@ def test_a_negated_test_in_a_when_is_certified(algorithm: str) -> None:
     planning = to_planning_problem(problem)
     result = plan(planning, PlannerConfig(algorithm=algorithm, max_time=20))
     assert result.solved and validate_plan(planning, result).valid
+
+
+def test_a_cost_increase_inside_when_is_located(tmp_path: Path) -> None:
+    """Refused before, but at search time and without a position ("ltamp: error: a cost
+    increase inside 'when' is not supported"); now at its file:line:col when the domain is
+    read, exit 2."""
+    (tmp_path / "domain").mkdir()
+    costly = DOMAIN.replace("(Broken ?v))))))",
+                            "(Broken ?v))) (when (Conf ?a) (increase (total-cost) 2)))))")
+    assert costly != DOMAIN
+    (tmp_path / "domain" / "domain.pddl").write_text(costly)
+    (tmp_path / "domain" / "stream.pddl").write_text(STREAM)
+    (tmp_path / "streams.py").write_text(BINDINGS)
+    path = tmp_path / "problem.yaml"
+    path.write_text(YAML)
+    err = io.StringIO()
+    with redirect_stdout(io.StringIO()), redirect_stderr(err), \
+            pytest.raises(SystemExit) as done:
+        main(["solve", str(path), "--max-time", "5", "--no-stats"])
+    lines = err.getvalue().strip().splitlines()
+    assert done.value.code == 2 and len(lines) == 1, lines
+    domain_file = tmp_path / "domain" / "domain.pddl"
+    assert lines[0].startswith(f"ltamp: error: {domain_file}:7:"), lines
+    assert "cost increase inside 'when'" in lines[0]
