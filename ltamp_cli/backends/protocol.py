@@ -261,6 +261,35 @@ class SkillBackend(Protocol):
         ...
 
 
+def trial_setup(backend: SkillBackend, skill: str) -> str | None:
+    """The versioned setup of ``backend``'s ``skill`` trials, which their records carry
+    (:attr:`~ltamp_cli.trials.record.TrialRecord.setup`), or ``None`` (the backend has none).
+
+    Optional part of the protocol: a backend whose trials depend on a setup that changes
+    between releases without changing its name (PyBullet with the Panda: grasps, base
+    placement, timing, ``ROBOT_SETUP_VERSIONS``) defines ``trial_setup(skill) -> str | None``.
+    A plugin's answer that is neither ``None`` nor a non-empty string is one
+    :class:`~ltamp_cli.errors.InputError` line naming the backend.
+    """
+    from ltamp_cli.errors import InputError
+
+    method = getattr(backend, "trial_setup", None)
+    if method is None:
+        return None
+    where = f"backend {getattr(backend, 'name', '?')!r} ({type(backend).__module__})"
+    try:
+        setup = method(skill)
+    except KeyError:
+        raise  # an unknown skill, as skill_spec reports it
+    except Exception as error:  # a plugin's bug: one line naming it, not a traceback
+        raise InputError(f"{where}: trial_setup({skill!r}) raised "
+                         f"{type(error).__name__}: {error}") from None
+    if setup is None or (isinstance(setup, str) and setup.strip()):
+        return setup
+    raise InputError(f"{where}: trial_setup({skill!r}) returned {setup!r:.40}: expected None "
+                     "or a non-empty string")
+
+
 def skill_spec(backend: SkillBackend, skill: str) -> SkillSpec:
     """Look a skill up by name, or raise ``KeyError`` naming the known ones."""
     specs = backend.skills()

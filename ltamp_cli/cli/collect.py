@@ -64,8 +64,9 @@ def collect_command(
             "fingertip pad or stirrer with a force-limited grasp and follows the path by IK "
             "and joint position control at the skill's speeds; unreachable poses, arm "
             "collisions and slip fail the trial; opt-in, see models/README.md for its "
-            "label agreement and cost). Records are tagged pybullet+panda, so the two "
-            "never mix in one file.",
+            "label agreement and cost). Records are tagged pybullet+panda with the "
+            "skill's robot setup version (\"setup\": \"panda-r3\"), so neither free and "
+            "robot trials nor two setups mix in one file.",
         ),
     ] = "none",
 ) -> None:
@@ -99,11 +100,12 @@ def _still_missing(job: CollectJob, out: Path) -> int:
     from dataclasses import replace
 
     from ltamp_cli.seeds import usable_seed
-    from ltamp_cli.trials.collect import pending_indices
+    from ltamp_cli.trials.collect import pending_indices, with_setup
     from ltamp_cli.trials.record import TrialDataset
 
     try:
-        return len(pending_indices(TrialDataset(out), replace(job, seed=usable_seed(job.seed))))
+        job = with_setup(replace(job, seed=usable_seed(job.seed)))
+        return len(pending_indices(TrialDataset(out), job))
     except InputError as error:  # the file now holds another job's trials
         typer.echo(f"ltamp: warning: {error}", err=True)
         return job.n

@@ -134,6 +134,7 @@ def train_command(
     model directory on its own trials.
     """
     from ltamp_cli.backends import load_backend
+    from ltamp_cli.backends.protocol import trial_setup
     from ltamp_cli.cli.collect import check_robot
     from ltamp_cli.cli.conventions import emit, progress_enabled
     from ltamp_cli.learning.active import (
@@ -196,6 +197,7 @@ def train_command(
                 f"backend {backend!r} has no skill {skill!r} (known: {', '.join(sorted(specs))})"
             )
         spec = specs[skill]
+        setup = trial_setup(physics, skill)  # the live trials' versioned setup, if any
         if ask:
             if data is not None:
                 raise InputError("--ask proposes live trials: it cannot be used with --data")
@@ -240,6 +242,7 @@ def train_command(
     result.model.save(
         str(out),
         backend=backend if robot == "none" else f"{backend}+{robot}",
+        **({"setup": setup} if setup is not None and data is None else {}),
         strategy=strategy,
         training={
             "mode": "pool" if data is not None else "online",

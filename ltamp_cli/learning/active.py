@@ -62,7 +62,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from tqdm import tqdm
 
-from ltamp_cli.backends.protocol import SkillBackend, SkillSpec, drawn_context, skill_spec
+from ltamp_cli.backends.protocol import (
+    SkillBackend,
+    SkillSpec,
+    drawn_context,
+    skill_spec,
+    trial_setup,
+)
 from ltamp_cli.backends.sanity import run_trial_safely
 from ltamp_cli.learning.acquisition import evaluate, maximize, straddle
 from ltamp_cli.learning.baselines import SKLEARN_KINDS, RandomModel, SklearnModel
@@ -91,6 +97,7 @@ from ltamp_cli.trials.record import (
     TrialDataset,
     TrialRecord,
     check_against_spec,
+    setup_words,
     training_score,
     without_duplicates,
 )
@@ -511,6 +518,13 @@ def _learn_online(
             f"{dataset.path if dataset else ''} holds {other} trials, not {backend.name} "
             "ones; use another --out"
         )
+    setup = trial_setup(backend, skill)
+    stranger = next((r for r in records if r.backend == backend.name and r.setup != setup), None)
+    if stranger is not None:  # the same backend, another version of its setup: other labels
+        raise ValueError(
+            f"{dataset.path if dataset else ''} holds {backend.name} trials of "
+            f"{setup_words(stranger.setup)}, not {setup_words(setup)}; use another --out"
+        )
     indices = [r.index for r in records if r.index >= 0]
     if len(set(indices)) != len(indices):
         repeated = next(i for i in indices if indices.count(i) > 1)
@@ -565,6 +579,7 @@ def _learn_online(
                 index=index,
                 info={"strategy": config.strategy, **dict(result.info)},
                 outcome=None if result.outcome is None else tuple(result.outcome),
+                setup=setup,
             )
             if dataset is not None:
                 dataset.append(record)

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from ltamp_cli.backends.protocol import SkillBackend, SkillSpec
+from ltamp_cli.backends.protocol import SkillBackend, SkillSpec, trial_setup
 from ltamp_cli.backends.sanity import checked_outcome
 from ltamp_cli.errors import InputError, location_in
 from ltamp_cli.jsondata import read_json_data
@@ -59,7 +59,10 @@ TRIALS_FILE = "trials.jsonl"
 
 @dataclass(frozen=True)
 class Proposal:
-    """The trial to run next; ``context``/``control`` in physical units, by parameter name."""
+    """The trial to run next; ``context``/``control`` in physical units, by parameter name.
+    ``setup``: the versioned trial setup it was proposed for (``"panda-r3"``,
+    :func:`~ltamp_cli.backends.protocol.trial_setup`), which the told record carries; in the
+    JSON only when there is one."""
 
     skill: str
     backend: str
@@ -67,9 +70,13 @@ class Proposal:
     seed: int
     context: dict[str, float]
     control: dict[str, float]
+    setup: str | None = None
 
     def to_json(self) -> dict[str, Any]:
-        return asdict(self)
+        data = asdict(self)
+        if self.setup is None:
+            del data["setup"]
+        return data
 
 
 def _write_json(path: Path, data: dict[str, Any]) -> None:
@@ -156,6 +163,7 @@ def ask(
         seed=_trial_seed(config.seed, index),
         context={n: float(v) for n, v in zip(spec.context.names, context, strict=True)},
         control={n: float(v) for n, v in zip(spec.control.names, control, strict=True)},
+        setup=trial_setup(backend, skill),
     )
     directory.mkdir(parents=True, exist_ok=True)
     _write_json(
@@ -202,7 +210,8 @@ def _pending_record(spec: SkillSpec, proposal: Proposal) -> TrialRecord:
         "skill": proposal.skill, "backend": proposal.backend, "seed": proposal.seed,
         "index": proposal.index, "score": 0.0, "valid": True,
         "context": [proposal.context[n] for n in spec.context.names],
-        "control": [proposal.control[n] for n in spec.control.names]})
+        "control": [proposal.control[n] for n in spec.control.names],
+        "setup": proposal.setup})
     if record.index < 0:
         raise ValueError(f"proposal index must be >= 0, got {record.index}")
     check_against_spec([record], spec)

@@ -55,10 +55,15 @@ class ObjectNames:
     def __init__(self) -> None:
         self.table = ObjectTable()
         self.types: dict[str, str] = {}
+        #: Domain constants that ``constant_map`` gives no value (their value is their name):
+        #: a string naming one, in any case, is that constant.
+        self._unmapped: set[str] = set()
 
-    def add_constant(self, name: str, value: Any, type_name: str) -> None:
+    def add_constant(self, name: str, value: Any, type_name: str, mapped: bool = True) -> None:
         self.table.add(name, value)
         self.types[name] = type_name
+        if not mapped:
+            self._unmapped.add(name)
 
     def name(self, value: Any) -> str:
         """The object of ``value``, created on first use."""
@@ -69,6 +74,8 @@ class ObjectNames:
                 self.types[lowered] = syntax.OBJECT_TYPE
                 return lowered
             if self.table.value(lowered) is value or self.table.value(lowered) == value:
+                return lowered
+            if lowered in self._unmapped:  # (:constants V1) and "V1" in init: one object
                 return lowered
         name = self.table.intern(value, "o")
         self.types.setdefault(name, syntax.OBJECT_TYPE)
@@ -186,7 +193,7 @@ def to_planning_problem(problem: PDDLProblem, stream_info: Mapping[str, Info] | 
     constants = _lowered(constant_map, "constant_map")
     for constant in domain.constants:
         names.add_constant(constant.name, constants.get(constant.name, constant.name),
-                           constant.type)
+                           constant.type, mapped=constant.name in constants)
     atoms, values = _init(init, names)
     goal_formula = to_formula(goal, names)
     stream_file = _stream_file(stream_pddl)

@@ -36,11 +36,11 @@ import numpy as np
 from tqdm import tqdm
 
 from ltamp_cli.backends import load_backend
-from ltamp_cli.backends.protocol import SkillBackend, drawn_context, skill_spec
+from ltamp_cli.backends.protocol import SkillBackend, drawn_context, skill_spec, trial_setup
 from ltamp_cli.backends.sanity import run_trial_safely
 from ltamp_cli.errors import InputError
 from ltamp_cli.seeds import usable_seed
-from ltamp_cli.trials.record import TrialDataset, TrialRecord
+from ltamp_cli.trials.record import TrialDataset, TrialRecord, setup_words
 from ltamp_cli.trials.robots import check_robot
 from ltamp_cli.writer_lock import exclusive_writer
 
@@ -66,6 +66,9 @@ class CollectJob:
     ``robot``: ``"none"`` (the backend's tools move free-floating) or a robot that carries
     them (``"panda"`` on ``pybullet``); it is passed to the backend as its ``robot`` option
     and is part of the records' identity (:attr:`tag`), so a file never mixes the two.
+    ``setup``: the versioned trial setup its records carry (``"panda-r3"``;
+    :func:`~ltamp_cli.backends.protocol.trial_setup`), filled in from the backend by
+    :func:`with_setup` (:func:`collect` does): a file never mixes two setups either.
     """
 
     skill: str
@@ -75,6 +78,7 @@ class CollectJob:
     valid_only: bool = False
     backend_options: Mapping[str, Any] | None = None
     robot: str = "none"
+    setup: str | None = None
 
     @property
     def tag(self) -> str:
@@ -87,6 +91,19 @@ class CollectJob:
         if self.robot != "none":
             options["robot"] = self.robot
         return options
+
+
+def with_setup(job: CollectJob) -> CollectJob:
+    """``job`` with the trial setup of its backend's skill (:attr:`CollectJob.setup`); an
+    unknown skill is an :class:`InputError` naming the backend's skills."""
+    backend = load_backend(job.backend, **job.options())
+    try:
+        skill_spec(backend, job.skill)  # backends without setups know their skills too
+        return replace(job, setup=trial_setup(backend, job.skill))
+    except KeyError as error:
+        raise InputError(str(error).strip("'\"")) from None
+    finally:
+        backend.close()
 
 
 def trial_seed(base_seed: int, index: int) -> int:
@@ -145,6 +162,7 @@ def _run_guarded(backend: SkillBackend, job: CollectJob, index: int) -> tuple[Tr
         index=index,
         info=dict(result.info),
         outcome=None if result.outcome is None else tuple(result.outcome),
+        setup=trial_setup(backend, job.skill),
     ), crashed
 
 
@@ -174,13 +192,20 @@ class TrialRunner:
 
 
 def pending_indices(dataset: TrialDataset, job: CollectJob) -> list[int]:
-    """Indices of ``job`` not yet in ``dataset``; refuses a file from a different job."""
+    """Indices of ``job`` not yet in ``dataset``; refuses a file from a different job (another
+    skill, backend, robot or trial setup: ``job.setup`` as :func:`with_setup` fills it)."""
     done: dict[int, int] = {}
     for line, record in enumerate(dataset.iter_records(), start=1):
         if record.skill != job.skill or record.backend != job.tag:
             raise InputError(
                 f"{dataset.path}: holds {record.backend}/{record.skill} trials, not "
                 f"{job.tag}/{job.skill}; use another --out file"
+            )
+        if record.setup != job.setup:
+            raise InputError(
+                f"{dataset.path}:{line}: holds {job.tag}/{job.skill} trials of "
+                f"{setup_words(record.setup)}, not {setup_words(job.setup)} (their labels "
+                "differ); use another --out file"
             )
         if 0 <= record.index < job.n and record.seed != trial_seed(job.seed, record.index):
             raise InputError(
@@ -321,13 +346,7 @@ def collect(
         raise InputError("--ray: expected 'local' or a Ray cluster address, got ''")
     job = replace(job, seed=usable_seed(job.seed))
     dataset = TrialDataset(out)
-    backend_check = load_backend(job.backend, **job.options())
-    try:
-        skill_spec(backend_check, job.skill)
-    except KeyError as error:
-        raise InputError(str(error).strip("'\"")) from None
-    finally:
-        backend_check.close()
+    job = with_setup(job)  # also checks the skill
     with ExitStack() as session:
         session.enter_context(exclusive_writer(out, is_directory=False, wait=wait))
         indices = pending_indices(dataset, job)

@@ -38,6 +38,10 @@ class TrialRecord:
     ``outcome`` is the trial's declared outcome (``SkillSpec.outcome``, physical units, in
     the order of its names) or ``None``; the JSON line has an ``"outcome"`` field only when
     it is not ``None``, so records of skills without one are written as before.
+    ``setup`` names the versioned trial setup that produced the record when the backend has
+    one (:func:`~ltamp_cli.backends.protocol.trial_setup`; the Panda's: ``"panda-r3"``) and
+    is written only when not ``None``: the labels of two setups differ, so a file or a run
+    never mixes them (``ltamp collect``/``train`` refuse, as for two backends).
     """
 
     skill: str
@@ -51,6 +55,7 @@ class TrialRecord:
     index: int = -1
     info: Mapping[str, Any] = field(default_factory=dict)
     outcome: tuple[float, ...] | None = None
+    setup: str | None = None
 
     def to_json(self) -> str:
         record = asdict(self)
@@ -62,6 +67,8 @@ class TrialRecord:
             del record["outcome"]
         else:
             record["outcome"] = [float(v) for v in self.outcome]
+        if self.setup is None:
+            del record["setup"]
         return json.dumps(record, sort_keys=True, allow_nan=False)
 
     @staticmethod
@@ -70,7 +77,7 @@ class TrialRecord:
         "false"`` is no boolean, ``"context": "5"`` no list): ``ValueError``/``TypeError``
         name the field. ``context`` and ``control`` must be finite; ``score`` is a finite
         number or ``null``/``NaN`` (an invalid trial); ``outcome``, optional, a list of
-        finite numbers or ``null``."""
+        finite numbers or ``null``; ``setup``, optional, a string or ``null``."""
         if not isinstance(data, Mapping):
             raise TypeError(f"expected a JSON object, got {type(data).__name__}")
         score = data["score"]
@@ -87,7 +94,13 @@ class TrialRecord:
             info=_mapping(data.get("info", {}), "info"),
             outcome=(None if data.get("outcome") is None
                      else _finite_values(data["outcome"], "outcome")),
+            setup=None if data.get("setup") is None else _text(data["setup"], "setup"),
         )
+
+
+def setup_words(setup: str | None) -> str:
+    """``setup`` for a message: ``setup 'panda-r3'`` or ``no recorded setup``."""
+    return "no recorded setup" if setup is None else f"setup {setup!r}"
 
 
 def _text(value: Any, name: str) -> str:

@@ -20,6 +20,7 @@ from ltamp_cli.backends.pybullet.paths import PosePath
 from ltamp_cli.backends.pybullet.render import Camera, FrameRecorder
 from ltamp_cli.backends.pybullet.skills.physics import BulletTrialPhysics
 from ltamp_cli.backends.pybullet.skills.robot import (
+    ROBOT_SETUP_VERSIONS,
     ROBOTS,
     RobotFailure,
     RobotSettings,
@@ -182,6 +183,15 @@ class Kitchen3DBackend:
         self.push_settings = push_settings or PushSettings()
         self.stir_settings = stir_settings or StirSettings()
         self._worlds: dict[WorldConfig, PhysicsWorld] = {}
+
+    def trial_setup(self, skill: str) -> str | None:
+        """The robot setup of ``skill``'s trials, which their records carry: ``None`` for
+        free-floating tools, else ``"<robot>-r<version>"`` (:data:`ROBOT_SETUP_VERSIONS`:
+        ``"panda-r3"`` for the pour), so trials of two setups are never mixed."""
+        self._spec(skill)
+        if self.robot == "none":
+            return None
+        return f"{self.robot}-r{ROBOT_SETUP_VERSIONS[skill]}"
 
     def world_config(self, skill: str) -> WorldConfig:
         """The world settings of ``skill``'s trials: :attr:`config` with the skill's

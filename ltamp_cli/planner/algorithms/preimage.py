@@ -18,7 +18,8 @@ def plan_preimage(result: DiscreteResult) -> tuple[set[Fact], set[Fact]]:
 
     Positive derived facts are explained by one axiom rule that fires; a negated derived fact
     by the static facts that block each of its rules that would otherwise fire (e.g. the
-    collision-free certificates that keep ``Unsafe`` false).
+    collision-free certificates that keep ``Unsafe`` false). A conditional effect that fires
+    in its step adds its condition, static facts included, as a precondition would.
     """
     assert result.task is not None and result.outcome is not None and result.actions is not None
     task, grounding = result.task, result.grounding
@@ -39,6 +40,20 @@ def plan_preimage(result: DiscreteResult) -> tuple[set[Fact], set[Fact]]:
             preimage.support(fact, vector, seen)
         for fact in action.pre_neg:
             preimage.refute(fact, vector, seen)
+        for effect in action.effects:
+            # A conditional effect that fired relies on its condition as the step relies on
+            # its precondition: its static facts (e.g. a test's ``(Hits ?q ?v)`` in a
+            # ``when``) were only optimistic when the effect was ground, and a plan whose
+            # goal needs the effect is wrong unless they are certified.
+            if not (effect.static_pos or effect.condition_pos or effect.condition_neg):
+                continue
+            if all(preimage.holds(f, vector) for f in effect.condition_pos) and not any(
+                    preimage.holds(f, vector) for f in effect.condition_neg):
+                preimage.needed.update(effect.static_pos)
+                for fact in effect.condition_pos:
+                    preimage.support(fact, vector, seen)
+                for fact in effect.condition_neg:
+                    preimage.refute(fact, vector, seen)
         cost_terms.update(action.cost_terms)
     final = task.state_vector(result.outcome.states[-1])
     preimage.support(GOAL_FACT, final, set())

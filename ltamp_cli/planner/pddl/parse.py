@@ -219,13 +219,15 @@ def _parse_cost_expression(expr: SExpr) -> CostExpression:
     return FunctionTerm(head, args, expr.location)
 
 
-def parse_effect(expr: SExpr, what: str = "an effect") -> Effect:
+def parse_effect(expr: SExpr, what: str = "an effect", in_when: bool = False) -> Effect:
+    """An effect; ``in_when``: inside a ``when``, where a cost increase is refused here, at
+    its position (the planner's costs are per action, not per conditional effect)."""
     node = _expect_list(expr, what)
     head = node.head()
     if head is None and not node.items:
         return AndEffect(())
     if head == "and":
-        return AndEffect(tuple(parse_effect(item, what) for item in node.items[1:]))
+        return AndEffect(tuple(parse_effect(item, what, in_when) for item in node.items[1:]))
     if head == "not":
         if len(node.items) != 2:
             raise InputError("'not' takes exactly one atom", node.location)
@@ -233,18 +235,22 @@ def parse_effect(expr: SExpr, what: str = "an effect") -> Effect:
     if head == "forall":
         if len(node.items) != 3:
             raise InputError("'forall' takes a parameter list and one effect", node.location)
-        return ForAllEffect(_parameters(node.items[1], "'forall'"), parse_effect(node.items[2]))
+        return ForAllEffect(_parameters(node.items[1], "'forall'"),
+                            parse_effect(node.items[2], in_when=in_when))
     if head == "when":
         if len(node.items) != 3:
             raise InputError("'when' takes a condition and an effect", node.location)
         return WhenEffect(parse_formula(node.items[1], "a 'when' condition"),
-                          parse_effect(node.items[2]))
+                          parse_effect(node.items[2], in_when=True))
     if head == "increase":
         if len(node.items) != 3:
             raise InputError("'increase' takes (total-cost) and an amount", node.location)
         target = node.items[1]
         if not (isinstance(target, SList) and target.head() == "total-cost" and len(target) == 1):
             raise InputError("only (increase (total-cost) ...) is supported", target.location)
+        if in_when:
+            raise InputError("a cost increase inside 'when' is not supported: an action's "
+                             "cost must not depend on its state", node.location)
         return IncreaseCost(_parse_cost_expression(node.items[2]))
     if head in ("decrease", "assign", "scale-up", "scale-down"):
         raise InputError(f"numeric effect '{head}' is not supported (only increase total-cost)",

@@ -42,6 +42,10 @@ class GroundEffect:
     condition_neg: tuple[Fact, ...]
     fact: Fact
     positive: bool
+    #: The static facts of the condition, true when the effect was ground and then dropped
+    #: from it (as an action's ``static_pre``): a plan whose effect fired relies on them,
+    #: and an optimistic one must have them certified (``plan_preimage``).
+    static_pos: tuple[Fact, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -633,7 +637,7 @@ def _emit(rule: _Rule, binding: dict[str, str], index: FactIndex, init: set[Fact
             cost_terms.append(cost_term)
     effects = []
     for effect in source.effects:
-        cond_pos, cond_neg, possible = [], [], True
+        cond_pos, cond_neg, cond_static, possible = [], [], [], True
         for literal in effect.condition:
             if literal.predicate == EQUALITY:
                 left, right = _ground(literal.args, binding)
@@ -644,10 +648,13 @@ def _emit(rule: _Rule, binding: dict[str, str], index: FactIndex, init: set[Fact
                 (cond_pos if literal.positive else cond_neg).append(fact)
             else:
                 possible &= (fact in init) == literal.positive
+                if literal.positive and not literal.predicate.startswith("type:"):
+                    cond_static.append(fact)
         if not possible:
             continue
         fact = (effect.predicate, *[get(a, a) for a in effect.args])
-        effects.append(GroundEffect(tuple(cond_pos), tuple(cond_neg), fact, effect.positive))
+        effects.append(GroundEffect(tuple(cond_pos), tuple(cond_neg), fact, effect.positive,
+                                    tuple(cond_static)))
         if effect.positive and index.add(fact):
             delta.append(fact)
     args = tuple([binding[p] for p in source.parameters])

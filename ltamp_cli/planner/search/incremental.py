@@ -278,7 +278,7 @@ class _Union:
         demands = list(instance.demands)
         for effect in source.effects:
             cond_pos, cond_neg, possible = [], [], True
-            static_pos, static_neg_ids = [], []
+            static_pos, static_neg_ids, static_facts = [], [], []
             for literal in effect.condition:
                 if literal.predicate == EQUALITY:
                     left, right = _ground(literal.args, binding)
@@ -289,12 +289,14 @@ class _Union:
                     (cond_pos if literal.positive else cond_neg).append(fact)
                 else:
                     (static_pos if literal.positive else static_neg_ids).append(fid(fact))
+                    if literal.positive and not literal.predicate.startswith("type:"):
+                        static_facts.append(fact)
             if not possible:
                 continue
             fact = (effect.predicate, *[get(a, a) for a in effect.args])
             effect_demands = tuple(f for f in cond_neg if f[0] in demanded)
             effects.append(_Effect(GroundEffect(tuple(cond_pos), tuple(cond_neg), fact,
-                                                effect.positive),
+                                                effect.positive, tuple(static_facts)),
                                    tuple(static_pos), tuple(static_neg_ids), effect_demands))
             demands.extend(effect_demands)
             if effect.positive and self.index.add(fact) and delta is not None:

@@ -10,10 +10,11 @@ encoded as static unary literals ``type:T``.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 
-from ltamp_cli.errors import InputError
+from ltamp_cli.errors import InputError, SourceLocation
 from ltamp_cli.planner.pddl.syntax import (
     EQUALITY,
     OBJECT_TYPE,
@@ -275,10 +276,11 @@ class Normalizer:
         types = tuple(
             LiftedLiteral(type_predicate(p.type), (p.name,)) for p in action.parameters
         )
-        effects, costs = self.effects(action.effect)
-        parameters = tuple(p.name for p in action.parameters)
-        created = len(self._pending)
-        clauses = [types + clause for clause in self.dnf(action.precondition)]
+        with _located(f"action {action.name!r}", action.location):
+            effects, costs = self.effects(action.effect)
+            parameters = tuple(p.name for p in action.parameters)
+            created = len(self._pending)
+            clauses = [types + clause for clause in self.dnf(action.precondition)]
         for name, _, _ in self._pending[created:]:
             self._action_uses[name] = [
                 clause for clause in clauses
@@ -292,7 +294,9 @@ class Normalizer:
             LiftedLiteral(type_predicate(p.type), (p.name,)) for p in axiom.head.parameters
         )
         rules = []
-        for clause in self.dnf(axiom.body):
+        with _located(f"derived predicate {axiom.head.name!r}", axiom.location):
+            body = self.dnf(axiom.body)
+        for clause in body:
             free = _clause_variables(clause) - set(head_args) - _typed_variables(clause)
             # Free body variables without a type literal are existential over all objects.
             extra = tuple(LiftedLiteral(type_predicate(OBJECT_TYPE), (v,)) for v in sorted(free))
@@ -306,6 +310,18 @@ class Normalizer:
             extra = tuple(LiftedLiteral(type_predicate(OBJECT_TYPE), (v,)) for v in sorted(free))
             rules.append(NormalAxiom(GOAL_PREDICATE, (), extra + clause))
         return rules
+
+
+@contextmanager
+def _located(what: str, location: SourceLocation) -> Iterator[None]:
+    """Give an :class:`InputError` raised without a position (a formula too large to expand,
+    found while normalising) the position of the action or axiom it came from."""
+    try:
+        yield
+    except InputError as error:
+        if error.location is not None:
+            raise
+        raise InputError(f"{what}: {error.message}", location) from None
 
 
 def _free_variables(formula: Formula) -> set[str]:

@@ -1,0 +1,56 @@
+"""Refusals found while normalising a domain name the action or axiom they come from.
+
+A precondition of 16 ``(or ...)`` conjuncts expands to 65 536 disjuncts (over the 20 000
+limit): refused in one line, but before round 6 without a position ("ltamp: error: a formula
+expands to more than 20000 disjuncts"), in a domain of many actions and axioms.
+"""
+
+from __future__ import annotations
+
+import io
+from contextlib import redirect_stderr, redirect_stdout
+from pathlib import Path
+
+import pytest
+
+from ltamp_cli.cli.app import main
+
+ORS = " ".join("(or (AtConf ?a) (Conf ?b))" for _ in range(16))
+DOMAIN = """(define (domain wide)
+  (:requirements :adl :derived-predicates)
+  (:predicates (Conf ?q) (AtConf ?q) (Fine ?q))
+  (:derived (Fine ?q) (and (Conf ?q) DERIVED))
+  (:action move :parameters (?a ?b)
+    :precondition (and (AtConf ?a) (Conf ?b) PRECONDITION)
+    :effect (and (AtConf ?b) (not (AtConf ?a)))))
+"""
+PROBLEM = """name: wide
+domain: domain
+objects: {q0: null, q1: null}
+init: ["(Conf q0)", "(Conf q1)", "(AtConf q0)"]
+goal: (AtConf q1)
+"""
+
+
+@pytest.mark.parametrize("where, line, what", [
+    ("PRECONDITION", 5, "action 'move'"),
+    ("DERIVED", 4, "derived predicate 'fine'"),
+])
+def test_a_formula_too_large_is_located(tmp_path: Path, where: str, line: int,
+                                        what: str) -> None:
+    text = DOMAIN.replace(where, ORS.replace("?a", "?q").replace("?b", "?q")
+                          if where == "DERIVED" else ORS)
+    text = text.replace("PRECONDITION", "").replace("DERIVED", "")
+    (tmp_path / "domain").mkdir()
+    domain = tmp_path / "domain" / "domain.pddl"
+    domain.write_text(text)
+    path = tmp_path / "problem.yaml"
+    path.write_text(PROBLEM)
+    err = io.StringIO()
+    with redirect_stdout(io.StringIO()), redirect_stderr(err), \
+            pytest.raises(SystemExit) as done:
+        main(["solve", str(path), "--max-time", "20", "--no-stats"])
+    lines = err.getvalue().strip().splitlines()
+    assert done.value.code == 2 and len(lines) == 1, lines
+    assert lines[0].startswith(f"ltamp: error: {domain}:{line}:3: {what}: a formula expands "
+                               "to more than"), lines
