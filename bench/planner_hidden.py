@@ -17,6 +17,10 @@ variants) and ``stack`` (towers to reverse or build). Each problem runs
   settings, in a child process whose path holds ``--pddlstream`` (a checkout with a Fast
   Downward build; skipped with a line if there is none). Reference only, never in tests.
 
+A PDDLStream checkout that works with this machine's Fast Downward binary (the
+``up-fast-downward`` wheel's, newer than PDDLStream's translator) is made by
+``sh bench/problems/hidden19/pddlstream_setup.sh SOURCE DEST`` (see its comments).
+
 Targets (issue #19): adaptive solves every problem 10/10 with ``max_time`` 60; no run returns
 later than ``max_time + 1 s``; no wrong "infeasible" (every problem here is solvable). The
 table gives solved / infeasible / timeouts, median and max CPU seconds per (problem, mode,
