@@ -139,7 +139,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.search:
         overrides["search"] = args.search
     use_one_thread()
-    problem = load_problem(REPO / "problems" / "examples" / f"{args.example}.yaml")
+    # An example's name, or a problem file (e.g. bench/problems/hidden19/*.yaml).
+    path = Path(args.example)
+    problem = load_problem(path if path.suffix == ".yaml"
+                           else REPO / "problems" / "examples" / f"{args.example}.yaml")
     rows: list[dict[str, Any]] = []
     totals: Counter = Counter()
     for seed in parse_seeds(args.seeds):

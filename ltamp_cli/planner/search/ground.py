@@ -129,6 +129,12 @@ class FactIndex:
             self._indexes_by_predicate[predicate].append(positions)
         return index.get(key, ())
 
+    def in_discovery_order(self) -> list[Fact]:
+        """Every fact, by predicate (first seen first) and within a predicate in the order
+        added: deterministic for a deterministic solve, and linear where sorting is not."""
+        return [(predicate, *args) for predicate, rows in self.by_predicate.items()
+                for args in rows]
+
     def sizes(self) -> dict[str, int]:
         """Facts per predicate so far: facts are only ever appended, so this marks a point
         after which :func:`join_new` finds what was added."""
