@@ -63,7 +63,7 @@ from ltamp_cli.planner.pddl.syntax import (
     effect_atoms,
     formula_atoms,
 )
-from ltamp_cli.planner.search.clock import check_deadline
+from ltamp_cli.planner.search.clock import check_deadline, sorted_before
 from ltamp_cli.planner.search.ground import Context, CostBound, Fact, FactIndex
 from ltamp_cli.planner.search.solve import DiscreteResult
 from ltamp_cli.planner.streams import External, PartialInputs, StreamInstance
@@ -187,7 +187,10 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
     the highest real level), also ``least_cut``: the least complexity by PDDLStream's rule
     (:func:`instance_level`) of an instance left out, so that an "infeasible" answer never
     rests on the sum."""
-    index = FactIndex.of_sorted(sorted(state.facts.members))  # a hash-independent order
+    # A hash-independent order, sorted and loaded in bounded steps (10^5 known facts: one
+    # ``sorted`` call would hold the GIL past the deadline).
+    index = FactIndex.of_sorted(sorted_before(state.facts.members, state.deadline),
+                                state.deadline)
     evaluation = OptimisticEvaluation(index, dict(state.function_values),
                                       dict(state.object_types))
     done: set[InstanceKey] = set()
