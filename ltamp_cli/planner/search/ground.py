@@ -679,16 +679,18 @@ class _ContextLiterals:
     with the reachable facts of each predicate set sorted once (a context names a few
     predicates; scanning every reachable fact per context cost PDDLStream's kitchen 1 s)."""
 
-    def __init__(self, grounding: Grounding) -> None:
+    def __init__(self, grounding: Grounding, deadline: float = NO_DEADLINE) -> None:
         self._by_predicates: dict[tuple[str, ...], tuple[Fact, ...]] = {}
         self._reachable = grounding.reachable
+        self._deadline = deadline
 
     def __call__(self, context: Context) -> tuple[tuple[Fact, ...], tuple[Fact, ...]]:
         predicates, facts = context
         candidates = self._by_predicates.get(predicates)
         if candidates is None:
             wanted = set(predicates)
-            candidates = tuple(sorted(f for f in self._reachable if f[0] in wanted))
+            candidates = tuple(sorted_before(
+                [f for f in self._reachable if f[0] in wanted], self._deadline))
             self._by_predicates[predicates] = candidates
         present = set(facts)
         return tuple(facts), tuple(f for f in candidates if f not in present)
@@ -702,7 +704,7 @@ def require_fluent_contexts(grounding: Grounding,
     import itertools
     from dataclasses import replace
 
-    context_literals = _ContextLiterals(grounding)
+    context_literals = _ContextLiterals(grounding, deadline)
     actions: list[GroundAction] = []
     for action in grounding.actions:
         needs = [requirements[f] for f in action.static_pre if f in requirements]
@@ -732,7 +734,7 @@ def forbid_contexts(grounding: Grounding,
     from dataclasses import replace
 
     context_ids: dict[Context, Fact] = {}
-    context_literals = _ContextLiterals(grounding)
+    context_literals = _ContextLiterals(grounding, deadline)
     axioms = list(grounding.axioms)
     actions: list[GroundAction] = []
     for action in grounding.actions:
