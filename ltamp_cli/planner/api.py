@@ -292,7 +292,7 @@ def _abandoned_result(state: PlannerState | None, config: PlannerConfig, start: 
                           diagnostics={"stopped_in": stopped_in})
     for _ in range(ABANDONED_READ_ATTEMPTS):
         try:
-            result = state.result(TIMEOUT, None)
+            result = state.result(TIMEOUT, None, known_facts=False)
             break
         except RuntimeError:  # a container changed size under the worker: read again
             continue

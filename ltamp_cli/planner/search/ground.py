@@ -19,7 +19,7 @@ from ltamp_cli.planner.pddl.syntax import (
     Number,
     is_variable,
 )
-from ltamp_cli.planner.search.clock import NO_DEADLINE, check_deadline
+from ltamp_cli.planner.search.clock import NO_DEADLINE, check_deadline, sorted_before
 from ltamp_cli.planner.search.normalize import (
     GOAL_PREDICATE,
     Clause,
@@ -94,15 +94,22 @@ class FactIndex:
         self._indexes_by_predicate: dict[str, list[tuple[int, ...]]] = defaultdict(list)
 
     @classmethod
-    def of_sorted(cls, facts: Sequence[Fact]) -> FactIndex:
+    def of_sorted(cls, facts: Sequence[Fact], deadline: float = NO_DEADLINE,
+                  chunk: int = 8192) -> FactIndex:
         """An index of ``facts`` (sorted, no duplicates), as adding them one by one would
         make it (no argument index exists yet, so none is updated): a bulk load, since
-        every grounding and optimistic evaluation starts with thousands of facts."""
+        every grounding and optimistic evaluation starts with thousands of facts. Loaded
+        ``chunk`` facts at a time with a deadline check between (``set.update`` of 10^5
+        facts is one C call)."""
         index = cls()
-        index.members.update(facts)
+        members = index.members
         by_predicate = index.by_predicate
-        for fact in facts:
-            by_predicate[fact[0]].append(fact[1:])
+        for begin in range(0, len(facts), chunk):
+            check_deadline(deadline)
+            part = facts[begin:begin + chunk]
+            members.update(part)
+            for fact in part:
+                by_predicate[fact[0]].append(fact[1:])
         return index
 
     def add(self, fact: Fact) -> bool:
@@ -409,7 +416,9 @@ def ground_task(
     fluent = static_predicates(actions, derived)  # predicates that are *not* static
     init_facts = set(init)
     # Sorted: string hashing varies between processes, and order decides tie-breaking later.
-    index = FactIndex.of_sorted(sorted(init_facts))
+    # In bounded steps (the initial facts of an optimistic task can number 10^5: one
+    # ``sorted`` call of them held the GIL for seconds past the deadline under load).
+    index = FactIndex.of_sorted(sorted_before(init_facts, deadline), deadline)
     rule_set = RuleSet(actions, axioms)
 
     seen: set[tuple[int, tuple[str, ...]]] = set()
@@ -426,8 +435,11 @@ def ground_task(
     )
     # A canonical order (the search breaks ties by operator index): plans then do not
     # depend on the order in which the joins happened to find the instances.
-    result.actions.sort(key=lambda a: (a.name, a.args, a.pre_pos, a.pre_neg, a.static_pre))
-    result.axioms.sort(key=lambda a: (a.head, a.body_pos, a.body_neg, a.static_pos))
+    result.actions = sorted_before(
+        result.actions, deadline,
+        key=lambda a: (a.name, a.args, a.pre_pos, a.pre_neg, a.static_pre))
+    result.axioms = sorted_before(
+        result.axioms, deadline, key=lambda a: (a.head, a.body_pos, a.body_neg, a.static_pos))
     return result
 
 
@@ -674,16 +686,18 @@ class _ContextLiterals:
     with the reachable facts of each predicate set sorted once (a context names a few
     predicates; scanning every reachable fact per context cost PDDLStream's kitchen 1 s)."""
 
-    def __init__(self, grounding: Grounding) -> None:
+    def __init__(self, grounding: Grounding, deadline: float = NO_DEADLINE) -> None:
         self._by_predicates: dict[tuple[str, ...], tuple[Fact, ...]] = {}
         self._reachable = grounding.reachable
+        self._deadline = deadline
 
     def __call__(self, context: Context) -> tuple[tuple[Fact, ...], tuple[Fact, ...]]:
         predicates, facts = context
         candidates = self._by_predicates.get(predicates)
         if candidates is None:
             wanted = set(predicates)
-            candidates = tuple(sorted(f for f in self._reachable if f[0] in wanted))
+            candidates = tuple(sorted_before(
+                [f for f in self._reachable if f[0] in wanted], self._deadline))
             self._by_predicates[predicates] = candidates
         present = set(facts)
         return tuple(facts), tuple(f for f in candidates if f not in present)
@@ -697,7 +711,7 @@ def require_fluent_contexts(grounding: Grounding,
     import itertools
     from dataclasses import replace
 
-    context_literals = _ContextLiterals(grounding)
+    context_literals = _ContextLiterals(grounding, deadline)
     actions: list[GroundAction] = []
     for action in grounding.actions:
         needs = [requirements[f] for f in action.static_pre if f in requirements]
@@ -727,7 +741,7 @@ def forbid_contexts(grounding: Grounding,
     from dataclasses import replace
 
     context_ids: dict[Context, Fact] = {}
-    context_literals = _ContextLiterals(grounding)
+    context_literals = _ContextLiterals(grounding, deadline)
     axioms = list(grounding.axioms)
     actions: list[GroundAction] = []
     for action in grounding.actions:

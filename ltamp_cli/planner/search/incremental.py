@@ -44,7 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ltamp_cli.planner.pddl.syntax import EQUALITY, FunctionTerm, Number
-from ltamp_cli.planner.search.clock import check_deadline
+from ltamp_cli.planner.search.clock import check_deadline, sorted_before
 from ltamp_cli.planner.search.ground import (
     Fact,
     FactIndex,
@@ -171,7 +171,7 @@ class _Union:
     def extend(self, init: Iterable[Fact], deadline: float) -> None:
         """Add the facts of ``init`` that are new to the union and ground what they reach."""
         members = self.index.members
-        delta = sorted([fact for fact in init if fact not in members])
+        delta = sorted_before([fact for fact in init if fact not in members], deadline)
         since = self.index.sizes() if self.started else None
         for fact in delta:
             self.index.add(fact)
@@ -452,7 +452,9 @@ class _Union:
                 reachable.add(instance.head)  # type: ignore[arg-type]
                 demanded.extend(instance.demands)
         if len(axioms) > included_axioms:  # on-demand ones were added
-            axioms.sort(key=lambda a: (a.head, a.body_pos, a.body_neg, a.static_pos))
+            axioms = sorted_before(
+                axioms, deadline,
+                key=lambda a: (a.head, a.body_pos, a.body_neg, a.static_pos))
         grounding = Grounding(actions, axioms, reachable,
                               frozenset({fact[0] for fact in reachable} - self.fluent),
                               self.derived, blocked)
