@@ -161,6 +161,8 @@ SETTINGS: dict[str, Callable[[], SkillBackend]] = {
     "pybullet-solver-50": lambda: load_backend(
         "pybullet", solver_iterations=REFERENCE_SOLVER_ITERATIONS
     ),
+    # An intermediate count, screened on a row's disagreeing inputs (bench/label_stability.py).
+    "pybullet-solver-20": lambda: load_backend("pybullet", solver_iterations=20),
     "sapien": lambda: load_backend("sapien"),
     "sapien-placed-spoon": _sapien_placed_spoon,
     "pybullet-panda": lambda: load_backend("pybullet", robot="panda"),
@@ -173,6 +175,7 @@ SETTINGS: dict[str, Callable[[], SkillBackend]] = {
 SETTING_ENGINES: dict[str, str] = {
     "pybullet": "pybullet",
     "pybullet-solver-50": "pybullet",
+    "pybullet-solver-20": "pybullet",
     "pybullet-panda": "pybullet",
     "sapien": "sapien",
     "sapien-placed-spoon": "sapien",
