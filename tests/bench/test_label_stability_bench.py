@@ -122,3 +122,28 @@ def test_a_small_run_reads_the_rows_trials_and_adds_only_the_shifted_ones(
     # A rerun finds everything cached and runs nothing.
     assert label_stability.main(argv) == 0
     assert len(cache.read_text().splitlines()) == 16
+
+
+def test_the_sign_test_of_one_sided_disagreements() -> None:
+    from bench.scoop_solver_summary import sign_test
+
+    assert sign_test(8, 8) == pytest.approx(2 / 256)  # all 8 one way: a bias, p < 0.01
+    assert sign_test(4, 8) == 1.0 and sign_test(0, 0) == 1.0
+    assert sign_test(5, 6) == pytest.approx(2 * 7 / 64)
+
+
+def test_the_scoop_summary_compares_cached_labels_by_key() -> None:
+    from bench.scoop_solver_summary import compare
+
+    inputs = np.array([[0.2, 0.08, 0.12, 0.15, 0.1, -0.1, 0.0, 0.0, 0.02],
+                       [0.2, 0.08, 0.12, 0.15, 0.3, -0.2, 0.1, 0.01, 0.03]])
+    cache = {}
+    for i, (fast_score, ref_score) in enumerate(((-0.5, 0.4), (0.2, 0.3))):
+        for setting, score in (("pybullet", fast_score), ("pybullet-solver-50", ref_score)):
+            key = fidelity.trial_key(setting, "scoop", inputs[i, :4], inputs[i, 4:], i)
+            cache[key] = {"key": key, "score": score, "valid": True, "error": None,
+                          "cpu_s": 1.0}
+    row = compare(cache, inputs, 0, "pybullet", "pybullet-solver-50", [0, 1])
+    assert (row["n"], row["agree"], row["reference_only"], row["fast_only"]) == (2, 1, 1, 0)
+    assert row["disagreeing_inputs"] == [0] and row["both_success"] == 1
+    assert not row["passes_0.95_rule"]
