@@ -47,6 +47,7 @@ import json
 import platform
 import re
 import sys
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -186,6 +187,10 @@ class Plan:
     settings: list[str]
     run: frozenset[str]
     shifts: list[Shift]
+    #: Cache-key names to read a setting's trials under instead of today's
+    #: (:func:`bench.fidelity.trial_key`), e.g. ``{"pybullet": "pybullet@v1"}`` for trials
+    #: simulated before a physics revision (read only: such trials cannot be run again).
+    key_names: Mapping[str, str] | None = None
 
     def split(self, index: int) -> tuple[np.ndarray, np.ndarray]:
         row = self.inputs[index]
@@ -199,8 +204,11 @@ class Plan:
 
     def key(self, setting: str, index: int, control: np.ndarray) -> str:
         context, _ = self.split(index)
-        return trial_key(setting, self.spec.name, context, control,
-                         self.seed * 100_000 + index)
+        seed = self.seed * 100_000 + index
+        if self.key_names and setting in self.key_names:
+            values = ",".join(f"{v:.12g}" for v in (*context, *control))
+            return f"{self.key_names[setting]}|{self.spec.name}|{seed}|{values}"
+        return trial_key(setting, self.spec.name, context, control, seed)
 
 
 def run_missing(plan: Plan, order: list[int], shard: tuple[int, int], cache_path: Path,

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bench.fidelity import is_success, load_cache, trial_key, wilson_interval
+from bench.fidelity import is_success, load_cache, wilson_interval
 from bench.label_stability import (
     Plan,
     choose_inputs,
@@ -41,6 +41,11 @@ from bench.label_stability import (
 from ltamp_cli.backends.skills3d.scoop import SCOOP_SPEC
 
 FIDELITY = Path(__file__).resolve().parents[1] / "docs" / "results" / "fidelity"
+#: The cache-key names the committed trials were simulated under (setting@physics version):
+#: read by these names, so the summary means the same after a later physics revision (e.g.
+#: the scoop's ``pybullet`` at 50 iterations, ``pybullet@v1.1``) re-keys today's settings.
+KEY_NAMES = {"pybullet": "pybullet@v1", "pybullet-solver-50": "pybullet-solver-50@v1",
+             "pybullet-solver-20": "pybullet-solver-20@v1", "sapien": "sapien@v3"}
 #: (fast, reference) comparisons, as bench/fidelity.py names the settings.
 PAIRS = (("pybullet", "pybullet-solver-50"), ("sapien", "pybullet-solver-50"),
          ("sapien", "pybullet"), ("pybullet-solver-20", "pybullet-solver-50"),
@@ -59,12 +64,10 @@ def sign_test(k: int, n: int) -> float:
 def compare(cache: dict[str, dict], inputs: np.ndarray, seed: int, fast: str, reference: str,
             indices: list[int]) -> dict:
     """Agreement of two settings' labels as drawn on the inputs ``indices`` that both have."""
-    d = SCOOP_SPEC.context.dim
+    plan = Plan(SCOOP_SPEC, seed, inputs, [fast, reference], frozenset(), [], KEY_NAMES)
     pairs = []
     for i in indices:
-        context, control = inputs[i, :d], inputs[i, d:]
-        records = [cache.get(trial_key(s, "scoop", context, control, seed * 100_000 + i))
-                   for s in (fast, reference)]
+        records = [cache.get(plan.key(s, i, plan.split(i)[1])) for s in (fast, reference)]
         if all(r is not None and r["error"] is None for r in records):
             pairs.append((i, *records))
     f = np.array([is_success(a) for _, a, _ in pairs], dtype=bool)
@@ -108,7 +111,7 @@ def main(argv: list[str] | None = None) -> int:
     names = [s.label for s in shifts]
     noise: dict = {}
     for setting in ("pybullet-solver-50", "pybullet"):
-        plan = Plan(SCOOP_SPEC, seed, inputs, [setting], frozenset(), shifts)
+        plan = Plan(SCOOP_SPEC, seed, inputs, [setting], frozenset(), shifts, KEY_NAMES)
         noise[setting] = {}
         for group, indices in (("random", chosen), ("disagreeing", bad)):
             kept, labels, cpu = labels_of(plan, cache, setting, indices)

@@ -133,7 +133,7 @@ def test_the_sign_test_of_one_sided_disagreements() -> None:
 
 
 def test_the_scoop_summary_compares_cached_labels_by_key() -> None:
-    from bench.scoop_solver_summary import compare
+    from bench.scoop_solver_summary import KEY_NAMES, compare
 
     inputs = np.array([[0.2, 0.08, 0.12, 0.15, 0.1, -0.1, 0.0, 0.0, 0.02],
                        [0.2, 0.08, 0.12, 0.15, 0.3, -0.2, 0.1, 0.01, 0.03]])
@@ -141,6 +141,7 @@ def test_the_scoop_summary_compares_cached_labels_by_key() -> None:
     for i, (fast_score, ref_score) in enumerate(((-0.5, 0.4), (0.2, 0.3))):
         for setting, score in (("pybullet", fast_score), ("pybullet-solver-50", ref_score)):
             key = fidelity.trial_key(setting, "scoop", inputs[i, :4], inputs[i, 4:], i)
+            key = key.replace(key.split("|")[0], KEY_NAMES[setting])  # frozen names
             cache[key] = {"key": key, "score": score, "valid": True, "error": None,
                           "cpu_s": 1.0}
     row = compare(cache, inputs, 0, "pybullet", "pybullet-solver-50", [0, 1])
