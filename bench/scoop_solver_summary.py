@@ -89,6 +89,33 @@ def compare(cache: dict[str, dict], inputs: np.ndarray, seed: int, fast: str, re
                                    if a != b]}
 
 
+def stratified(cache: dict[str, dict], inputs: np.ndarray, seed: int, setting: str,
+               shifts: list, bad: list[int], chosen: list[int], n: int) -> dict:
+    """Per shift, the share of all ``n`` inputs whose ``setting`` label survives it, from two
+    strata: the disagreeing inputs ``bad`` (measured, counted as they are) and the others,
+    whose rate is that of the random inputs ``chosen`` outside ``bad`` (``range``: with that
+    rate at its 95 % Wilson ends). A point estimate with a range, not a test."""
+    plan = Plan(SCOOP_SPEC, seed, inputs, [setting], frozenset(), shifts, KEY_NAMES)
+    kept_bad, labels_bad, _ = labels_of(plan, cache, setting, bad)
+    others = [i for i in chosen if i not in set(bad)]
+    kept_other, labels_other, _ = labels_of(plan, cache, setting, others)
+    out: dict = {"disagreeing_measured": len(kept_bad), "others_measured": len(kept_other)}
+    if len(kept_bad) < len(bad) or not kept_other:
+        return out
+    for j, shift in enumerate(shifts):
+        flips_bad = int((labels_bad[:, j + 1] != labels_bad[:, 0]).sum())
+        same = int((labels_other[:, j + 1] == labels_other[:, 0]).sum())
+        low, high = wilson_interval(same, len(kept_other))
+        rest = n - len(bad)
+        out[shift.label] = {
+            "estimate": (len(bad) - flips_bad + rest * same / len(kept_other)) / n,
+            "range": [(len(bad) - flips_bad + rest * low) / n,
+                      (len(bad) - flips_bad + rest * high) / n],
+            "disagreeing_kept": len(bad) - flips_bad, "others_kept": same}
+    out["mean_over_shifts"] = float(np.mean([out[s.label]["estimate"] for s in shifts]))
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--inputs", type=Path, default=FIDELITY / "engine_scoop_inputs.json")
@@ -120,6 +147,9 @@ def main(argv: list[str] | None = None) -> int:
                 "unstable_inputs": [i for i, row in zip(kept, labels, strict=True)
                                     if not (row == row[0]).all()],
                 "cpu_s_per_trial": float(np.mean(cpu)) if cpu else None}
+    for setting in noise:
+        noise[setting]["stratified_all_inputs"] = stratified(
+            cache, inputs, seed, setting, shifts, bad, chosen, args.trials)
     screen = sorted(set(bad) | set(chosen))
     summary = {
         "skill": skill, "trials": args.trials, "seed": seed, "machine": platform.platform(),
@@ -149,6 +179,13 @@ def main(argv: list[str] | None = None) -> int:
                       f"({r['wilson95'][0]:.3f}-{r['wilson95'][1]:.3f}) self-agreement "
                       + "  ".join(f"{k} {v['count']}/{v['n']}"
                                   for k, v in s["self_agreement"].items()))
+    for setting, groups in noise.items():
+        for name, value in groups["stratified_all_inputs"].items():
+            if name == "mean_over_shifts":
+                print(f"stratified {setting:<20} mean over shifts: {value:.3f}")
+            if isinstance(value, dict):
+                print(f"stratified {setting:<20} {name}: {value['estimate']:.3f} "
+                      f"({value['range'][0]:.3f}-{value['range'][1]:.3f})")
     print(f"wrote {args.out}")
     return 0
 
