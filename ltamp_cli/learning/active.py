@@ -87,6 +87,7 @@ from ltamp_cli.learning.outcomes import (
 )
 from ltamp_cli.seeds import usable_seed
 from ltamp_cli.threads import limits_threads
+from ltamp_cli.trials.physics import backend_physics, check_physics
 from ltamp_cli.trials.record import (
     TrialDataset,
     TrialRecord,
@@ -511,6 +512,10 @@ def _learn_online(
             f"{dataset.path if dataset else ''} holds {other} trials, not {backend.name} "
             "ones; use another --out"
         )
+    # Nor labels of another physics (e.g. the scoop's 5 vs 50 solver iterations).
+    physics = backend_physics(backend, skill)
+    check_physics(records, physics, str(dataset.path) if dataset else "the trials",
+                  "use another --out")
     indices = [r.index for r in records if r.index >= 0]
     if len(set(indices)) != len(indices):
         repeated = next(i for i in indices if indices.count(i) > 1)
@@ -565,6 +570,7 @@ def _learn_online(
                 index=index,
                 info={"strategy": config.strategy, **dict(result.info)},
                 outcome=None if result.outcome is None else tuple(result.outcome),
+                physics=physics,
             )
             if dataset is not None:
                 dataset.append(record)

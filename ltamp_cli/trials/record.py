@@ -38,6 +38,9 @@ class TrialRecord:
     ``outcome`` is the trial's declared outcome (``SkillSpec.outcome``, physical units, in
     the order of its names) or ``None``; the JSON line has an ``"outcome"`` field only when
     it is not ``None``, so records of skills without one are written as before.
+    ``physics`` is the backend's physics tag when the trial ran (e.g. ``pybullet@v1.1``,
+    :mod:`ltamp_cli.trials.physics`) or ``None`` (an unversioned backend, an imported trial,
+    or a record written before the field; written only when set).
     """
 
     skill: str
@@ -51,6 +54,7 @@ class TrialRecord:
     index: int = -1
     info: Mapping[str, Any] = field(default_factory=dict)
     outcome: tuple[float, ...] | None = None
+    physics: str | None = None
 
     def to_json(self) -> str:
         record = asdict(self)
@@ -62,6 +66,8 @@ class TrialRecord:
             del record["outcome"]
         else:
             record["outcome"] = [float(v) for v in self.outcome]
+        if self.physics is None:
+            del record["physics"]
         return json.dumps(record, sort_keys=True, allow_nan=False)
 
     @staticmethod
@@ -70,7 +76,7 @@ class TrialRecord:
         "false"`` is no boolean, ``"context": "5"`` no list): ``ValueError``/``TypeError``
         name the field. ``context`` and ``control`` must be finite; ``score`` is a finite
         number or ``null``/``NaN`` (an invalid trial); ``outcome``, optional, a list of
-        finite numbers or ``null``."""
+        finite numbers or ``null``; ``physics``, optional, a string or ``null``."""
         if not isinstance(data, Mapping):
             raise TypeError(f"expected a JSON object, got {type(data).__name__}")
         score = data["score"]
@@ -87,6 +93,7 @@ class TrialRecord:
             info=_mapping(data.get("info", {}), "info"),
             outcome=(None if data.get("outcome") is None
                      else _finite_values(data["outcome"], "outcome")),
+            physics=None if data.get("physics") is None else _text(data["physics"], "physics"),
         )
 
 
