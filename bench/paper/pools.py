@@ -34,7 +34,7 @@ import json
 import os
 import sys
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -44,6 +44,7 @@ from bench.paper.common import Context
 from ltamp_cli.backends.protocol import SkillBackend, SkillSpec
 from ltamp_cli.learning.metrics import HeldOutSet
 from ltamp_cli.trials.collect import CollectJob, collect
+from ltamp_cli.trials.physics import legacy_physics, record_physics
 from ltamp_cli.trials.record import TrialDataset, TrialRecord, is_success, training_score
 
 POOL_SEED = 10_000
@@ -190,9 +191,20 @@ def restore_pool(archive: Path, path: Path) -> int:
     done = dataset.done_indices()
     with gzip.open(archive, "rt", encoding="utf-8") as handle:
         missing = [record for line in handle if line.strip()
-                   if (record := TrialRecord.from_dict(json.loads(line))).index not in done]
+                   if (record := archived_record(json.loads(line))).index not in done]
     dataset.append(missing)
     return len(missing)
+
+
+def archived_record(line: Mapping[str, Any]) -> TrialRecord:
+    """The trial record of an archive line. For an engine with versioned physics the line's
+    ``physics_version`` is the trial's physics (``TrialRecord.physics``), so collecting into
+    a restored cache under another physics version is refused rather than mixed."""
+    record = TrialRecord.from_dict(line)
+    if (record.physics is None and legacy_physics(record.backend) is not None
+            and isinstance(line.get("physics_version"), str)):
+        record = replace(record, physics=line["physics_version"])
+    return record
 
 
 def archive_pool(records: list[TrialRecord], archive: Path) -> bool:
@@ -207,15 +219,18 @@ def archive_pool(records: list[TrialRecord], archive: Path) -> bool:
         if archived == sorted(r.index for r in records):
             return False
     version = importlib.metadata.version("ltamp")
-    provenance: dict[str, dict[str, str]] = {}
+    engines: dict[str, str] = {}
     lines = []
     for record in sorted(records, key=lambda r: r.index):
         data = json.loads(record.to_json())
-        if record.backend not in provenance:
-            provenance[record.backend] = {
-                "physics_version": physics_version(record.backend, record.skill),
-                "engine_version": engine_version(record.backend)}
-        data.update(pool_seed=POOL_SEED, ltamp_version=version, **provenance[record.backend])
+        if record.backend not in engines:
+            engines[record.backend] = engine_version(record.backend)
+        # The record's own physics (a trial collected before another physics version keeps
+        # its own); the current version only for a record that carries none.
+        physics = record_physics(record) or physics_version(record.backend, record.skill)
+        data.pop("physics", None)
+        data.update(pool_seed=POOL_SEED, ltamp_version=version, physics_version=physics,
+                    engine_version=engines[record.backend])
         lines.append(json.dumps(data, sort_keys=True) + "\n")
     archive.parent.mkdir(parents=True, exist_ok=True)
     partial = archive.with_name(archive.name + ".partial")
@@ -248,7 +263,7 @@ def snapshot(out: Path) -> dict[str, int]:
             with gzip.open(archive, "rt", encoding="utf-8") as handle:
                 for line in handle:
                     if line.strip():
-                        record = TrialRecord.from_dict(json.loads(line))
+                        record = archived_record(json.loads(line))
                         by_index.setdefault(record.index, record)
         archive_pool(list(by_index.values()), archive)
         counts[path.stem] = len(by_index)

@@ -93,6 +93,7 @@ from ltamp_cli.learning.outcomes import (
 )
 from ltamp_cli.seeds import usable_seed
 from ltamp_cli.threads import limits_threads
+from ltamp_cli.trials.physics import backend_physics, check_physics
 from ltamp_cli.trials.record import (
     TrialDataset,
     TrialRecord,
@@ -525,6 +526,10 @@ def _learn_online(
             f"{dataset.path if dataset else ''} holds {backend.name} trials of "
             f"{setup_words(stranger.setup)}, not {setup_words(setup)}; use another --out"
         )
+    # Nor labels of another physics (e.g. the scoop's 5 vs 50 solver iterations).
+    physics = backend_physics(backend, skill)
+    check_physics(records, physics, str(dataset.path) if dataset else "the trials",
+                  "use another --out")
     indices = [r.index for r in records if r.index >= 0]
     if len(set(indices)) != len(indices):
         repeated = next(i for i in indices if indices.count(i) > 1)
@@ -580,6 +585,7 @@ def _learn_online(
                 info={"strategy": config.strategy, **dict(result.info)},
                 outcome=None if result.outcome is None else tuple(result.outcome),
                 setup=setup,
+                physics=physics,
             )
             if dataset is not None:
                 dataset.append(record)

@@ -40,6 +40,7 @@ from ltamp_cli.backends.protocol import SkillBackend, drawn_context, skill_spec,
 from ltamp_cli.backends.sanity import run_trial_safely
 from ltamp_cli.errors import InputError
 from ltamp_cli.seeds import usable_seed
+from ltamp_cli.trials.physics import backend_physics, check_physics
 from ltamp_cli.trials.record import TrialDataset, TrialRecord, setup_words
 from ltamp_cli.trials.robots import check_robot
 from ltamp_cli.writer_lock import exclusive_writer
@@ -163,6 +164,7 @@ def _run_guarded(backend: SkillBackend, job: CollectJob, index: int) -> tuple[Tr
         info=dict(result.info),
         outcome=None if result.outcome is None else tuple(result.outcome),
         setup=trial_setup(backend, job.skill),
+        physics=backend_physics(backend, job.skill),
     ), crashed
 
 
@@ -191,9 +193,12 @@ class TrialRunner:
             backend.close()
 
 
-def pending_indices(dataset: TrialDataset, job: CollectJob) -> list[int]:
+def pending_indices(dataset: TrialDataset, job: CollectJob, physics: str | None = None,
+                    *, same_physics: bool = False) -> list[int]:
     """Indices of ``job`` not yet in ``dataset``; refuses a file from a different job (another
-    skill, backend, robot or trial setup: ``job.setup`` as :func:`with_setup` fills it)."""
+    skill, backend, robot or trial setup: ``job.setup`` as :func:`with_setup` fills it), and
+    with ``same_physics`` one whose trials were simulated with another physics than
+    ``physics`` (the job's backend's tag, :func:`backend_physics`)."""
     done: dict[int, int] = {}
     for line, record in enumerate(dataset.iter_records(), start=1):
         if record.skill != job.skill or record.backend != job.tag:
@@ -207,6 +212,8 @@ def pending_indices(dataset: TrialDataset, job: CollectJob) -> list[int]:
                 f"{setup_words(record.setup)}, not {setup_words(job.setup)} (their labels "
                 "differ); use another --out file"
             )
+        if same_physics:
+            check_physics((record,), physics, str(dataset.path), "use another --out file")
         if 0 <= record.index < job.n and record.seed != trial_seed(job.seed, record.index):
             raise InputError(
                 f"{dataset.path}: trial {record.index} was collected with a different "
@@ -347,9 +354,17 @@ def collect(
     job = replace(job, seed=usable_seed(job.seed))
     dataset = TrialDataset(out)
     job = with_setup(job)  # also checks the skill
+    backend_check = load_backend(job.backend, **job.options())
+    try:
+        skill_spec(backend_check, job.skill)
+        physics = backend_physics(backend_check, job.skill)
+    except KeyError as error:
+        raise InputError(str(error).strip("'\"")) from None
+    finally:
+        backend_check.close()
     with ExitStack() as session:
         session.enter_context(exclusive_writer(out, is_directory=False, wait=wait))
-        indices = pending_indices(dataset, job)
+        indices = pending_indices(dataset, job, physics, same_physics=True)
         stream: Iterator[TrialRecord]
         if ray_address is not None:
             from ltamp_cli.trials.ray_collect import import_ray, ray_session, ray_stream

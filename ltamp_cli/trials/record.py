@@ -42,6 +42,9 @@ class TrialRecord:
     one (:func:`~ltamp_cli.backends.protocol.trial_setup`; the Panda's: ``"panda-r3"``) and
     is written only when not ``None``: the labels of two setups differ, so a file or a run
     never mixes them (``ltamp collect``/``train`` refuse, as for two backends).
+    ``physics`` is the backend's physics tag when the trial ran (e.g. ``pybullet@v1.1``,
+    :mod:`ltamp_cli.trials.physics`) or ``None`` (an unversioned backend, an imported trial,
+    or a record written before the field; written only when set).
     """
 
     skill: str
@@ -56,6 +59,7 @@ class TrialRecord:
     info: Mapping[str, Any] = field(default_factory=dict)
     outcome: tuple[float, ...] | None = None
     setup: str | None = None
+    physics: str | None = None
 
     def to_json(self) -> str:
         record = asdict(self)
@@ -69,6 +73,8 @@ class TrialRecord:
             record["outcome"] = [float(v) for v in self.outcome]
         if self.setup is None:
             del record["setup"]
+        if self.physics is None:
+            del record["physics"]
         return json.dumps(record, sort_keys=True, allow_nan=False)
 
     @staticmethod
@@ -77,7 +83,8 @@ class TrialRecord:
         "false"`` is no boolean, ``"context": "5"`` no list): ``ValueError``/``TypeError``
         name the field. ``context`` and ``control`` must be finite; ``score`` is a finite
         number or ``null``/``NaN`` (an invalid trial); ``outcome``, optional, a list of
-        finite numbers or ``null``; ``setup``, optional, a string or ``null``."""
+        finite numbers or ``null``; ``setup`` and ``physics``, optional, strings or
+        ``null``."""
         if not isinstance(data, Mapping):
             raise TypeError(f"expected a JSON object, got {type(data).__name__}")
         score = data["score"]
@@ -95,6 +102,7 @@ class TrialRecord:
             outcome=(None if data.get("outcome") is None
                      else _finite_values(data["outcome"], "outcome")),
             setup=None if data.get("setup") is None else _text(data["setup"], "setup"),
+            physics=None if data.get("physics") is None else _text(data["physics"], "physics"),
         )
 
 

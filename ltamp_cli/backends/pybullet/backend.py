@@ -26,7 +26,12 @@ from ltamp_cli.backends.pybullet.skills.robot import (
     RobotSettings,
     RobotTrialPhysics,
 )
-from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig, skill_world_config
+from ltamp_cli.backends.pybullet.world import (
+    PhysicsWorld,
+    WorldConfig,
+    physics_tag,
+    skill_world_config,
+)
 from ltamp_cli.backends.sanity import run_guarded
 from ltamp_cli.backends.skills3d.common import PathCheck
 from ltamp_cli.backends.skills3d.physics import StepCallback
@@ -153,7 +158,7 @@ class Kitchen3DBackend:
     def __init__(
         self,
         gui: bool = False,
-        solver_iterations: int = 5,
+        solver_iterations: int | None = None,
         pour_settings: PourSettings | None = None,
         scoop_settings: ScoopSettings | None = None,
         push_settings: PushSettings | None = None,
@@ -169,15 +174,18 @@ class Kitchen3DBackend:
         self.name = backend_tag(robot)
         #: The settings every skill's world shares (each skill's world then takes its own
         #: contact breaking threshold, :meth:`world_config`).
-        self.config = WorldConfig(gui=bool(gui), solver_iterations=int(solver_iterations))
+        self.config = WorldConfig(gui=bool(gui))
+        #: Solver iterations of every skill's world (a what-if); ``None``: each skill's own
+        #: (:data:`~.world.SKILL_SOLVER_ITERATIONS`).
+        self.solver_iterations = None if solver_iterations is None else int(solver_iterations)
         unknown = set(contact_breaking_m or {}) - set(_SPECS)
         if unknown:
             raise ValueError(f"contact_breaking_m: unknown skills {sorted(unknown)} "
                              f"(known: {KNOWN_SKILLS})")
         self.contact_breaking_m: Mapping[str, float] = MappingProxyType(
             {skill: float(m) for skill, m in (contact_breaking_m or {}).items()})
-        for skill in self.contact_breaking_m:
-            self.world_config(skill)  # a bad threshold fails here, not in the first trial
+        for skill in (_SPECS if self.solver_iterations is not None else self.contact_breaking_m):
+            self.world_config(skill)  # a bad setting fails here, not in the first trial
         self.pour_settings = pour_settings or PourSettings()
         self.scoop_settings = scoop_settings or ScoopSettings()
         self.push_settings = push_settings or PushSettings()
@@ -195,9 +203,16 @@ class Kitchen3DBackend:
 
     def world_config(self, skill: str) -> WorldConfig:
         """The world settings of ``skill``'s trials: :attr:`config` with the skill's
-        contact breaking threshold."""
+        contact breaking threshold and solver iterations (or this backend's what-ifs)."""
         self._spec(skill)
-        return skill_world_config(skill, self.config, self.contact_breaking_m)
+        return skill_world_config(skill, self.config, self.contact_breaking_m,
+                                  self.solver_iterations)
+
+    def physics_tag(self, skill: str) -> str:
+        """The physics ``skill``'s trials on this backend carry (``TrialRecord.physics``):
+        ``pybullet@v<physics_version(skill)>``, with a suffix for a what-if setting
+        (:func:`~.world.physics_tag`)."""
+        return physics_tag(skill, self.world_config(skill))
 
     def world_for(self, skill: str) -> PhysicsWorld:
         """The physics world of ``skill``'s trials (connected lazily, reused across trials;

@@ -30,8 +30,24 @@ GRAVITY_M_S2 = 9.81
 PHYSICS_VERSION = 1
 #: Per-skill revisions on top of :data:`PHYSICS_VERSION`, bumped when a change touches one
 #: skill's world only (so the other skills' cached trials stay valid). ``push`` 1: its world's
-#: 2 cm contact breaking threshold (issue #20, :data:`SKILL_CONTACT_BREAKING_M`).
-SKILL_PHYSICS_REVISIONS: Mapping[str, int] = MappingProxyType({"push": 1})
+#: 2 cm contact breaking threshold (issue #20, :data:`SKILL_CONTACT_BREAKING_M`). ``scoop`` 1:
+#: 50 solver iterations (issues #20/#21, :data:`SKILL_SOLVER_ITERATIONS`), so 5-iteration
+#: scoop trials (cached, pooled or recorded as ``pybullet@v1``) never mix with new ones.
+SKILL_PHYSICS_REVISIONS: Mapping[str, int] = MappingProxyType({"push": 1, "scoop": 1})
+
+#: Solver iterations per step of each Kitchen3D skill's world (the reference implementation
+#: runs PyBullet at its default, 50). The scoop takes 50: with 5 its labels agreed with 50's
+#: on 189/200 random valid inputs (Wilson 0.904-0.969, below the 0.95 rule), every one of the
+#: 11 disagreements a success only 50 reproduces (sign test p = 0.001: a bias, not label
+#: noise; ``models/README.md``, ``docs/results/fidelity/scoop_solver.json``); a scoop trial
+#: costs ~1.7x the CPU (9.1 vs 5.5 s). Pour, push and stir keep 5 (their ``3d-<skill>-solver``
+#: rows). A backend's ``solver_iterations`` option replaces them all (a what-if).
+SKILL_SOLVER_ITERATIONS: Mapping[str, int] = MappingProxyType({
+    "pour": 5,
+    "scoop": 50,
+    "push": 5,
+    "stir": 5,
+})
 
 #: Contact breaking threshold (m) of the bead worlds: Bullet's default (2 cm) keeps a
 #: manifold for every bead within 2 cm of a 6 mm bead; 4 mm makes bead piles 2-4x faster with
@@ -84,16 +100,39 @@ class WorldConfig:
 
 
 def skill_world_config(skill: str, base: WorldConfig | None = None,
-                       contact_breaking_m: Mapping[str, float] | None = None) -> WorldConfig:
-    """``base`` (default :class:`WorldConfig`) with ``skill``'s contact breaking threshold:
+                       contact_breaking_m: Mapping[str, float] | None = None,
+                       solver_iterations: int | None = None) -> WorldConfig:
+    """``base`` (default :class:`WorldConfig`) with ``skill``'s contact breaking threshold,
     ``contact_breaking_m[skill]`` when given there (metres; a what-if for benchmarks), else
-    :data:`SKILL_CONTACT_BREAKING_M`. Raises ``KeyError`` for an unknown skill."""
+    :data:`SKILL_CONTACT_BREAKING_M`, and its solver iterations, ``solver_iterations`` when
+    given (a what-if for every skill), else :data:`SKILL_SOLVER_ITERATIONS`. Raises
+    ``KeyError`` for an unknown skill, ``ValueError`` for a setting out of range."""
     overrides = contact_breaking_m or {}
     threshold = overrides.get(skill, SKILL_CONTACT_BREAKING_M[skill])
     if not 0.0 < threshold <= 0.1:
         raise ValueError(f"contact breaking threshold of {skill!r} must be in (0, 0.1] m, "
                          f"got {threshold}")
-    return replace(base or WorldConfig(), contact_breaking_threshold=float(threshold))
+    iterations = SKILL_SOLVER_ITERATIONS[skill] if solver_iterations is None else solver_iterations
+    if isinstance(iterations, bool) or not isinstance(iterations, int) or iterations < 1:
+        raise ValueError(f"solver iterations of {skill!r} must be an integer >= 1, "
+                         f"got {iterations!r}")
+    return replace(base or WorldConfig(), contact_breaking_threshold=float(threshold),
+                   solver_iterations=iterations)
+
+
+def physics_tag(skill: str, config: WorldConfig) -> str:
+    """What trial records of ``skill`` simulated in a world of ``config`` carry as their
+    physics (``TrialRecord.physics``): ``pybullet@v<physics_version(skill)>``, with
+    ``+solver<n>`` / ``+breaking<m>m`` when ``config`` departs from the skill's shipped
+    solver iterations / contact breaking threshold (a what-if's labels are not the shipped
+    ones, so a file never mixes the two)."""
+    shipped = skill_world_config(skill)
+    tag = f"pybullet@v{physics_version(skill)}"
+    if config.solver_iterations != shipped.solver_iterations:
+        tag += f"+solver{config.solver_iterations}"
+    if config.contact_breaking_threshold != shipped.contact_breaking_threshold:
+        tag += f"+breaking{config.contact_breaking_threshold:g}m"
+    return tag
 
 
 class PhysicsWorld:

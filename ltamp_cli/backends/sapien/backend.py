@@ -8,6 +8,7 @@ PyBullet backend (``name = "sapien"``); see :mod:`.skills`. One backend owns one
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import fields
 
 import numpy as np
 
@@ -24,7 +25,7 @@ from ltamp_cli.backends.sapien.render import (
     require_renderer,
 )
 from ltamp_cli.backends.sapien.skills import SapienTrialPhysics
-from ltamp_cli.backends.sapien.world import SapienWorld, SapienWorldConfig
+from ltamp_cli.backends.sapien.world import SapienWorld, SapienWorldConfig, physics_version
 from ltamp_cli.backends.skills3d.physics import StepCallback
 from ltamp_cli.backends.skills3d.pour import PourSettings
 from ltamp_cli.backends.skills3d.push import PushSettings
@@ -83,6 +84,17 @@ class SapienKitchen3DBackend:
         if self._world is None:
             self._world = SapienWorld(self.config)
         return self._world
+
+    def physics_tag(self, skill: str) -> str:
+        """The physics ``skill``'s trials on this backend carry (``TrialRecord.physics``):
+        ``sapien@v<physics_version(skill)>``, with ``+<field>=<value>`` for each world
+        setting that departs from :class:`~.world.SapienWorldConfig`'s (a what-if's labels
+        are not the shipped ones, so a file never mixes the two)."""
+        self._kinematics.skills()[skill]  # KeyError for an unknown skill
+        shipped = SapienWorldConfig()
+        changed = [f"+{f.name}={getattr(self.config, f.name)}" for f in fields(self.config)
+                   if getattr(self.config, f.name) != getattr(shipped, f.name)]
+        return f"sapien@v{physics_version(skill)}" + "".join(changed)
 
     def skills(self) -> Mapping[str, SkillSpec]:
         return self._kinematics.skills()
