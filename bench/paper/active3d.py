@@ -34,6 +34,7 @@ from bench.paper.poollearn import (
     resume_from,
     skill_parts,
     success_checkpoints,
+    theta_validity,
 )
 from bench.paper.pools import (
     FULL_SKILL_BACKENDS,
@@ -114,7 +115,8 @@ def _skill_results(ctx: Context, names: list[str]) -> dict[str, Any]:
                             checkpoints: CheckpointLog = checkpoints) -> list[dict[str, Any]]:
                         evaluator = CheckpointEvaluator(
                             spec, pool.heldout(), live_score(backend, skill, 700 + seed),
-                            contexts, is_valid, success_checkpoints(sizes, seed), seed,
+                            contexts, theta_validity(is_valid, learner),
+                            success_checkpoints(sizes, seed), seed,
                             sizes["candidates"], **resume_from(checkpoints, key))
                         config = LearningConfig(strategy=learner, kernel="mlp",
                                                 budget=sizes["budget"], seed=seed)

@@ -37,6 +37,7 @@ from bench.paper.poollearn import (
     resume_from,
     skill_parts,
     success_checkpoints,
+    theta_validity,
 )
 from bench.paper.pools import (
     FULL_SKILL_BACKENDS,
@@ -126,7 +127,8 @@ def _skill_results(ctx: Context, names: list[str]) -> dict[str, Any]:
                         evaluator = CheckpointEvaluator(
                             spec, pool.heldout(),
                             live_score(backend, skill, 500 + seed) if kind == "learner"
-                            else None, contexts, is_valid, success_checkpoints(sizes, seed), seed,
+                            else None, contexts, theta_validity(is_valid, strategy),
+                            success_checkpoints(sizes, seed), seed,
                             sizes["candidates"], **resume_from(checkpoints, key))
                         config = LearningConfig(strategy=strategy, kernel=kernel,
                                                 budget=sizes["budget"], seed=seed)

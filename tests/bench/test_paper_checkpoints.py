@@ -13,8 +13,10 @@ import pytest
 
 from bench.paper import supervised3d
 from bench.paper.common import CheckpointLog, Context, LiveScore
-from bench.paper.poollearn import CheckpointEvaluator, memoized_validity
+from bench.paper.poollearn import CheckpointEvaluator, memoized_validity, theta_validity
+from ltamp_cli.backends import load_backend
 from ltamp_cli.backends.synthetic import SyntheticBackend
+from ltamp_cli.learning.active import LearningConfig, learn_online
 
 # Three checkpoints, each simulating θ* on 3 contexts; two learners (a GP, whose fits warm-start
 # from the last one, and a network), one seed, no kernel-only jobs: 2 jobs x 3 checkpoints.
@@ -146,3 +148,30 @@ def test_memoized_validity_asks_each_control_once() -> None:
     assert asked == [3, 1]
     test(np.full(2, 2.0), np.array([[3.0], [4.0], [-5.0]]))  # over the limit: starts afresh
     assert test(np.zeros(2), controls[:1]).tolist() == [True] and asked == [3, 1, 3, 1]
+
+
+@pytest.mark.parametrize("strategy", ["gp", "nn-c", "rf-r"])
+def test_theta_validity_gives_the_full_tests_theta_with_fewer_checks(strategy: str) -> None:
+    backend = load_backend("synthetic")
+    calls = {"full": 0, "theta": 0}
+
+    def counted(name: str) -> Any:
+        def test(context: np.ndarray, controls: np.ndarray) -> np.ndarray:
+            calls[name] += len(controls)
+            return backend.is_valid("skill8d", context, controls)
+        return test
+
+    model = learn_online(backend, "skill8d",
+                         LearningConfig(strategy=strategy, budget=20, seed=1)).model
+    theta = theta_validity(memoized_validity(counted("theta")), strategy)
+    rng = np.random.default_rng(5)
+    for index in range(5):
+        context = backend.sample_context("skill8d", rng)
+        for _ in range(2):  # a second checkpoint with the same candidates: remembered
+            a, _ = model.most_confident_control(context, np.random.default_rng(index),
+                                                counted("full"), 2000)
+            b, _ = model.most_confident_control(context, np.random.default_rng(index), theta,
+                                                2000)
+            np.testing.assert_array_equal(a, b)
+    assert calls["theta"] < calls["full"] / 8
+    backend.close()
