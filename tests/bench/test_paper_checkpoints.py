@@ -175,3 +175,22 @@ def test_theta_validity_gives_the_full_tests_theta_with_fewer_checks(strategy: s
             np.testing.assert_array_equal(a, b)
     assert calls["theta"] < calls["full"] / 8
     backend.close()
+
+
+@pytest.mark.parametrize("name", ["supervised3d", "active3d"])
+def test_committed_standard_job_logs_still_match_their_sizes(name: str) -> None:
+    """The committed standard job logs are read back (same sizes hash), so their jobs are not
+    rerun: the checkpoint log added nothing to what a job's hash depends on."""
+    import importlib
+    import json
+
+    from bench.paper.common import REPO, sizes_hash
+    from bench.paper.poollearn import job_sizes
+
+    module = importlib.import_module(f"bench.paper.{name}")
+    sizes = Context("standard", REPO / "docs" / "results" / "standard", False).sizes(
+        module.SIZES)
+    log = REPO / "docs" / "results" / "standard" / "runs" / f"{module.NAME}-standard.jsonl"
+    lines = [json.loads(line) for line in log.read_text().splitlines()]
+    assert lines and {line["sizes"] for line in lines} == {
+        sizes_hash(job_sizes(sizes, skill)) for skill in sizes["skills"]}
