@@ -17,6 +17,7 @@ from typing import Any
 from tqdm import tqdm
 
 from bench.paper.common import (
+    CheckpointLog,
     Context,
     JobLog,
     curve_series,
@@ -30,8 +31,10 @@ from bench.paper.poollearn import (
     pool_curve,
     pooled_skill,
     require_part,
+    resume_from,
     skill_parts,
     success_checkpoints,
+    theta_validity,
 )
 from bench.paper.pools import (
     FULL_SKILL_BACKENDS,
@@ -95,27 +98,32 @@ def _skill_results(ctx: Context, names: list[str]) -> dict[str, Any]:
         for skill in names:
             # Finished jobs: a rerun continues after the last one.
             log = JobLog(ctx, NAME, job_sizes(sizes, skill))
+            # Evaluated checkpoints of unfinished jobs: a rerun continues inside a job.
+            checkpoints = CheckpointLog(ctx, NAME, job_sizes(sizes, skill))
             backend, pool, spec, contexts, is_valid = pooled_skill(ctx, sizes, backends, skill)
 
             rows: list[dict[str, Any]] = []
             rep_rows: list[dict[str, Any]] = []
             for learner in tqdm(LEARNERS, desc=f"active3d {skill}", disable=not ctx.progress):
                 for seed in range(sizes["seeds"]):
+                    key = f"{skill}/{learner}/{seed}"
 
                     def job(learner: str = learner, seed: int = seed, skill: str = skill,
                             pool: Any = pool, spec: Any = spec, contexts: Any = contexts,
-                            is_valid: Any = is_valid,
-                            backend: Any = backend) -> list[dict[str, Any]]:
+                            is_valid: Any = is_valid, backend: Any = backend,
+                            key: str = key,
+                            checkpoints: CheckpointLog = checkpoints) -> list[dict[str, Any]]:
                         evaluator = CheckpointEvaluator(
                             spec, pool.heldout(), live_score(backend, skill, 700 + seed),
-                            contexts, is_valid, success_checkpoints(sizes, seed), seed,
-                            sizes["candidates"])
+                            contexts, theta_validity(is_valid, learner),
+                            success_checkpoints(sizes, seed), seed,
+                            sizes["candidates"], **resume_from(checkpoints, key))
                         config = LearningConfig(strategy=learner, kernel="mlp",
                                                 budget=sizes["budget"], seed=seed)
                         return pool_curve(pool, spec, config, sizes["eval_every"],
                                           evaluator)[0]
 
-                    curve = log.run(f"{skill}/{learner}/{seed}", job)
+                    curve = log.run(key, job)
                     rows += [{"learner": learner, **row} for row in curve]
                 for rep in range(sizes["reps"]):
 

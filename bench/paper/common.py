@@ -69,17 +69,10 @@ class JobLog:
         folder = ctx.out / "runs"
         folder.mkdir(parents=True, exist_ok=True)
         self.path = folder / f"{experiment}-{ctx.mode}.jsonl"
-        self.sizes = hashlib.sha256(json.dumps(sizes, sort_keys=True, default=str)
-                                    .encode()).hexdigest()[:16]
-        self._done: dict[str, list[dict[str, Any]]] = {}
-        if self.path.is_file():
-            for line in self.path.read_text().splitlines():
-                try:
-                    entry = json.loads(line)
-                except json.JSONDecodeError:
-                    continue  # a line torn by an interruption
-                if isinstance(entry, dict) and entry.get("sizes") == self.sizes:
-                    self._done[str(entry["key"])] = list(entry["rows"])
+        self.sizes = sizes_hash(sizes)
+        self._done: dict[str, list[dict[str, Any]]] = {
+            str(entry["key"]): list(entry["rows"]) for entry in read_entries(self.path,
+                                                                             self.sizes)}
 
     def get(self, key: str) -> list[dict[str, Any]] | None:
         """The rows of job ``key`` if it finished in an earlier (or this) run."""
@@ -90,25 +83,92 @@ class JobLog:
         read them back (JSON values: lists for tuples, floats for numpy scalars)."""
         line = json.dumps({"key": key, "sizes": self.sizes, "rows": rows},
                           default=_jsonable) + "\n"
-        # The parts of a split experiment (one per skill) may run in parallel processes and
-        # share this log: the lock keeps the torn-line check and the append together, and the
-        # line is one unbuffered write (a buffered one could be split and interleaved).
-        with self.path.open("a+b", buffering=0) as handle:
-            fcntl.flock(handle.fileno(), fcntl.LOCK_EX)
-            size = os.fstat(handle.fileno()).st_size
-            if size > 0 and os.pread(handle.fileno(), 1, size - 1) != b"\n":
-                line = "\n" + line  # end a line torn by an interruption first
-            data = line.encode("utf-8")
-            while data:
-                data = data[os.write(handle.fileno(), data):]
-            os.fsync(handle.fileno())
-        self._done[key] = json.loads(line.strip())["rows"]
+        append_line(self.path, line)
+        self._done[key] = json.loads(line)["rows"]
         return self._done[key]
 
     def run(self, key: str, job: Callable[[], list[dict[str, Any]]]) -> list[dict[str, Any]]:
         """``job()``'s rows, computed now or read back from an earlier run."""
         rows = self.get(key)
         return self.put(key, job()) if rows is None else rows
+
+
+def append_line(path: Path, line: str) -> None:
+    """Append one JSON ``line`` (ending in a newline) to ``path``: one unbuffered write under
+    an exclusive lock, fsynced. The parts of a split experiment (one per skill) may run in
+    parallel processes and share a log: the lock keeps the torn-line check and the append
+    together (a buffered write could be split and interleaved); a line torn by an
+    interruption is ended first, so readers skip it and nothing else."""
+    with path.open("a+b", buffering=0) as handle:
+        fcntl.flock(handle.fileno(), fcntl.LOCK_EX)
+        size = os.fstat(handle.fileno()).st_size
+        if size > 0 and os.pread(handle.fileno(), 1, size - 1) != b"\n":
+            line = "\n" + line
+        data = line.encode("utf-8")
+        while data:
+            data = data[os.write(handle.fileno(), data):]
+        os.fsync(handle.fileno())
+
+
+def read_entries(path: Path, sizes: str) -> list[dict[str, Any]]:
+    """The JSON-object lines of ``path`` recorded under the sizes hash ``sizes``, in file
+    order (torn lines and lines of other sizes skipped; no file: none)."""
+    if not path.is_file():
+        return []
+    entries = []
+    for line in path.read_text().splitlines():
+        try:
+            entry = json.loads(line)
+        except json.JSONDecodeError:
+            continue  # a line torn by an interruption
+        if isinstance(entry, dict) and entry.get("sizes") == sizes:
+            entries.append(entry)
+    return entries
+
+
+class CheckpointLog:
+    """The finished checkpoints of unfinished jobs, so that a rerun continues *inside* a job.
+
+    A pooled experiment's job (learner × seed) evaluates F1 and the simulated θ* success rate
+    at up to 40 checkpoints; at full size one job is ~10 CPU minutes, hours on a loaded
+    machine, and an interruption used to lose all of it. Each evaluated checkpoint is one
+    line ``{"key", "sizes", "n_trials", "f1", "success_rate", "successes", "scorer"}``
+    appended to ``<out>/runs/<experiment>-<mode>-checkpoints.jsonl`` (``scorer``: how many
+    live trials the job's true-score function had run after it, so a rerun's trial seeds
+    continue where the logged ones stopped). A rerun of the job replays its learning (cheap:
+    the model fits) and reads these evaluations back instead of recomputing them; the job's
+    final rows are byte-identical to an uninterrupted run's (``tests/bench``). Same sizes
+    hash as the experiment's :class:`JobLog`.
+    """
+
+    def __init__(self, ctx: Context, experiment: str, sizes: Mapping[str, Any]) -> None:
+        folder = ctx.out / "runs"
+        folder.mkdir(parents=True, exist_ok=True)
+        self.path = folder / f"{experiment}-{ctx.mode}-checkpoints.jsonl"
+        self.sizes = sizes_hash(sizes)
+        self._done: dict[str, dict[int, dict[str, Any]]] = {}
+        for entry in read_entries(self.path, self.sizes):
+            self._done.setdefault(str(entry["key"]), {})[int(entry["n_trials"])] = entry
+
+    def get(self, key: str) -> dict[int, dict[str, Any]]:
+        """Job ``key``'s logged checkpoints: ``{n_trials: entry}`` (a copy)."""
+        return dict(self._done.get(key, {}))
+
+    def put(self, key: str, entry: dict[str, Any]) -> dict[str, Any]:
+        """Record one evaluated checkpoint ``entry`` (``n_trials``, metrics, ``scorer``) of
+        job ``key``; returns it as a rerun will read it back."""
+        line = json.dumps({"key": key, "sizes": self.sizes, **entry}, default=_jsonable) + "\n"
+        append_line(self.path, line)
+        stored = json.loads(line)
+        self._done.setdefault(key, {})[int(stored["n_trials"])] = stored
+        return stored
+
+
+def sizes_hash(sizes: Mapping[str, Any]) -> str:
+    """The 16-hex-digit hash under which a log's lines are recorded (``sizes``: the
+    experiment's row of its ``SIZES`` table, or what its jobs depend on)."""
+    return hashlib.sha256(json.dumps(sizes, sort_keys=True, default=str)
+                          .encode()).hexdigest()[:16]
 
 
 def machine() -> dict[str, Any]:
@@ -150,34 +210,53 @@ def progress_enabled() -> bool:
     return sys.stderr.isatty()
 
 
-def live_score(
-    backend: SkillBackend, skill: str, seed: int, key: str | None = None
-) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+class LiveScore:
     """True score by simulation: ``(contexts (k, dα), controls (k, dθ)) -> scores (k,)``.
 
-    Each call runs ``k`` real trials on ``backend`` (seeded by ``seed`` and a call counter, so
-    a run is reproducible); ``key`` (e.g. ``fraction_in_bowl``) is collected into
-    ``scorer.infos`` for metrics other than the score.
+    Each call runs ``k`` real trials on ``backend``; trial ``i`` of the scorer's life has
+    seed ``SeedSequence([seed, i])`` (``position`` counts them), so a run is reproducible
+    and a resumed one can :meth:`seek` past trials whose outcomes it already logged.
+    ``key`` (e.g. ``fraction_in_bowl``) is collected into ``infos`` for metrics other than
+    the score.
     """
-    counter = iter(range(10**9))
-    infos: list[dict[str, Any]] = []
 
-    def score(contexts: np.ndarray, controls: np.ndarray) -> np.ndarray:
+    def __init__(self, backend: SkillBackend, skill: str, seed: int,
+                 key: str | None = None) -> None:
+        self.backend = backend
+        self.skill = skill
+        self.seed = seed
+        self.key = key
+        self.position = 0
+        self.infos: list[dict[str, Any]] = []
+
+    def seek(self, position: int) -> None:
+        """Continue as if ``position`` trials had run (a resumed job's logged ones)."""
+        if position < 0:
+            raise ValueError(f"a scorer position is >= 0, got {position}")
+        self.position = position
+
+    def __call__(self, contexts: np.ndarray, controls: np.ndarray) -> np.ndarray:
         contexts = np.atleast_2d(np.asarray(contexts, dtype=float))
         controls = np.atleast_2d(np.asarray(controls, dtype=float))
         if len(contexts) == 1 and len(controls) > 1:
             contexts = np.repeat(contexts, len(controls), axis=0)
         out = np.empty(len(controls))
         for i, (context, control) in enumerate(zip(contexts, controls, strict=True)):
-            trial_seed = int(np.random.SeedSequence([seed, next(counter)]).generate_state(1)[0])
-            result = backend.run_trial(skill, context, control, trial_seed & 0x7FFFFFFF)
+            trial_seed = int(np.random.SeedSequence([self.seed, self.position])
+                             .generate_state(1)[0])
+            self.position += 1
+            result = self.backend.run_trial(self.skill, context, control,
+                                            trial_seed & 0x7FFFFFFF)
             out[i] = result.score if np.isfinite(result.score) else -1.0
-            infos.append({"score": out[i], "valid": bool(result.valid),
-                          **({key: result.info.get(key)} if key else {})})
+            self.infos.append({"score": out[i], "valid": bool(result.valid),
+                               **({self.key: result.info.get(self.key)} if self.key else {})})
         return out
 
-    score.infos = infos  # type: ignore[attr-defined]
-    return score
+
+def live_score(backend: SkillBackend, skill: str, seed: int, key: str | None = None
+               ) -> LiveScore:
+    """The :class:`LiveScore` of ``skill`` on ``backend`` with trial seeds from ``seed``."""
+    return LiveScore(backend, skill, seed, key)
 
 
 def unavailable(what: str) -> dict[str, Any]:

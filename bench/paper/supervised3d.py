@@ -20,6 +20,7 @@ from typing import Any
 from tqdm import tqdm
 
 from bench.paper.common import (
+    CheckpointLog,
     Context,
     JobLog,
     curve_series,
@@ -33,8 +34,10 @@ from bench.paper.poollearn import (
     pool_curve,
     pooled_skill,
     require_part,
+    resume_from,
     skill_parts,
     success_checkpoints,
+    theta_validity,
 )
 from bench.paper.pools import (
     FULL_SKILL_BACKENDS,
@@ -102,6 +105,8 @@ def _skill_results(ctx: Context, names: list[str]) -> dict[str, Any]:
         for skill in names:
             # Finished jobs: a rerun continues after the last one.
             log = JobLog(ctx, NAME, job_sizes(sizes, skill))
+            # Evaluated checkpoints of unfinished jobs: a rerun continues inside a job.
+            checkpoints = CheckpointLog(ctx, NAME, job_sizes(sizes, skill))
             backend, pool, spec, contexts, is_valid = pooled_skill(ctx, sizes, backends, skill)
 
             rows: list[dict[str, Any]] = []
@@ -111,23 +116,26 @@ def _skill_results(ctx: Context, names: list[str]) -> dict[str, Any]:
             for strategy, kernel, kind in tqdm(jobs, desc=f"supervised3d {skill}",
                                                disable=not ctx.progress):
                 for seed in range(sizes["seeds"]):
+                    key = f"{skill}/{strategy}/{kernel}/{kind}/{seed}"
 
                     def job(strategy: str = strategy, kernel: str = kernel, kind: str = kind,
                             seed: int = seed, skill: str = skill, pool: Any = pool,
                             spec: Any = spec, contexts: Any = contexts,
-                            is_valid: Any = is_valid,
-                            backend: Any = backend) -> list[dict[str, Any]]:
+                            is_valid: Any = is_valid, backend: Any = backend,
+                            key: str = key,
+                            checkpoints: CheckpointLog = checkpoints) -> list[dict[str, Any]]:
                         evaluator = CheckpointEvaluator(
                             spec, pool.heldout(),
                             live_score(backend, skill, 500 + seed) if kind == "learner"
-                            else None, contexts, is_valid, success_checkpoints(sizes, seed), seed,
-                            sizes["candidates"])
+                            else None, contexts, theta_validity(is_valid, strategy),
+                            success_checkpoints(sizes, seed), seed,
+                            sizes["candidates"], **resume_from(checkpoints, key))
                         config = LearningConfig(strategy=strategy, kernel=kernel,
                                                 budget=sizes["budget"], seed=seed)
                         return pool_curve(pool, spec, config, sizes["eval_every"],
                                           evaluator)[0]
 
-                    curve = log.run(f"{skill}/{strategy}/{kernel}/{kind}/{seed}", job)
+                    curve = log.run(key, job)
                     for row in curve:
                         if kind == "learner":
                             rows.append({"learner": strategy, **row})

@@ -687,6 +687,7 @@ def learn_from_pool(
     eval_every: int = 0,
     progress: bool = False,
     evaluate_success: bool = True,
+    final_fit: bool = True,
 ) -> LearningResult:
     """Learn from pre-collected trials, choosing each next one from the pool without replacement.
 
@@ -694,7 +695,10 @@ def learn_from_pool(
     whole pool; ``lse2``: among the ``pool_neighbourhood`` fraction of remaining trials whose
     contexts are nearest to that of a uniformly drawn remaining trial); the others take the
     pool in a random order. At most ``min(budget, len(pool))`` trials are used. Thread pools
-    are limited to ``config.threads`` meanwhile, as in ``ltamp train``.
+    are limited to ``config.threads`` meanwhile, as in ``ltamp train``. ``final_fit=False``
+    skips the final full refit (random restarts) for callers that only want the curve: the
+    result's model is then the last one fitted (refitted on all trials only if no checkpoint
+    fell on the last trial); the curve is the same either way (the final fit comes after it).
     """
     pool = [r for r in pool if r.skill == spec.name]
     if not pool:
@@ -742,7 +746,8 @@ def learn_from_pool(
             learner.add(x_pool[index], pool[index])
             curve.maybe(learner)
             bar.update(1)
-    return LearningResult(learner.final(), [pool[i] for i in chosen], curve.points)
+    model = learner.final() if final_fit else learner.current()
+    return LearningResult(model, [pool[i] for i in chosen], curve.points)
 
 
 def _pool_pick(
