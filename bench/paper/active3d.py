@@ -21,6 +21,7 @@ from bench.paper.common import (
     Context,
     JobLog,
     curve_series,
+    fit_key,
     live_score,
     plot_panels,
     write_json,
@@ -106,7 +107,7 @@ def _skill_results(ctx: Context, names: list[str]) -> dict[str, Any]:
             rep_rows: list[dict[str, Any]] = []
             for learner in tqdm(LEARNERS, desc=f"active3d {skill}", disable=not ctx.progress):
                 for seed in range(sizes["seeds"]):
-                    key = f"{skill}/{learner}/{seed}"
+                    key = fit_key(f"{skill}/{learner}/{seed}", learner)
 
                     def job(learner: str = learner, seed: int = seed, skill: str = skill,
                             pool: Any = pool, spec: Any = spec, contexts: Any = contexts,
@@ -137,7 +138,7 @@ def _skill_results(ctx: Context, names: list[str]) -> dict[str, Any]:
                         return pool_curve(pool, spec, config, sizes["rep_every"],
                                           evaluator)[0]
 
-                    curve = log.run(f"{skill}/{learner}/rep{rep}", rep_job)
+                    curve = log.run(fit_key(f"{skill}/{learner}/rep{rep}", learner), rep_job)
                     rep_rows += [{"learner": learner, **row} for row in curve
                                  if row["n_trials"] >= sizes["rep_init"]]
             skills[skill] = {"pool": pool.stats(), "summary": summarize(rows),

@@ -37,6 +37,7 @@ from bench.paper.common import (
     Context,
     JobLog,
     curve_series,
+    fit_key,
     live_score,
     plot_panels,
     write_json,
@@ -123,8 +124,8 @@ def job_key(learner: str, seed: int, learns_from_outcome: bool) -> str:
     key names it: a job logged under another acquisition (an earlier default) is not resumed
     as if it were this one."""
     if learner in ("lse", "lse2") and learns_from_outcome:
-        return f"{learner}+{LearningConfig().hindsight_acquisition}/{seed}"
-    return f"{learner}/{seed}"
+        return fit_key(f"{learner}+{LearningConfig().hindsight_acquisition}/{seed}", learner)
+    return fit_key(f"{learner}/{seed}", learner)
 
 
 def _skill_rows(ctx: Context, skill: str, backend: SkillBackend | None) -> list[dict[str, Any]]:

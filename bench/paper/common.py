@@ -20,6 +20,8 @@ from typing import Any
 import numpy as np
 
 from ltamp_cli.backends.protocol import SkillBackend
+from ltamp_cli.learning.active import GP_STRATEGIES
+from ltamp_cli.learning.gp import FIT_OBJECTIVE
 
 REPO = Path(__file__).resolve().parents[2]
 MODES = ("smoke", "quick", "standard", "full")
@@ -162,6 +164,14 @@ class CheckpointLog:
         stored = json.loads(line)
         self._done.setdefault(key, {})[int(stored["n_trials"])] = stored
         return stored
+
+
+def fit_key(key: str, strategy: str) -> str:
+    """Job ``key`` of a learner using ``strategy``, naming the GP fit objective when the
+    learner fits GPs (:data:`~ltamp_cli.learning.gp.FIT_OBJECTIVE`): a job logged under an
+    earlier default fit is rerun, not mixed with this fit's jobs. Learners without a GP
+    keep their keys (their logged jobs stay valid)."""
+    return f"{key}@{FIT_OBJECTIVE}" if strategy in GP_STRATEGIES else key
 
 
 def sizes_hash(sizes: Mapping[str, Any]) -> str:

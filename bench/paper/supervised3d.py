@@ -24,6 +24,7 @@ from bench.paper.common import (
     Context,
     JobLog,
     curve_series,
+    fit_key,
     live_score,
     plot_panels,
     write_json,
@@ -116,7 +117,7 @@ def _skill_results(ctx: Context, names: list[str]) -> dict[str, Any]:
             for strategy, kernel, kind in tqdm(jobs, desc=f"supervised3d {skill}",
                                                disable=not ctx.progress):
                 for seed in range(sizes["seeds"]):
-                    key = f"{skill}/{strategy}/{kernel}/{kind}/{seed}"
+                    key = fit_key(f"{skill}/{strategy}/{kernel}/{kind}/{seed}", strategy)
 
                     def job(strategy: str = strategy, kernel: str = kernel, kind: str = kind,
                             seed: int = seed, skill: str = skill, pool: Any = pool,
