@@ -26,6 +26,7 @@ from ltamp_cli.planner.pddl.syntax import Stream
 from ltamp_cli.planner.problem import PlanningProblem
 from ltamp_cli.planner.result import INFEASIBLE, TIMEOUT, Certificate, PlanResult
 from ltamp_cli.planner.search.engine import SEARCH_ALGORITHMS
+from ltamp_cli.planner.search.normalize import GoalFormulaError
 from ltamp_cli.planner.search.skeleton import (
     check_constraints,
     equates_arguments,
@@ -111,9 +112,15 @@ def solve(problem: PlanningProblem, config: PlannerConfig | None = None) -> Plan
     tracker = CallTracker()
     holder: list[PlannerState] = []
     refuse_unsupported(problem, config.algorithm)
-    with _relaxed_gc(), limited_threads(config.threads):
-        finished, result = run_until(lambda: _solve(problem, config, start, tracker, holder),
-                                     start + config.max_time, tracker)
+    try:
+        with _relaxed_gc(), limited_threads(config.threads):
+            finished, result = run_until(
+                lambda: _solve(problem, config, start, tracker, holder),
+                start + config.max_time, tracker)
+    except GoalFormulaError as error:
+        if problem.goal_location is None:
+            raise
+        raise InputError(error.message, problem.goal_location) from None
     if finished:
         assert result is not None
         return result

@@ -78,6 +78,9 @@ class PlanningProblem:
     goal: Formula
     planner_options: dict[str, Any] = field(default_factory=dict)
     raw: Mapping[str, Any] = field(default_factory=dict)
+    # Where the goal was written (YAML ``goal:``, a PDDL problem file): refusals of the goal
+    # found while solving (a formula too large to expand) name it. None: built in Python.
+    goal_location: SourceLocation | None = None
 
 
 def _path_error(path: Path, what: str, where: SourceLocation) -> InputError | None:
@@ -308,7 +311,8 @@ def load_problem(path: str | Path, domain_dir: str | Path | None = None) -> Plan
     check_problem(problem, domain)
     return with_negated_tests(PlanningProblem(
         problem.name, str(path), domain, stream_file, factory, bindings_source, world, objects,
-        problem.init, problem.function_values, goal, dict(planner_options), doc.data))
+        problem.init, problem.function_values, goal, dict(planner_options), doc.data,
+        doc.location("goal")))
 
 
 def _check_plan_constraints(doc: YamlDocument, options: Mapping[str, Any],
@@ -376,4 +380,5 @@ def _from_pddl_problem(path: Path, domain: Domain, source: str, options: dict[st
     for constant in domain.constants:
         objects.setdefault(constant.name, (constant.type, None))
     return PlanningProblem(problem.name, source, domain, None, None, "", {}, objects,
-                           problem.init, problem.function_values, problem.goal, options, {})
+                           problem.init, problem.function_values, problem.goal, options, {},
+                           problem.location)

@@ -305,11 +305,24 @@ class Normalizer:
 
     def goal(self, goal: Formula) -> list[NormalAxiom]:
         rules = []
-        for clause in self.dnf(goal):
+        try:
+            clauses = self.dnf(goal)
+        except InputError as error:
+            if error.location is not None:
+                raise
+            raise GoalFormulaError(f"the goal: {error.message}") from None
+        for clause in clauses:
             free = _clause_variables(clause) - _typed_variables(clause)
             extra = tuple(LiftedLiteral(type_predicate(OBJECT_TYPE), (v,)) for v in sorted(free))
             rules.append(NormalAxiom(GOAL_PREDICATE, (), extra + clause))
         return rules
+
+
+class GoalFormulaError(InputError):
+    """A refusal of the goal formula found while normalising it (one too large to expand).
+    The normaliser does not know where the goal was written: the caller that does
+    (:func:`ltamp_cli.planner.api.solve`, from ``PlanningProblem.goal_location``) gives it
+    that position."""
 
 
 @contextmanager
