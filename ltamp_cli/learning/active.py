@@ -70,6 +70,7 @@ from ltamp_cli.backends.protocol import (
     trial_setup,
 )
 from ltamp_cli.backends.sanity import run_trial_safely
+from ltamp_cli.errors import InputError, location_in
 from ltamp_cli.learning.acquisition import evaluate, maximize, straddle
 from ltamp_cli.learning.baselines import SKLEARN_KINDS, RandomModel, SklearnModel
 from ltamp_cli.learning.defaults import DEFAULT_STRATEGY
@@ -492,6 +493,20 @@ def learn_online(
                              progress, evaluate_success)
 
 
+def refuse_pending_trial(dataset: TrialDataset) -> None:
+    """Refuse to append live trials to the ``trials.jsonl`` of an ask/tell directory whose
+    proposal is still pending: they would take the proposal's index, and its told result
+    could no longer be recorded under it (:func:`~.ask_tell.tell`)."""
+    from ltamp_cli.learning.ask_tell import PENDING_FILE, TRIALS_FILE
+
+    pending = dataset.path.parent / PENDING_FILE
+    if dataset.path.name == TRIALS_FILE and pending.is_file():
+        raise InputError(
+            "a trial proposed by `ltamp train --ask` is pending here: tell its outcome first "
+            "(`ltamp tell DIR --score S`), or delete pending.json to drop it",
+            location_in(pending))
+
+
 def check_same_trials(records: Sequence[TrialRecord], backend: SkillBackend, skill: str,
                       where: str) -> None:
     """Refuse ``records`` (a run's own trials, read from ``where``) that ``backend``'s
@@ -532,6 +547,8 @@ def _learn_online(
 ) -> LearningResult:
     """:func:`learn_online` holding the dataset's writer lock."""
     spec = skill_spec(backend, skill)  # KeyError naming the backend's skills
+    if dataset is not None:
+        refuse_pending_trial(dataset)
     records = dataset.read() if dataset is not None and dataset.exists() else []
     check_same_trials(records, backend, skill, str(dataset.path) if dataset else "the trials")
     setup, physics = trial_setup(backend, skill), backend_physics(backend, skill)

@@ -280,10 +280,20 @@ def _tell_locked(directory: Path, score: float, valid: bool,
             record = replace(record, outcome=values)
     dataset = TrialDataset(directory / TRIALS_FILE)
     records = dataset.read()
-    # A crash between appending and clearing pending.json must not duplicate the trial.
-    if not any(r.index == proposal.index for r in records):
+    # A crash between appending and clearing pending.json must not duplicate the trial; a
+    # record of another trial under the proposal's index (a live run resumed in DIR since
+    # the ask) must not pass for it: the told result would be dropped without a word.
+    holder = next((r for r in records if r.index == proposal.index), None)
+    if holder is None:
         dataset.append(record)
         records.append(record)
+    elif (holder.seed, holder.context, holder.control) != (record.seed, record.context,
+                                                          record.control):
+        raise InputError(
+            f"trial {proposal.index} is already recorded, and it is not the pending trial "
+            "(another run appended its own trials since the ask): nothing was recorded; "
+            "give this result to a fresh directory with `ltamp import`, or ask again",
+            location_in(dataset.path))
     rng = np.random.default_rng([config.seed, len(records), 11])
     x, y = learner_from_records(spec, config, records, rng).training_set()
     model = fit_model(spec, config, x, y, _previous_model(directory), rng=rng,
