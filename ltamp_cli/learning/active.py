@@ -70,6 +70,7 @@ from ltamp_cli.backends.protocol import (
     trial_setup,
 )
 from ltamp_cli.backends.sanity import run_trial_safely
+from ltamp_cli.errors import InputError, location_in
 from ltamp_cli.learning.acquisition import evaluate, maximize, straddle
 from ltamp_cli.learning.baselines import SKLEARN_KINDS, RandomModel, SklearnModel
 from ltamp_cli.learning.defaults import DEFAULT_STRATEGY
@@ -492,6 +493,48 @@ def learn_online(
                              progress, evaluate_success)
 
 
+def refuse_pending_trial(dataset: TrialDataset) -> None:
+    """Refuse to append live trials to the ``trials.jsonl`` of an ask/tell directory whose
+    proposal is still pending: they would take the proposal's index, and its told result
+    could no longer be recorded under it (:func:`~.ask_tell.tell`)."""
+    from ltamp_cli.learning.ask_tell import PENDING_FILE, TRIALS_FILE
+
+    pending = dataset.path.parent / PENDING_FILE
+    if dataset.path.name == TRIALS_FILE and pending.is_file():
+        raise InputError(
+            "a trial proposed by `ltamp train --ask` is pending here: tell its outcome first "
+            "(`ltamp tell DIR --score S`), or delete pending.json to drop it",
+            location_in(pending))
+
+
+def check_same_trials(records: Sequence[TrialRecord], backend: SkillBackend, skill: str,
+                      where: str) -> None:
+    """Refuse ``records`` (a run's own trials, read from ``where``) that ``backend``'s
+    ``skill`` trials must not join: another skill or robot (``ValueError``), another version
+    of the backend's trial setup (``ValueError``) or another physics (:class:`InputError`).
+    Live learning (:func:`learn_online`) and ``ask`` (trials run outside ltamp, labelled for
+    this backend) resume only on these terms."""
+    strangers = [r for r in records if r.skill != skill]
+    if strangers:
+        raise ValueError(f"{where} holds trials of skill {strangers[0].skill!r}, not {skill!r}")
+    # Labels of a robot-in-the-loop trial and of a free-floating one differ: never mix them.
+    other = next((r.backend for r in records
+                  if r.backend != backend.name and "+" in f"{r.backend}{backend.name}"), None)
+    if other is not None:
+        raise ValueError(
+            f"{where} holds {other} trials, not {backend.name} ones; use another --out"
+        )
+    setup = trial_setup(backend, skill)
+    stranger = next((r for r in records if r.backend == backend.name and r.setup != setup), None)
+    if stranger is not None:  # the same backend, another version of its setup: other labels
+        raise ValueError(
+            f"{where} holds {backend.name} trials of {setup_words(stranger.setup)}, not "
+            f"{setup_words(setup)}; use another --out"
+        )
+    # Nor labels of another physics (e.g. the scoop's 5 vs 50 solver iterations).
+    check_physics(records, backend_physics(backend, skill), where, "use another --out")
+
+
 def _learn_online(
     backend: SkillBackend,
     skill: str,
@@ -504,32 +547,11 @@ def _learn_online(
 ) -> LearningResult:
     """:func:`learn_online` holding the dataset's writer lock."""
     spec = skill_spec(backend, skill)  # KeyError naming the backend's skills
+    if dataset is not None:
+        refuse_pending_trial(dataset)
     records = dataset.read() if dataset is not None and dataset.exists() else []
-    strangers = [r for r in records if r.skill != skill]
-    if strangers:
-        raise ValueError(
-            f"{dataset.path if dataset else ''} holds trials of skill "
-            f"{strangers[0].skill!r}, not {skill!r}"
-        )
-    # Labels of a robot-in-the-loop trial and of a free-floating one differ: never mix them.
-    other = next((r.backend for r in records
-                  if r.backend != backend.name and "+" in f"{r.backend}{backend.name}"), None)
-    if other is not None:
-        raise ValueError(
-            f"{dataset.path if dataset else ''} holds {other} trials, not {backend.name} "
-            "ones; use another --out"
-        )
-    setup = trial_setup(backend, skill)
-    stranger = next((r for r in records if r.backend == backend.name and r.setup != setup), None)
-    if stranger is not None:  # the same backend, another version of its setup: other labels
-        raise ValueError(
-            f"{dataset.path if dataset else ''} holds {backend.name} trials of "
-            f"{setup_words(stranger.setup)}, not {setup_words(setup)}; use another --out"
-        )
-    # Nor labels of another physics (e.g. the scoop's 5 vs 50 solver iterations).
-    physics = backend_physics(backend, skill)
-    check_physics(records, physics, str(dataset.path) if dataset else "the trials",
-                  "use another --out")
+    check_same_trials(records, backend, skill, str(dataset.path) if dataset else "the trials")
+    setup, physics = trial_setup(backend, skill), backend_physics(backend, skill)
     indices = [r.index for r in records if r.index >= 0]
     if len(set(indices)) != len(indices):
         repeated = next(i for i in indices if indices.count(i) > 1)

@@ -32,6 +32,7 @@ from ltamp_cli.learning.active import (
     LearningConfig,
     _propose,
     _trial_seed,
+    check_same_trials,
     fit_model,
     goes_active,
     learner_from_records,
@@ -44,6 +45,7 @@ from ltamp_cli.learning.model_dir import (
     load_model,
     spec_to_json,
 )
+from ltamp_cli.trials.physics import backend_physics
 from ltamp_cli.trials.record import (
     MAX_SCORE_MAGNITUDE,
     TrialDataset,
@@ -62,7 +64,9 @@ class Proposal:
     """The trial to run next; ``context``/``control`` in physical units, by parameter name.
     ``setup``: the versioned trial setup it was proposed for (``"panda-r3"``,
     :func:`~ltamp_cli.backends.protocol.trial_setup`), which the told record carries; in the
-    JSON only when there is one."""
+    JSON only when there is one. ``physics``: likewise the backend's physics tag
+    (:func:`~ltamp_cli.trials.physics.backend_physics`): the told trial is labelled for that
+    backend's skill, so it resumes with live trials of it and never with another physics'."""
 
     skill: str
     backend: str
@@ -71,11 +75,13 @@ class Proposal:
     context: dict[str, float]
     control: dict[str, float]
     setup: str | None = None
+    physics: str | None = None
 
     def to_json(self) -> dict[str, Any]:
         data = asdict(self)
-        if self.setup is None:
-            del data["setup"]
+        for optional in ("setup", "physics"):
+            if data[optional] is None:
+                del data[optional]
         return data
 
 
@@ -134,12 +140,11 @@ def ask(
     spec = backend.skills()[skill]
     dataset = TrialDataset(directory / TRIALS_FILE)
     records = dataset.read()
-    strangers = [r for r in records if r.skill != skill]
-    if strangers:
-        raise InputError(
-            f"holds trials of skill {strangers[0].skill!r}, not {skill!r}",
-            location_in(dataset.path),
-        )
+    # The trials a proposal is fitted on are the ones `ltamp train` would resume with.
+    try:
+        check_same_trials(records, backend, skill, str(dataset.path))
+    except ValueError as error:
+        raise InputError(str(error)) from None
     rng = np.random.default_rng([config.seed, len(records), 7])
     model: SkillModel | None = None
     learner = learner_from_records(spec, config, records, rng)
@@ -164,6 +169,7 @@ def ask(
         context={n: float(v) for n, v in zip(spec.context.names, context, strict=True)},
         control={n: float(v) for n, v in zip(spec.control.names, control, strict=True)},
         setup=trial_setup(backend, skill),
+        physics=backend_physics(backend, skill),
     )
     directory.mkdir(parents=True, exist_ok=True)
     _write_json(
@@ -211,7 +217,7 @@ def _pending_record(spec: SkillSpec, proposal: Proposal) -> TrialRecord:
         "index": proposal.index, "score": 0.0, "valid": True,
         "context": [proposal.context[n] for n in spec.context.names],
         "control": [proposal.control[n] for n in spec.control.names],
-        "setup": proposal.setup})
+        "setup": proposal.setup, "physics": proposal.physics})
     if record.index < 0:
         raise ValueError(f"proposal index must be >= 0, got {record.index}")
     check_against_spec([record], spec)
@@ -274,10 +280,20 @@ def _tell_locked(directory: Path, score: float, valid: bool,
             record = replace(record, outcome=values)
     dataset = TrialDataset(directory / TRIALS_FILE)
     records = dataset.read()
-    # A crash between appending and clearing pending.json must not duplicate the trial.
-    if not any(r.index == proposal.index for r in records):
+    # A crash between appending and clearing pending.json must not duplicate the trial; a
+    # record of another trial under the proposal's index (a live run resumed in DIR since
+    # the ask) must not pass for it: the told result would be dropped without a word.
+    holder = next((r for r in records if r.index == proposal.index), None)
+    if holder is None:
         dataset.append(record)
         records.append(record)
+    elif (holder.seed, holder.context, holder.control) != (record.seed, record.context,
+                                                          record.control):
+        raise InputError(
+            f"trial {proposal.index} is already recorded, and it is not the pending trial "
+            "(another run appended its own trials since the ask): nothing was recorded; "
+            "give this result to a fresh directory with `ltamp import`, or ask again",
+            location_in(dataset.path))
     rng = np.random.default_rng([config.seed, len(records), 11])
     x, y = learner_from_records(spec, config, records, rng).training_set()
     model = fit_model(spec, config, x, y, _previous_model(directory), rng=rng,

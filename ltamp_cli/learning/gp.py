@@ -500,8 +500,20 @@ class GaussianProcess:
 
 
 def _score_scale(y: np.ndarray) -> float:
+    """The scores' RMS, which the GP works in units of (1 for all-zero scores).
+
+    Only the sign of a score decides success, so the fit must not depend on its unit: scores
+    of ±1e-13 (or 1e-200, whose squares underflow) are divided by their RMS as ±1 are. They
+    were once left in score units under a 1e-12 cut-off, and the noise floor swallowed them
+    (a model of ±1e-13 scores had μ/σ ≈ 1e-10 at the centre of its success region).
+    """
     rms = float(np.sqrt(np.mean(np.square(y)))) if len(y) else 0.0
-    return rms if rms > 1e-12 else 1.0
+    if rms > 1e-12:
+        return rms  # the common case, computed as it always was (fits stay bit for bit)
+    peak = float(np.max(np.abs(y))) if len(y) else 0.0
+    if not 0.0 < peak < math.inf:
+        return 1.0
+    return peak * float(np.sqrt(np.mean(np.square(np.asarray(y) / peak))))
 
 
 def fit_gp(

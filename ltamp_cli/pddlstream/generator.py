@@ -14,6 +14,8 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
+from ltamp_cli.planner.streams import WildOutput
+
 ListGenFn = Callable[..., Iterator[list[Any]]]
 
 
@@ -53,8 +55,13 @@ def from_fn(fn: Callable[..., Any]) -> ListGenFn:
 
 
 def from_test(test: Callable[..., Any]) -> ListGenFn:
-    """A boolean test as a stream without outputs."""
-    return from_fn(lambda *inputs, **kwargs: () if test(*inputs, **kwargs) else None)
+    """A boolean test as a stream without outputs. A ``WildOutput`` the test returns is
+    passed on, not taken as ``True`` (its facts would be lost): the stream refuses it in one
+    line, as for ``from_fn``."""
+    def outputs(*inputs: Any, **kwargs: Any) -> Any:
+        truth = test(*inputs, **kwargs)
+        return truth if isinstance(truth, WildOutput) else (() if truth else None)
+    return from_fn(outputs)
 
 
 def fn_from_constant(constant: Any) -> Callable[..., Any]:

@@ -336,8 +336,24 @@ def _adapt(external: External, procedure: Callable[..., Any]) -> Callable[..., A
         if isinstance(produced, WildOutput):
             return produced
         first = next(iter(produced), [])
-        return first if isinstance(first, WildOutput) else bool(first)
+        if isinstance(first, WildOutput):
+            return first
+        if isinstance(first, list | tuple) and any(isinstance(v, WildOutput) for v in first):
+            # from_gen_fn / from_fn / from_test put each item in an output list: the list
+            # is "true" and its WildOutput's facts would be lost (a wrong "infeasible")
+            raise _wrapped_wild_output(external)
+        return bool(first)
     return test
+
+
+def _wrapped_wild_output(external: External) -> InputError:
+    """A test whose WildOutput came wrapped as one output tuple (PDDLStream refuses it too:
+    "an output tuple is not a sequence")."""
+    return InputError(f"stream {external.name!r}: its procedure gave a WildOutput wrapped as "
+                      "an output (from_fn, from_gen_fn and from_test wrap what they are "
+                      "given): put the function or generator function that returns or "
+                      "yields WildOutput in stream_map itself",
+                      getattr(external, "location", None))
 
 
 def _not_a_list_generator(external: External, produced: Any) -> InputError:

@@ -24,9 +24,29 @@ from ltamp_cli.trials.record import TrialRecord
 
 def backend_physics(backend: Any, skill: str) -> str | None:
     """The physics tag of ``skill``'s trials on ``backend`` (its ``physics_tag(skill)``), or
-    ``None`` for a backend without versioned physics (Box2D, plugins)."""
-    tag = getattr(backend, "physics_tag", None)
-    return None if tag is None else str(tag(skill))
+    ``None`` for a backend without versioned physics (Box2D, plugins).
+
+    A plugin's ``physics_tag`` may answer ``None`` (unversioned, as if it had no such method:
+    its older records without the field still match) or a non-empty string; anything else,
+    or an exception other than ``KeyError`` (an unknown skill), is one
+    :class:`InputError` line naming the backend — a ``str()`` of it would be written into
+    every record (``"None"``, ``"5"``) and refuse the plugin's own older files.
+    """
+    method = getattr(backend, "physics_tag", None)
+    if method is None:
+        return None
+    where = f"backend {getattr(backend, 'name', '?')!r} ({type(backend).__module__})"
+    try:
+        tag = method(skill)
+    except KeyError:
+        raise  # an unknown skill, as skill_spec reports it
+    except Exception as error:  # a plugin's bug: one line naming it, not a traceback
+        raise InputError(f"{where}: physics_tag({skill!r}) raised "
+                         f"{type(error).__name__}: {error}") from None
+    if tag is None or (isinstance(tag, str) and tag.strip()):
+        return tag
+    raise InputError(f"{where}: physics_tag({skill!r}) returned {tag!r:.40}: expected None "
+                     "or a non-empty string")
 
 
 def legacy_physics(backend: str) -> str | None:

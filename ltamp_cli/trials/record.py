@@ -83,8 +83,9 @@ class TrialRecord:
         "false"`` is no boolean, ``"context": "5"`` no list): ``ValueError``/``TypeError``
         name the field. ``context`` and ``control`` must be finite; ``score`` is a finite
         number or ``null``/``NaN`` (an invalid trial); ``outcome``, optional, a list of
-        finite numbers or ``null``; ``setup`` and ``physics``, optional, strings or
-        ``null``."""
+        finite numbers or ``null``; ``setup`` and ``physics``, optional, non-empty strings or
+        ``null`` (an empty name would read as "no recorded setup/physics" in messages while
+        comparing unequal to it)."""
         if not isinstance(data, Mapping):
             raise TypeError(f"expected a JSON object, got {type(data).__name__}")
         score = data["score"]
@@ -101,8 +102,8 @@ class TrialRecord:
             info=_mapping(data.get("info", {}), "info"),
             outcome=(None if data.get("outcome") is None
                      else _finite_values(data["outcome"], "outcome")),
-            setup=None if data.get("setup") is None else _text(data["setup"], "setup"),
-            physics=None if data.get("physics") is None else _text(data["physics"], "physics"),
+            setup=None if data.get("setup") is None else _tag(data["setup"], "setup"),
+            physics=None if data.get("physics") is None else _tag(data["physics"], "physics"),
         )
 
 
@@ -114,6 +115,12 @@ def setup_words(setup: str | None) -> str:
 def _text(value: Any, name: str) -> str:
     if not isinstance(value, str):
         raise TypeError(f"field {name!r} must be a string, got {value!r:.40}")
+    return value
+
+
+def _tag(value: Any, name: str) -> str:
+    if not (isinstance(value, str) and value.strip()):
+        raise TypeError(f"field {name!r} must be a non-empty string or null, got {value!r:.40}")
     return value
 
 
