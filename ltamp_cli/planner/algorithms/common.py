@@ -416,10 +416,12 @@ class PlannerState:
             self.sampling_time += time.perf_counter() - start
         self.add_wild_facts(instance)
         external = instance.external
-        if not isinstance(external, StreamFunction):
-            self.families.record(instance.name, instance.inputs,
-                                 bool(outputs) or bool(instance.is_test and instance.value),
-                                 outputs, self.problem.objects)
+        if (isinstance(external, Stream) and external.outputs and not external.fluents
+                and self.config.algorithm != "incremental"):
+            # Only generators are penalised (see .optimistic), and incremental never is; a
+            # :fluents stream's failure belongs to the state it was called in.
+            self.families.record(instance.name, instance.inputs, bool(outputs), outputs,
+                                 self.problem.objects)
         if not instance.exhausted and isinstance(external, Stream) and not external.is_test:
             self.multi_output.add(instance.name)
         if isinstance(external, StreamFunction):
