@@ -11,6 +11,7 @@ import numpy as np
 
 from ltamp_cli.errors import InputError
 from ltamp_cli.planner.algorithms.effort import Effort, estimate_effort, observed_cheap
+from ltamp_cli.planner.algorithms.families import StreamFamilies
 from ltamp_cli.planner.objects import ObjectTable
 from ltamp_cli.planner.pddl.syntax import (
     OBJECT_TYPE,
@@ -273,6 +274,10 @@ class PlannerState:
     # Stream name -> real input tuples enumerated for eager evaluation but not called yet
     # (above the level bound, see :meth:`eager_within_level`).
     deferred_eager: dict[str, list[tuple[str, ...]]] = field(default_factory=dict)
+    # Calls and successes per stream family (where the inputs come from, see
+    # :mod:`.families`): a family that keeps failing gets its optimistic instances' level
+    # raised.
+    families: StreamFamilies = field(default_factory=StreamFamilies)
 
     @functools.cached_property
     def recursive(self) -> frozenset[str]:
@@ -411,6 +416,12 @@ class PlannerState:
             self.sampling_time += time.perf_counter() - start
         self.add_wild_facts(instance)
         external = instance.external
+        if (isinstance(external, Stream) and external.outputs and not external.fluents
+                and self.config.algorithm != "incremental"):
+            # Only generators are penalised (see .optimistic), and incremental never is; a
+            # :fluents stream's failure belongs to the state it was called in.
+            self.families.record(instance.name, instance.inputs, bool(outputs), outputs,
+                                 self.problem.objects)
         if not instance.exhausted and isinstance(external, Stream) and not external.is_test:
             self.multi_output.add(instance.name)
         if isinstance(external, StreamFunction):

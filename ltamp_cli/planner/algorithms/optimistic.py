@@ -4,7 +4,11 @@ Instances not yet (fully) called certify their facts with placeholder objects ``
 a complexity bound (complexity of an instance = summed complexity of its inputs + calls
 made; the limit on it is checked by PDDLStream's rule, the highest, see
 :func:`instance_level`); a plan over real and optimistic facts is then retraced to the
-*stream plan* of instances whose calls would make its optimistic facts real.
+*stream plan* of instances whose calls would make its optimistic facts real. Below the
+limit, two penalties raise a generator instance's complexity: its stream *family* kept
+failing (:mod:`.families`), or it is one pending instance over sampled values too many
+(:data:`MAX_UNIQUE_OVER_SAMPLES`); neither applies at the limit, where "infeasible" is
+decided.
 
 Shared placeholders (PDDLStream's shared optimistic objects, ``StreamInfo(opt_gen_fn=
 PartialInputs(...))``, see :func:`_share_group`): with an explicit policy, PDDLStream's
@@ -44,7 +48,7 @@ and every plan returned is still validated against the real facts.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
 from ltamp_cli.planner.algorithms.common import (
@@ -53,6 +57,7 @@ from ltamp_cli.planner.algorithms.common import (
     instantiate_atoms,
 )
 from ltamp_cli.planner.algorithms.effort import observed_cheap, order_by_effort
+from ltamp_cli.planner.algorithms.families import Origin, origin
 from ltamp_cli.planner.pddl.check import fluent_predicates
 from ltamp_cli.planner.pddl.syntax import (
     OBJECT_TYPE,
@@ -83,6 +88,8 @@ class Placeholders:
     shared: dict[InstanceKey, tuple[str, ...]] = field(default_factory=dict)
     # Streams whose outputs may be shared (see :func:`stateful_streams`); set on first use.
     stateful: frozenset[str] | None = None
+    # Generators whose outputs other streams take as inputs (see feeding_generators).
+    feeding: frozenset[str] | None = None
 
     def new(self, stream: Stream) -> tuple[str, ...]:
         number = len(self.unique) + len(self.shared)
@@ -135,6 +142,23 @@ def stateful_streams(domain: Domain, streams: Iterable[Stream]) -> frozenset[str
                      if not stateful_arguments(stream).isdisjoint(stream.outputs))
 
 
+def feeding_generators(externals: Iterable[object]) -> frozenset[str]:
+    """The generators an output of which is certified in a predicate that the ``:domain``
+    of a stream or function mentions: each of their pending instances multiplies the
+    instances of those streams (a configuration, the motions from and to it). Only these
+    are limited by :data:`MAX_UNIQUE_OVER_SAMPLES`; the others' instances are as many as
+    their inputs (tamp2d_uniform's motions between sampled configurations: limiting them
+    made blocked_6's and blocked_8's plans costlier, 117 -> 221 and 147 -> 283 median)."""
+    externals = list(externals)
+    consumed = {atom.predicate for external in externals
+                for atom in getattr(external, "domain", ())}
+    return frozenset(
+        external.name for external in externals
+        if isinstance(external, Stream) and external.outputs and any(
+            atom.predicate in consumed and set(atom.args) & set(external.outputs)
+            for atom in external.certified))
+
+
 def _refine(state: PlannerState, placeholders: Placeholders, keys: list[InstanceKey]) -> None:
     """Give instances ``keys``, which one plan needed from one shared placeholder, their
     own placeholders from now on. (Splitting a default-policy group by real input values
@@ -178,7 +202,21 @@ class OptimisticEvaluation:
     context_blocks: dict[Fact, list[Context]] = field(default_factory=dict)
     # Shared placeholder tuple -> the instances that share it (in evaluation order).
     sharing: dict[tuple[str, ...], list[InstanceKey]] = field(default_factory=dict)
+    # Stream name -> its instances over sampled real values with their own placeholders in
+    # this evaluation (see :data:`MAX_UNIQUE_OVER_SAMPLES`).
+    unique_over_samples: dict[str, int] = field(default_factory=dict)
 
+
+# Instances over real values only keep their own placeholders, but only this many per
+# stream among those with a sampled input (a value a stream made, not a problem object);
+# the others share theirs with the instances over the same problem objects, as PDDLStream's
+# default shared optimistic outputs do (:func:`_overflow_group`). Each sample multiplies
+# such instances (every sampled pose x every sampled grasp x every robot gives a
+# kinematics instance) and, each with its own configuration, the motions between all pairs
+# of them: the hidden suite's handoff_2 reached 198 pending kinematics instances and
+# 23,086 motion placeholders, 1-2 s per search. Instances within the limit keep their
+# placeholders across evaluations, refined ones too.
+MAX_UNIQUE_OVER_SAMPLES = 32
 
 # Candidate instances evaluated between two deadline checks (a check costs ~50 ns).
 DEADLINE_STRIDE = 256
@@ -206,6 +244,16 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
     # round added. An instance cut by the bound stays cut (its level depends only on its
     # inputs), so it is not retried.
     since: dict[str, int] | None = None
+    families = state.families
+    problem_objects = state.problem.objects
+    if placeholders.feeding is None:
+        placeholders.feeding = feeding_generators(state.externals.values())
+    inputs_of_streams = placeholders.feeding
+
+    def placeholder_origin(value: str) -> Origin | None:
+        producer = evaluation.object_producer.get(value)
+        return None if producer is None else origin(*producer, problem_objects)
+
     while True:
         before = index.sizes()
         for external in state.externals.values():
@@ -243,6 +291,14 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
                         continue
                     level += real.num_calls
                     highest += real.num_calls
+                if not exact and isinstance(external, Stream) and external.outputs:
+                    # Below the limit only: "infeasible" is decided without either.
+                    if external.name in inputs_of_streams:
+                        level += _overflow_penalty(evaluation, external, inputs, problem_objects)
+                    if families.has_failing(external.name):
+                        level += families.instance_penalty(external.name, inputs,
+                                                           problem_objects,
+                                                           placeholder_origin)
                 if level > complexity:
                     evaluation.cut = True
                     if exact and (evaluation.least_cut is None
@@ -281,6 +337,23 @@ def _share_group(key: InstanceKey, policy: PartialInputs | None,
         return None if selected is None else (name, tuple(inputs[i] for i in selected))
     optimistic = tuple(x for x in inputs if x.startswith("#"))
     return (name, optimistic) if optimistic else None
+
+
+def _overflow_penalty(evaluation: OptimisticEvaluation, external: Stream,
+                      inputs: tuple[str, ...], problem_objects: Mapping[str, object]) -> int:
+    """Extra levels for a candidate instance of generator ``external`` over real values
+    with a sampled input: 0 for the first :data:`MAX_UNIQUE_OVER_SAMPLES` of its stream in
+    this evaluation (in the evaluation's deterministic order: older samples first), then
+    2, 4, 8, ... for each further block of as many. Instances over problem objects only
+    (as many as the problem makes) or over placeholders are not counted."""
+    if external.fluents or any(x.startswith("#") for x in inputs) or all(
+            x in problem_objects for x in inputs):
+        return 0
+    rank = evaluation.unique_over_samples.get(external.name, 0)
+    evaluation.unique_over_samples[external.name] = rank + 1
+    if rank < MAX_UNIQUE_OVER_SAMPLES:
+        return 0
+    return 2 ** (rank // MAX_UNIQUE_OVER_SAMPLES)
 
 
 def instance_level(inputs: Iterable[str], levels: dict[str, int],

@@ -27,7 +27,9 @@ Both learn several conflicts from one failed stream plan: when a cheap generator
 out, its siblings in the plan are tried at once with the plan's tests
 (:func:`probe_siblings`); and when a plan's shared placeholders are refined, its cheap
 unshared generators over real inputs are tried with its tests before the search that
-follows (:func:`probe_refined_plan`). Adaptive does not count the retries its cheap bonus
+follows (:func:`probe_refined_plan`). A binding's first call of an instance whose stream
+family keeps failing (:mod:`.families`) is deferred by as many retries as the family's
+penalty, once per step. Adaptive does not count the retries its cheap bonus
 allowed against a later costly step of a skeleton without action costs
 (:func:`over_retry_limit`). The full search after a plan whose shared placeholders were
 refined may be bounded by the effort of the search that found it (opt-in,
@@ -250,6 +252,8 @@ class Binding:
     # Of ``attempts``, those made at steps whose retries adaptive's cheap bonus allowed
     # (see :func:`over_retry_limit`).
     cheap_attempts: int = 0
+    # The step whose first call was deferred for its failing family (see advance).
+    deferred: int = -1
 
     def branch_key(self) -> tuple[object, ...]:
         return (self.step, self.output_index, tuple(sorted(self.mapping.items())))
@@ -315,6 +319,14 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
     key = binding.branch_key()
     if key in binding.skeleton.tried:
         return []  # a local repair or an ordinary alternative took this branch already
+    if instance.num_calls == 0 and binding.deferred != binding.step:
+        penalty = state.families.instance_penalty(name, real_inputs, state.problem.objects)
+        if penalty:
+            # A family that keeps failing (see .families): its first call waits as many
+            # retries as the optimistic evaluation adds levels, once per step.
+            binding.deferred = binding.step
+            binding.attempts += penalty
+            return [binding]
     if binding.output_index >= len(instance.results) and not instance.exhausted:
         state.call(instance)
     if binding.output_index < len(instance.results):
