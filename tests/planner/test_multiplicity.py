@@ -176,3 +176,26 @@ def test_relaxation_reaches_through_abstract_inputs(make_problem: MakeProblem) -
         VISITS_DOMAIN, visits_yaml(3), CHAIN_STREAMS,
         CHAIN_BINDINGS))
     assert relaxed(problem)
+
+
+# No negated precondition: the goal asks for two different seen configurations.
+MARK_DOMAIN = """
+(define (domain marks)
+  (:predicates (Conf ?q) (Seen ?q) (Region ?r))
+  (:action look :parameters (?q) :precondition (Conf ?q) :effect (Seen ?q)))
+"""
+
+
+@pytest.mark.parametrize("algorithm", ALGORITHMS)
+def test_goal_inequality_between_outputs_of_one_instance(make_problem: MakeProblem,
+                                                         algorithm: str) -> None:
+    problem = load_problem(make_problem(
+        MARK_DOMAIN,
+        "domain: dom\nbindings: bindings.py\nworld: {count: null}\nobjects: {r: null}\n"
+        'init: ["(Region r)"]\n'
+        "goal: (exists (?a ?b) (and (Seen ?a) (Seen ?b) (not (= ?a ?b))))\n",
+        VISITS_STREAMS, VISITS_BINDINGS))
+    result = solve(problem, PlannerConfig(algorithm=algorithm, max_time=30))
+    assert result.status == "solved", result.diagnostics
+    assert sorted(step.values for step in result.plan) == [(1.0,), (2.0,)]
+    assert validate_plan(problem, result).valid

@@ -106,9 +106,11 @@ class _RelaxedEmit:
             if not literal.positive:
                 continue
             left, right = (binding.get(a, a) for a in literal.args)
-            if is_variable(left) and not is_variable(right):
+            if is_variable(left) and is_variable(right):
+                continue  # nothing binds them: an effect on them is unsupported (_bound)
+            if is_variable(left):
                 binding[left] = right
-            elif is_variable(right) and not is_variable(left):
+            elif is_variable(right):
                 binding[right] = left
             elif left != right:
                 return
