@@ -21,11 +21,16 @@ from ltamp_cli.planner.algorithms.common import (
 )
 from ltamp_cli.planner.algorithms.focused import solve_focused
 from ltamp_cli.planner.algorithms.incremental import solve_incremental
+from ltamp_cli.planner.algorithms.multiplicity import (
+    UnsupportedConstruct,
+    has_generators,
+    relaxed_goal_reachable,
+)
 from ltamp_cli.planner.algorithms.skeletons import solve_with_skeletons
 from ltamp_cli.planner.pddl.syntax import Stream
 from ltamp_cli.planner.problem import PlanningProblem
 from ltamp_cli.planner.result import INFEASIBLE, TIMEOUT, Certificate, PlanResult
-from ltamp_cli.planner.search.engine import SEARCH_ALGORITHMS
+from ltamp_cli.planner.search.engine import SEARCH_ALGORITHMS, SearchTimeout
 from ltamp_cli.planner.search.normalize import GoalFormulaError
 from ltamp_cli.planner.search.skeleton import (
     check_constraints,
@@ -193,25 +198,52 @@ def refuse_unsupported(problem: PlanningProblem, algorithm: str) -> None:
                 stream.fluents_location)
 
 
+WILD_FACTS_NOTE = "wild facts: the optimistic plans' failure proves nothing"
+EQUATED_NOTE = ("plan constraints equate arguments that optimistic plans keep apart: their "
+                "failure proves nothing")
+MULTIPLICITY_NOTE = ("a plan may need several distinct outputs of one stream instance (the "
+                     "goal is reachable in the merge-safe relaxation): one optimistic output "
+                     "per instance proves nothing")
+
+
 def _infeasibility_unproven(problem: PlanningProblem, config: PlannerConfig,
-                            state: PlannerState) -> bool:
-    """Whether an optimistic algorithm's "infeasible" may be wrong: some stream certifies
-    facts it does not declare (wild outputs seen, or a stream with no :certified facts),
-    which no optimistic plan can anticipate; or plan constraints equate arguments that
-    optimistic plans keep apart (distinct stream instances have distinct placeholders, yet
-    their real outputs may be one object)."""
+                            state: PlannerState) -> str | None:
+    """Why an optimistic algorithm's "infeasible" may be wrong (``None``: it is proven):
+    some stream certifies facts it does not declare (wild outputs seen, or a stream with no
+    :certified facts), which no optimistic plan can anticipate; plan constraints equate
+    arguments that optimistic plans keep apart (distinct stream instances have distinct
+    placeholders, yet their real outputs may be one object); or a plan may need two
+    distinct outputs of one instance (:func:`_multiplicity_may_matter`)."""
     if config.algorithm == "incremental" or problem.stream_file is None:
-        return False
+        return None
     if config.constraints is not None:
         known = {arg for atom in problem.init for arg in atom.args}
         known.update(constant.name for constant in problem.domain.constants)
         if equates_arguments(config.constraints, known):
-            return True
+            return EQUATED_NOTE
     if state.saw_wild_facts or any(not stream.certified and not stream.is_rule
                                    for stream in problem.stream_file.streams):
-        return True
+        return WILD_FACTS_NOTE
     _probe_uncalled_instances(state)
-    return state.saw_wild_facts
+    if state.saw_wild_facts:
+        return WILD_FACTS_NOTE
+    if _multiplicity_may_matter(state):
+        return MULTIPLICITY_NOTE
+    return None
+
+
+def _multiplicity_may_matter(state: PlannerState) -> bool:
+    """Whether a plan might need several distinct outputs of one stream instance, which one
+    optimistic placeholder per instance cannot stand for: only if some stream makes objects
+    and the goal is reachable in the relaxation where merging objects cannot hurt
+    (:func:`.multiplicity.relaxed_goal_reachable`); past the deadline, or on a construct
+    the relaxation cannot represent, it may."""
+    if not has_generators(state):
+        return False
+    try:
+        return relaxed_goal_reachable(state)
+    except (SearchTimeout, UnsupportedConstruct):
+        return True
 
 
 def _probe_uncalled_instances(state: PlannerState) -> None:
@@ -230,12 +262,12 @@ def _probe_uncalled_instances(state: PlannerState) -> None:
 
 
 def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
-                               state: PlannerState, statistics: StreamStatistics
-                               ) -> PlanResult:
-    """The incremental algorithm, which calls every stream instance and so finds wild facts,
-    for the time left; a timeout (not "infeasible") when it cannot run (:fluents)."""
+                               state: PlannerState, statistics: StreamStatistics,
+                               note: str) -> PlanResult:
+    """The incremental algorithm, which calls every stream instance (and so finds wild
+    facts and distinct outputs of one instance), for the time left; a timeout (not
+    "infeasible") when it cannot run (:fluents). ``note``: why it runs."""
     remaining = state.deadline - time.perf_counter()
-    note = "wild facts: the optimistic plans' failure proves nothing"
     if remaining <= 0 or any(s.fluents for s in problem.stream_file.streams):  # type: ignore[union-attr]
         result = state.result(TIMEOUT, None)
         result.diagnostics["infeasibility_unproven"] = note
@@ -265,8 +297,10 @@ def _solve(problem: PlanningProblem, config: PlannerConfig, start: float,
     holder.append(state)
     run = _algorithm(config.algorithm)
     best = run(state)
-    if best.status == INFEASIBLE and _infeasibility_unproven(problem, config, state):
-        best = _complete_with_incremental(problem, config, state, statistics)
+    if best.status == INFEASIBLE:
+        unproven = _infeasibility_unproven(problem, config, state)
+        if unproven is not None:
+            best = _complete_with_incremental(problem, config, state, statistics, unproven)
     improvements = [best.cost] if best.solved else []
     while (best.solved and best.cost > config.success_cost + COST_EPSILON
            and not state.timed_out()):

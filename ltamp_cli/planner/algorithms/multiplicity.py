@@ -1,0 +1,176 @@
+"""Whether an optimistic algorithm's "infeasible" is proven despite one placeholder per
+stream instance (issue: two distinct outputs of one generator instance).
+
+The optimistic algorithms give each stream instance one placeholder output. A plan that
+needs two *distinct* outputs of one instance (``go(?q)`` requires ``(not (Seen ?q))`` and
+the goal needs two ``go``s) has no optimistic counterpart, so their failure alone proves
+nothing. :func:`relaxed_goal_reachable` decides a relaxation in which merging objects
+cannot hurt: no delete effects, no negative literals (preconditions, axiom bodies, goal),
+no inequalities, effect conditions assumed true, and each stream's certified facts
+asserted optimistically for an abstract output:
+
+* a stream instance over objects that exist now gets one abstract output (its real outputs
+  so far are real facts already), none when the instance is exhausted;
+* an instance with an abstract input gets the stream's single abstract output.
+
+Mapping every future stream output to its abstract output is a homomorphism that keeps
+positive facts, so every real plan, however many distinct outputs it uses, maps to a
+relaxed plan here. When the goal is unreachable in this finite relaxation, no plan exists
+and "infeasible" is proven; otherwise the caller must not claim it (it escalates).
+Not covered (as in the optimistic algorithms): a stream output that *equals* an object
+that exists already (objects are values), and facts a stream does not declare (wild
+facts, handled by the caller).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+
+from ltamp_cli.planner.algorithms.common import PlannerState, instantiate_atoms
+from ltamp_cli.planner.pddl.syntax import (
+    OBJECT_TYPE,
+    ExternalPredicate,
+    Stream,
+    is_variable,
+)
+from ltamp_cli.planner.search.ground import (
+    Fact,
+    FactIndex,
+    RuleSet,
+    _Rule,
+    semi_naive_fixpoint,
+)
+from ltamp_cli.planner.search.normalize import GOAL_PREDICATE, NormalAction, NormalAxiom
+from ltamp_cli.planner.search.solve import normalized_task
+
+# Prefix of abstract outputs: no parsed PDDL name starts with it.
+ABSTRACT_PREFIX = "#any:"
+
+
+class UnsupportedConstruct(Exception):
+    """The relaxation cannot represent a rule (an effect on a variable that no positive
+    literal binds): the caller treats infeasibility as unproven."""
+
+
+def has_generators(state: PlannerState) -> bool:
+    """Whether some stream makes new objects (only then can multiplicity matter)."""
+    return any(isinstance(e, Stream) and e.outputs for e in state.externals.values())
+
+
+def relaxed_goal_reachable(state: PlannerState) -> bool:
+    """Whether the goal is reachable in the relaxation of the module docstring, starting
+    from the facts and objects known now (``state.facts``, ``state.object_types``).
+
+    Raises :class:`~ltamp_cli.planner.search.engine.SearchTimeout` past the solve's deadline
+    and :class:`UnsupportedConstruct` (both mean: not proven)."""
+    problem = state.problem
+    real = frozenset(state.object_types)
+    objects: dict[str, str] = dict(state.object_types)
+    index = FactIndex.of_sorted(sorted(state.facts.members), state.deadline)
+    enumerated: dict[str, dict[str, int]] = {}
+    delta: list[Fact] | None = None
+    rule_set: RuleSet | None = None
+    renormalize = True
+    while True:
+        if renormalize:
+            # Quantifiers and forall effects expand over the objects: again when new
+            # abstract objects came, then from scratch over every fact.
+            actions, axioms, typed = normalized_task(
+                problem.domain, objects, (), problem.goal, state.deadline)
+            for fact in typed:
+                index.add(fact)
+            rule_set = RuleSet(actions, axioms)
+            delta, renormalize = None, False
+        assert rule_set is not None
+        semi_naive_fixpoint(rule_set, index, delta, _RelaxedEmit(index), state.deadline)
+        if (GOAL_PREDICATE,) in index.members:
+            return True
+        before = len(objects)
+        delta = _stream_round(state, index, real, objects, enumerated)
+        if not delta:
+            return False
+        renormalize = len(objects) != before
+
+
+class _RelaxedEmit:
+    """Record a rule instance of the relaxation: its positive effects (conditions assumed
+    true) or its axiom head become reachable; negative literals and inequalities are
+    ignored, equalities between bound terms are kept (merging keeps them true)."""
+
+    def __init__(self, index: FactIndex) -> None:
+        self.index = index
+
+    def __call__(self, rule: _Rule, binding: dict[str, str], delta: list[Fact]) -> None:
+        binding = dict(binding)
+        for literal in rule.equalities:
+            if not literal.positive:
+                continue
+            left, right = (binding.get(a, a) for a in literal.args)
+            if is_variable(left) and is_variable(right):
+                continue  # nothing binds them: an effect on them is unsupported (_bound)
+            if is_variable(left):
+                binding[left] = right
+            elif is_variable(right):
+                binding[right] = left
+            elif left != right:
+                return
+        source = rule.source
+        if isinstance(source, NormalAxiom):
+            self._reach((source.predicate, *_bound(source.head_args, binding)), delta)
+            return
+        assert isinstance(source, NormalAction)
+        for effect in source.effects:
+            if effect.positive:
+                self._reach((effect.predicate, *_bound(effect.args, binding)), delta)
+
+    def _reach(self, fact: Fact, delta: list[Fact]) -> None:
+        if self.index.add(fact):
+            delta.append(fact)
+
+
+def _bound(args: Iterable[str], binding: Mapping[str, str]) -> tuple[str, ...]:
+    ground = tuple(binding.get(a, a) for a in args)
+    if any(is_variable(a) for a in ground):
+        raise UnsupportedConstruct(f"unbound variable in {ground}")
+    return ground
+
+
+def _stream_round(state: PlannerState, index: FactIndex, real: frozenset[str],
+                  objects: dict[str, str], enumerated: dict[str, dict[str, int]]
+                  ) -> list[Fact]:
+    """Assert what every stream instance over ``index`` could certify (joined only over the
+    facts added since the stream's last round); new abstract outputs join ``objects``.
+    Returns the new facts."""
+    added: list[Fact] = []
+    for external in state.externals.values():
+        if not isinstance(external, Stream | ExternalPredicate):
+            continue  # cost functions certify nothing
+        since = enumerated.get(external.name)
+        enumerated[external.name] = index.sizes()
+        for inputs in list(dict.fromkeys(state.bindings_of(external, index, since))):
+            for fact in _abstract_facts(state, external, inputs, real, objects):
+                if index.add(fact):
+                    added.append(fact)
+    return added
+
+
+def _abstract_facts(state: PlannerState, external: Stream | ExternalPredicate,
+                    inputs: tuple[str, ...], real: frozenset[str],
+                    objects: dict[str, str]) -> list[Fact]:
+    """The facts one instance may still certify, its outputs abstract; none when the
+    instance over existing objects is exhausted (what it certified is known already)."""
+    over_real = all(x in real for x in inputs)
+    if over_real:
+        found = state.instances.get((external.name, inputs))
+        if found is not None and found.exhausted:
+            return []
+    if isinstance(external, ExternalPredicate):
+        mapping = dict(zip(external.head.args, inputs, strict=True))
+        return instantiate_atoms((external.head,), mapping)
+    mapping = dict(zip(external.inputs, inputs, strict=True))
+    owner = f"{external.name}({','.join(inputs)})" if over_real else external.name
+    for output in external.outputs:
+        name = f"{ABSTRACT_PREFIX}{owner}:{output}"
+        mapping[output] = name
+        objects.setdefault(name, OBJECT_TYPE)
+    return instantiate_atoms(external.certified, mapping)
