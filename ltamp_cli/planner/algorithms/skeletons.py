@@ -386,11 +386,11 @@ def probe_siblings(state: PlannerState, failed: Binding) -> None:
             continue
         # Only within its domain: a domain fact certified by a later entry of the plan
         # is not real yet.
-        domain = instantiate_atoms(external.domain,
-                                   dict(zip(external.inputs, real_inputs, strict=True)))
-        if not all(fact in state.facts.members for fact in domain):
+        if not _domain_real(state, name, real_inputs):
             continue
         outputs = skeleton.outputs_at(position)
+        # The tests see the failed binding's values and the sibling's own outputs.
+        bound = {x: v for x, v in failed.mapping.items() if x not in outputs}
         tests = []
         for test_position, (test, test_inputs) in enumerate(plan):
             test_external = state.externals[test]
@@ -399,30 +399,11 @@ def probe_siblings(state: PlannerState, failed: Binding) -> None:
                                                                or test_external.fluents))
                     or not set(test_inputs) & set(outputs)):
                 continue
-            bound = [failed.mapping.get(x, x) for x in test_inputs]
-            if all(x in outputs or not x.startswith("#") for x in bound):
-                tests.append((test, test_inputs))
-        for index in range(SIBLING_PROBE_OUTPUTS):
-            if index >= len(instance.results):
-                if instance.exhausted:
-                    break
-                state.call(instance)
-                if index >= len(instance.results):
-                    break
-            mapping = {**failed.mapping,
-                       **dict(zip(outputs, instance.results[index], strict=True))}
-            accepted = True
-            for test, test_inputs in tests:
-                checked = state.instance(test, tuple(mapping.get(x, x) for x in test_inputs))
-                if checked.num_calls == 0:
-                    state.call(checked)
-                if not checked.value:
-                    accepted = False
-                    break
-            if accepted:
-                break
-        if instance.exhausted:
-            state.record_failure(instance)
+            resolved = tuple(bound.get(x, x) for x in test_inputs)
+            if all(x in outputs or not x.startswith("#") for x in resolved):
+                tests.append((test, resolved))
+        _probe(state, instance, outputs, tests, SIBLING_PROBE_OUTPUTS,
+               real_test_domains=False)
 
 
 # When a plan's shared placeholders are refined (the search runs again), the plan's cheap
@@ -494,12 +475,19 @@ def _cheap_or_unmeasured(state: PlannerState, name: str) -> bool:
 
 
 def _probe(state: PlannerState, instance: StreamInstance, outputs: tuple[str, ...],
-           tests: list[tuple[str, tuple[str, ...]]], limit: int) -> None:
+           tests: list[tuple[str, tuple[str, ...]]], limit: int, *,
+           real_test_domains: bool = True) -> None:
     """Call the generator ``instance`` until an output (bound to the placeholders
     ``outputs``) passes every one of ``tests`` (stream name, inputs over those placeholders
-    and real values), it
-    runs out, or ``limit`` outputs were tried; a test whose domain facts are not all real
-    is not called. A run-out instance is recorded as failed."""
+    and real values), it runs out, it is found costly after a call
+    (:func:`.effort.observed_cheap`), or ``limit`` outputs were tried. A run-out instance
+    is recorded as failed.
+
+    With ``real_test_domains`` a test whose domain facts are not all real is skipped (the
+    refined plan's tests: a later entry of the plan may certify them); without it every
+    test is called (the sibling probe's tests come from a stream plan that bound them).
+    The sibling probe enters only with a generator observed cheap, so the costly stop
+    does not change it in practice."""
     for index in range(limit):
         if index >= len(instance.results):
             if instance.exhausted or (instance.num_calls and not observed_cheap(
@@ -512,10 +500,7 @@ def _probe(state: PlannerState, instance: StreamInstance, outputs: tuple[str, ..
         accepted = True
         for test, test_inputs in tests:
             inputs = tuple(bound.get(x, x) for x in test_inputs)
-            external = state.externals[test]
-            domain = instantiate_atoms(external_domain(external), dict(
-                zip(external_inputs(external), inputs, strict=True)))
-            if not all(fact in state.facts.members for fact in domain):
+            if real_test_domains and not _domain_real(state, test, inputs):
                 continue
             checked = state.instance(test, inputs)
             if checked.num_calls == 0:
@@ -527,6 +512,14 @@ def _probe(state: PlannerState, instance: StreamInstance, outputs: tuple[str, ..
             break
     if instance.exhausted:
         state.record_failure(instance)
+
+
+def _domain_real(state: PlannerState, name: str, inputs: tuple[str, ...]) -> bool:
+    """Whether every domain fact of external ``name`` over real ``inputs`` is known."""
+    external = state.externals[name]
+    domain = instantiate_atoms(external_domain(external),
+                               dict(zip(external_inputs(external), inputs, strict=True)))
+    return all(fact in state.facts.members for fact in domain)
 
 
 def state_dependent(instance: StreamInstance) -> bool:
