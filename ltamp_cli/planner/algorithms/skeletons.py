@@ -57,7 +57,9 @@ from ltamp_cli.planner.algorithms.optimistic import (
     bindable_stream_plan,
     contextual_stream_plan,
     evaluate_eager,
+    failed_siblings,
     optimistic_evaluation,
+    record_rejection,
     repairable,
     report_unusable,
     sampled_inputs,
@@ -308,6 +310,7 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
                             binding.cheap_attempts)]
         state.record_failure(instance)
         report_unusable(state, real_inputs, binding.made_by)
+        record_rejection(state, real_inputs, binding.made_by)
         binding.skeleton.retries.cheap = not state_dependent(instance)
         if not context:
             binding.skeleton.learn_nogood(binding.step, binding.mapping)
@@ -412,6 +415,11 @@ def probe_siblings(state: PlannerState, failed: Binding) -> None:
 REFINEMENT_PROBE_OUTPUTS = 4
 
 
+# A speculative search (adaptive) leaves out the never-called generator instances whose
+# sibling failed (:func:`.optimistic.failed_siblings`); see solve_with_skeletons.
+HOLD_BACK_FAILED_SIBLINGS = True
+
+
 def probe_refined_plan(state: PlannerState, evaluation: OptimisticEvaluation,
                        needed: set[Fact], refined: set[InstanceKey]) -> None:
     """Before the search that follows a refinement: each generator of the refined plan's
@@ -507,6 +515,10 @@ def _probe(state: PlannerState, instance: StreamInstance, outputs: tuple[str, ..
                 state.call(checked)
             if not checked.value:
                 accepted = False
+                if all(x in bound.values() or x in state.problem.objects for x in inputs):
+                    # rejected against the problem's own values (see record_rejection)
+                    state.rejected_outputs.setdefault(
+                        (instance.name, instance.inputs), set()).add(instance.results[index])
                 break
         if accepted:
             break
@@ -608,7 +620,12 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                 speculative_in_a_row = speculative_in_a_row + 1 if speculative else 0
                 facts_at_search = len(state.facts.members)
                 sampling.failures = 0
-                evaluation = optimistic_evaluation(state, complexity, placeholders)
+                # A speculative search leaves out the never-called siblings of generators
+                # that failed (see HOLD_BACK_FAILED_SIBLINGS); a full search sees them.
+                evaluation = optimistic_evaluation(
+                    state, complexity, placeholders,
+                    failed_siblings(state) if speculative and HOLD_BACK_FAILED_SIBLINGS
+                    else None)
                 # The most advanced binding's plan, with what it bound so far, is checked
                 # first: once sampling made its facts real it is usually still a plan.
                 # Rebased onto this task (partial_guess) only without action costs: with
