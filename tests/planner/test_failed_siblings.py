@@ -58,7 +58,9 @@ def test_a_rejection_counts_against_a_generator_only_when_it_sampled_alone() -> 
     pose, other = _instance(False, [("p1",)]), _instance(False, [("p2",)])
     pose.inputs, other.inputs = ("mug", "table"), ("pitcher", "table")
     # Two sampled values: the combination failed, neither generator is blamed.
-    state = SimpleNamespace(rejected_outputs={})
+    problem = SimpleNamespace(objects={"mug": None, "pitcher": None, "saucer": None,
+                                       "saucer-start": None})
+    state = SimpleNamespace(rejected_outputs={}, problem=problem)
     optimistic.record_rejection(state, ("mug", "p1", "pitcher", "p2"),  # type: ignore[arg-type]
                                 {"p1": (pose, ("p1",)), "p2": (other, ("p2",))})
     assert state.rejected_outputs == {}
@@ -66,6 +68,11 @@ def test_a_rejection_counts_against_a_generator_only_when_it_sampled_alone() -> 
     optimistic.record_rejection(state, ("mug", "p1", "saucer", "saucer-start"),  # type: ignore[arg-type]
                                 {"p1": (pose, ("p1",))})
     assert state.rejected_outputs == {("sample-pose", ("mug", "table")): {("p1",)}}
+    # Against a value sampled by an earlier stream plan (not the problem's): not blamed.
+    state = SimpleNamespace(rejected_outputs={}, problem=problem)
+    optimistic.record_rejection(state, ("mug", "p1", "saucer", "p0"),  # type: ignore[arg-type]
+                                {"p1": (pose, ("p1",))})
+    assert state.rejected_outputs == {}
 
 
 def fixed_cost_clock(seconds_per_call: float) -> Callable[[], float]:

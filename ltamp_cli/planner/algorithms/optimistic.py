@@ -531,12 +531,13 @@ def repairable(state: PlannerState, instance: StreamInstance, used: int) -> bool
 
 def record_rejection(state: PlannerState, consumed: tuple[str, ...],
                      made_by: dict[str, tuple[StreamInstance, tuple[str, ...]]]) -> None:
-    """After a test rejected the values ``consumed``: when exactly one generator of the
-    binding (or of the stream plans before it) sampled them, its output was rejected against
-    the problem's own values, which is evidence against that generator rather than against
-    a combination of samples; recorded in ``state.rejected_outputs``."""
+    """After a test rejected the values ``consumed``: when one generator of the binding
+    sampled them (``made_by``) and the others are the problem's own, its output was rejected
+    against the problem, which is evidence against that generator rather than against a
+    combination of samples; recorded in ``state.rejected_outputs``."""
     producers = {id(made_by[x][0]): made_by[x] for x in consumed if x in made_by}
-    if len(producers) != 1:
+    if len(producers) != 1 or not all(x in made_by or x in state.problem.objects
+                                      for x in consumed):
         return
     instance, output = next(iter(producers.values()))
     if isinstance(instance.external, Stream) and not instance.is_test:
