@@ -551,6 +551,9 @@ class FailedSiblings:
     each failed instance and each of its input positions."""
 
     signatures: frozenset[tuple[str, int, tuple[str, ...]]]
+    # The streams of the failed instances: other streams' instances are not siblings (the
+    # check runs for every candidate instance of a speculative evaluation).
+    streams: frozenset[str] = frozenset()
 
     def __bool__(self) -> bool:
         return bool(self.signatures)
@@ -559,8 +562,9 @@ class FailedSiblings:
         """Whether instance ``key`` differs from a failed instance of its stream in at most
         one input value (the failed instance itself is exhausted, so not evaluated)."""
         name, inputs = key
-        return any((name, i, inputs[:i] + inputs[i + 1:]) in self.signatures
-                   for i in range(len(inputs)))
+        return name in self.streams and any(
+            (name, i, inputs[:i] + inputs[i + 1:]) in self.signatures
+            for i in range(len(inputs)))
 
 
 def failed_siblings(state: PlannerState) -> FailedSiblings:
@@ -582,7 +586,7 @@ def failed_siblings(state: PlannerState) -> FailedSiblings:
         name, inputs = key
         for i in range(len(inputs)):
             signatures.add((name, i, inputs[:i] + inputs[i + 1:]))
-    return FailedSiblings(frozenset(signatures))
+    return FailedSiblings(frozenset(signatures), frozenset(name for name, _, _ in signatures))
 
 
 def report_unusable(state: PlannerState, consumed: tuple[str, ...],
