@@ -37,7 +37,9 @@ def test_only_instances_that_ran_out_with_every_output_rejected_have_failed() ->
     failed = ("sample-pose", ("mug", "coaster"))
     used = ("sample-pose", ("spoon", "shelf"))  # ran out, one output accepted
     going = ("sample-pose", ("kettle", "tray"))  # rejected once, not run out
+    objects = {"mug", "pitcher", "coaster", "table", "spoon", "shelf", "kettle", "tray"}
     state = SimpleNamespace(
+        problem=SimpleNamespace(objects=objects),
         instances={failed: _instance(True, [("slot0",)]),
                    used: _instance(True, [("s1",), ("s2",)]),
                    going: _instance(False, [("t1",)])},
@@ -50,8 +52,11 @@ def test_only_instances_that_ran_out_with_every_output_rejected_have_failed() ->
     assert not siblings.holds(("inverse-kinematics", ("pitcher", "coaster")))
     assert not siblings.holds(("sample-pose", ("pitcher", "shelf")))
     assert not siblings.holds(("sample-pose", ("pitcher", "tray")))
-    assert not optimistic.failed_siblings(
-        SimpleNamespace(instances={}, rejected_outputs={}))  # type: ignore[arg-type]
+    # A sibling over a value the problem does not name (a sample) is not held back.
+    assert not siblings.holds(("sample-pose", ("#sampled-object", "coaster")))
+    assert not siblings.holds(("sample-pose", ("mug", "sampled-region")))
+    assert not optimistic.failed_siblings(SimpleNamespace(  # type: ignore[arg-type]
+        instances={}, rejected_outputs={}, problem=SimpleNamespace(objects=objects)))
 
 
 def test_a_rejection_counts_against_a_generator_only_when_it_sampled_alone() -> None:

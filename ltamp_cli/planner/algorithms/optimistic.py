@@ -44,7 +44,7 @@ and every plan returned is still validated against the real facts.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Collection, Iterable
 from dataclasses import dataclass, field
 
 from ltamp_cli.planner.algorithms.common import (
@@ -548,22 +548,26 @@ def record_rejection(state: PlannerState, consumed: tuple[str, ...],
 class FailedSiblings:
     """Generator instances that *failed*: ran out with every output rejected
     (:func:`record_rejection`). ``signatures``: (stream, position, the other inputs) of
-    each failed instance and each of its input positions."""
+    each failed instance and each position that holds one of the problem's own objects
+    (``objects``)."""
 
     signatures: frozenset[tuple[str, int, tuple[str, ...]]]
     # The streams of the failed instances: other streams' instances are not siblings (the
     # check runs for every candidate instance of a speculative evaluation).
     streams: frozenset[str] = frozenset()
+    objects: Collection[str] = frozenset()
 
     def __bool__(self) -> bool:
         return bool(self.signatures)
 
     def holds(self, key: InstanceKey) -> bool:
-        """Whether instance ``key`` differs from a failed instance of its stream in at most
-        one input value (the failed instance itself is exhausted, so not evaluated)."""
+        """Whether instance ``key`` differs from a failed instance of its stream in one
+        input, where both hold one of the problem's own objects (the failed instance
+        itself is exhausted, so not evaluated)."""
         name, inputs = key
         return name in self.streams and any(
-            (name, i, inputs[:i] + inputs[i + 1:]) in self.signatures
+            inputs[i] in self.objects
+            and (name, i, inputs[:i] + inputs[i + 1:]) in self.signatures
             for i in range(len(inputs)))
 
 
@@ -572,12 +576,18 @@ def failed_siblings(state: PlannerState) -> FailedSiblings:
 
     Why a speculative search leaves their never-called siblings out: such a search exploits
     what sampling learned, and a sibling of a generator that failed (same stream, inputs
-    that differ in one value) is the opposite, an untried copy whose level is lowest
-    because it was never called. kitchen_fluent: the coaster's one slot holds the saucer;
-    once ``sample-pose(mug, coaster)`` failed there, every speculative search on 7 of 10
-    seeds parked the pitcher on a fresh ``sample-pose(pitcher, coaster)`` pose (the table
-    sampler it had used had calls, so a higher level), whose stream plan died at once on
-    the same slot. Full searches see every instance, so completeness is unchanged."""
+    that differ in one of the problem's objects: the same region for another object) is the
+    opposite, an untried copy whose level is lowest because it was never called.
+    kitchen_fluent: the coaster's one slot holds the saucer; once
+    ``sample-pose(mug, coaster)`` failed there, every speculative search on 7 of 10 seeds
+    parked the pitcher on a fresh ``sample-pose(pitcher, coaster)`` pose (the table sampler
+    it had used had calls, so a higher level), whose stream plan died at once on the same
+    slot. Only where the differing value is the problem's own on both sides: instances
+    over sampled values are as many as the samples, and one sample's failure says little
+    about another's (PDDLStream's continuous_tamp/rmmp, whose ``s-intersection`` over
+    sampled modes failed often: held back, its solves took about twice the CPU). Full
+    searches see every instance, so completeness is unchanged."""
+    objects = state.problem.objects
     signatures: set[tuple[str, int, tuple[str, ...]]] = set()
     for key, outputs in state.rejected_outputs.items():
         instance = state.instances.get(key)
@@ -585,8 +595,10 @@ def failed_siblings(state: PlannerState) -> FailedSiblings:
             continue
         name, inputs = key
         for i in range(len(inputs)):
-            signatures.add((name, i, inputs[:i] + inputs[i + 1:]))
-    return FailedSiblings(frozenset(signatures), frozenset(name for name, _, _ in signatures))
+            if inputs[i] in objects:
+                signatures.add((name, i, inputs[:i] + inputs[i + 1:]))
+    return FailedSiblings(frozenset(signatures),
+                          frozenset(name for name, _, _ in signatures), objects)
 
 
 def report_unusable(state: PlannerState, consumed: tuple[str, ...],
