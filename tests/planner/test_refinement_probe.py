@@ -76,8 +76,9 @@ def test_costly_generators_are_called_at_most_once_by_the_probe(
     calls: list[tuple[str, int]] = []
     probe = skeletons._probe
 
-    def recorded(state: Any, instance: Any, outputs: Any, tests: Any, limit: int) -> None:
-        probe(state, instance, outputs, tests, limit)
+    def recorded(state: Any, instance: Any, outputs: Any, tests: Any, limit: int,
+                 **options: Any) -> None:
+        probe(state, instance, outputs, tests, limit, **options)
         calls.append((instance.name, instance.num_calls))
 
     monkeypatch.setattr(skeletons, "_probe", recorded)

@@ -254,6 +254,10 @@ class PlannerState:
     # (:fluents stream, inputs) -> the contexts in which a call of it failed.
     failed_contexts: dict[tuple[str, tuple[str, ...]], list[Context]] = field(
         default_factory=dict)
+    # Generator instance -> its outputs that a test rejected against values that no stream
+    # sampled in that binding (see optimistic.record_rejection, failed_siblings).
+    rejected_outputs: dict[tuple[str, tuple[str, ...]], set[tuple[str, ...]]] = field(
+        default_factory=dict)
     # Per-stream totals persisted by earlier runs of this domain (calls, successes, time_s).
     history: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
     # (purpose, stream name) -> ``facts.sizes()`` when the stream's inputs were last

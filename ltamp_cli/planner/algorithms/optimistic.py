@@ -48,7 +48,7 @@ and every plan returned is still validated against the real facts.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping
 from dataclasses import dataclass, field
 
 from ltamp_cli.planner.algorithms.common import (
@@ -223,12 +223,15 @@ DEADLINE_STRIDE = 256
 
 
 def optimistic_evaluation(state: PlannerState, complexity: int,
-                          placeholders: Placeholders) -> OptimisticEvaluation:
+                          placeholders: Placeholders,
+                          held_back: FailedSiblings | None = None
+                          ) -> OptimisticEvaluation:
     """The real facts and the optimistic ones of the instances within ``complexity``
     (summed input levels + calls). At or above the algorithms' limit (``max_complexity`` +
     the highest real level), also ``least_cut``: the least complexity by PDDLStream's rule
     (:func:`instance_level`) of an instance left out, so that an "infeasible" answer never
-    rests on the sum."""
+    rests on the sum. ``held_back``: never-called instances with a failed sibling are left
+    out too (:func:`failed_siblings`; the evaluation is then ``cut``)."""
     # A hash-independent order, sorted and loaded in bounded steps (10^5 known facts: one
     # ``sorted`` call would hold the GIL past the deadline).
     index = FactIndex.of_sorted(sorted_before(state.facts.members, state.deadline),
@@ -286,6 +289,9 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
                          + max([real_levels.get(x, 0) for x in inputs], default=0))
                 highest = instance_level(inputs, evaluation.max_level, real_levels)
                 real = state.instances.get(key)
+                if held_back and (real is None or not real.num_calls) and held_back.holds(key):
+                    evaluation.cut = True
+                    continue
                 if real is not None:
                     if real.disabled or (real.exhausted and not _pending_test(real)):
                         continue
@@ -594,6 +600,78 @@ def repairable(state: PlannerState, instance: StreamInstance, used: int) -> bool
         return False
     return observed_cheap(state.history.get(instance.name),
                           state.stream_stats.get(instance.name))
+
+
+def record_rejection(state: PlannerState, consumed: tuple[str, ...],
+                     made_by: dict[str, tuple[StreamInstance, tuple[str, ...]]]) -> None:
+    """After a test rejected the values ``consumed``: when one generator of the binding
+    sampled them (``made_by``) and the others are the problem's own, its output was rejected
+    against the problem, which is evidence against that generator rather than against a
+    combination of samples; recorded in ``state.rejected_outputs``."""
+    producers = {id(made_by[x][0]): made_by[x] for x in consumed if x in made_by}
+    if len(producers) != 1 or not all(x in made_by or x in state.problem.objects
+                                      for x in consumed):
+        return
+    instance, output = next(iter(producers.values()))
+    if isinstance(instance.external, Stream) and not instance.is_test:
+        state.rejected_outputs.setdefault((instance.name, instance.inputs), set()).add(output)
+
+
+@dataclass(frozen=True)
+class FailedSiblings:
+    """Generator instances that *failed*: ran out with every output rejected
+    (:func:`record_rejection`). ``signatures``: (stream, position, the other inputs) of
+    each failed instance and each position that holds one of the problem's own objects
+    (``objects``)."""
+
+    signatures: frozenset[tuple[str, int, tuple[str, ...]]]
+    # The streams of the failed instances: other streams' instances are not siblings (the
+    # check runs for every candidate instance of a speculative evaluation).
+    streams: frozenset[str] = frozenset()
+    objects: Collection[str] = frozenset()
+
+    def __bool__(self) -> bool:
+        return bool(self.signatures)
+
+    def holds(self, key: InstanceKey) -> bool:
+        """Whether instance ``key`` differs from a failed instance of its stream in one
+        input, where both hold one of the problem's own objects (the failed instance
+        itself is exhausted, so not evaluated)."""
+        name, inputs = key
+        return name in self.streams and any(
+            inputs[i] in self.objects
+            and (name, i, inputs[:i] + inputs[i + 1:]) in self.signatures
+            for i in range(len(inputs)))
+
+
+def failed_siblings(state: PlannerState) -> FailedSiblings:
+    """The failed generator instances of the solve so far, as :class:`FailedSiblings`.
+
+    Why a speculative search leaves their never-called siblings out: such a search exploits
+    what sampling learned, and a sibling of a generator that failed (same stream, inputs
+    that differ in one of the problem's objects: the same region for another object) is the
+    opposite, an untried copy whose level is lowest because it was never called.
+    kitchen_fluent: the coaster's one slot holds the saucer; once
+    ``sample-pose(mug, coaster)`` failed there, every speculative search on 7 of 10 seeds
+    parked the pitcher on a fresh ``sample-pose(pitcher, coaster)`` pose (the table sampler
+    it had used had calls, so a higher level), whose stream plan died at once on the same
+    slot. Only where the differing value is the problem's own on both sides: instances
+    over sampled values are as many as the samples, and one sample's failure says little
+    about another's (PDDLStream's continuous_tamp/rmmp, whose ``s-intersection`` over
+    sampled modes failed often: held back, its solves took about twice the CPU). Full
+    searches see every instance, so completeness is unchanged."""
+    objects = state.problem.objects
+    signatures: set[tuple[str, int, tuple[str, ...]]] = set()
+    for key, outputs in state.rejected_outputs.items():
+        instance = state.instances.get(key)
+        if instance is None or not instance.exhausted or not set(instance.results) <= outputs:
+            continue
+        name, inputs = key
+        for i in range(len(inputs)):
+            if inputs[i] in objects:
+                signatures.add((name, i, inputs[:i] + inputs[i + 1:]))
+    return FailedSiblings(frozenset(signatures),
+                          frozenset(name for name, _, _ in signatures), objects)
 
 
 def report_unusable(state: PlannerState, consumed: tuple[str, ...],

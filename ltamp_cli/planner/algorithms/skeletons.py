@@ -27,9 +27,13 @@ Both learn several conflicts from one failed stream plan: when a cheap generator
 out, its siblings in the plan are tried at once with the plan's tests
 (:func:`probe_siblings`); and when a plan's shared placeholders are refined, its cheap
 unshared generators over real inputs are tried with its tests before the search that
-follows (:func:`probe_refined_plan`). A binding's first call of an instance whose stream
-family keeps failing (:mod:`.families`) is deferred by as many retries as the family's
-penalty, once per step. Adaptive does not count the retries its cheap bonus
+follows (:func:`probe_refined_plan`); and when a cheap ``:fluents`` generator produces
+nothing in a state, its never-called siblings are called in that state
+(:func:`probe_context_siblings`). Adaptive's speculative searches leave out the never-called
+siblings of generators that failed (:data:`HOLD_BACK_FAILED_SIBLINGS`). A binding's first
+call of an instance whose stream family keeps failing (:mod:`.families`) is deferred by as
+many retries as the family's penalty, once per step. Adaptive does not count the retries its
+cheap bonus
 allowed against a later costly step of a skeleton without action costs
 (:func:`over_retry_limit`). The full search after a plan whose shared placeholders were
 refined may be bounded by the effort of the search that found it (opt-in,
@@ -59,7 +63,9 @@ from ltamp_cli.planner.algorithms.optimistic import (
     bindable_stream_plan,
     contextual_stream_plan,
     evaluate_eager,
+    failed_siblings,
     optimistic_evaluation,
+    record_rejection,
     repairable,
     report_unusable,
     sampled_inputs,
@@ -312,6 +318,7 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
                             binding.cheap_attempts)]
         state.record_failure(instance)
         report_unusable(state, real_inputs, binding.made_by)
+        record_rejection(state, real_inputs, binding.made_by)
         binding.skeleton.retries.cheap = not state_dependent(instance)
         if not context:
             binding.skeleton.learn_nogood(binding.step, binding.mapping)
@@ -347,6 +354,9 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
         binding.skeleton.retries.cheap = not state_dependent(instance)
         if SIBLING_PROBE_OUTPUTS:
             probe_siblings(state, binding)
+        if (CONTEXT_SIBLING_PROBE_CALLS and state_dependent(instance)
+                and not instance.results):
+            probe_context_siblings(state, instance)
         return []
     binding.attempts += 1  # nothing this call: retry later
     return [binding]
@@ -398,11 +408,11 @@ def probe_siblings(state: PlannerState, failed: Binding) -> None:
             continue
         # Only within its domain: a domain fact certified by a later entry of the plan
         # is not real yet.
-        domain = instantiate_atoms(external.domain,
-                                   dict(zip(external.inputs, real_inputs, strict=True)))
-        if not all(fact in state.facts.members for fact in domain):
+        if not _domain_real(state, name, real_inputs):
             continue
         outputs = skeleton.outputs_at(position)
+        # The tests see the failed binding's values and the sibling's own outputs.
+        bound = {x: v for x, v in failed.mapping.items() if x not in outputs}
         tests = []
         for test_position, (test, test_inputs) in enumerate(plan):
             test_external = state.externals[test]
@@ -411,36 +421,60 @@ def probe_siblings(state: PlannerState, failed: Binding) -> None:
                                                                or test_external.fluents))
                     or not set(test_inputs) & set(outputs)):
                 continue
-            bound = [failed.mapping.get(x, x) for x in test_inputs]
-            if all(x in outputs or not x.startswith("#") for x in bound):
-                tests.append((test, test_inputs))
-        for index in range(SIBLING_PROBE_OUTPUTS):
-            if index >= len(instance.results):
-                if instance.exhausted:
-                    break
-                state.call(instance)
-                if index >= len(instance.results):
-                    break
-            mapping = {**failed.mapping,
-                       **dict(zip(outputs, instance.results[index], strict=True))}
-            accepted = True
-            for test, test_inputs in tests:
-                checked = state.instance(test, tuple(mapping.get(x, x) for x in test_inputs))
-                if checked.num_calls == 0:
-                    state.call(checked)
-                if not checked.value:
-                    accepted = False
-                    break
-            if accepted:
-                break
-        if instance.exhausted:
-            state.record_failure(instance)
+            resolved = tuple(bound.get(x, x) for x in test_inputs)
+            if all(x in outputs or not x.startswith("#") for x in resolved):
+                tests.append((test, resolved))
+        _probe(state, instance, outputs, tests, SIBLING_PROBE_OUTPUTS,
+               real_test_domains=False)
+
+
+# After a cheap :fluents generator produced nothing in a state, this many of its never-called
+# siblings are called in the same state (0: off); see probe_context_siblings.
+CONTEXT_SIBLING_PROBE_CALLS = 64
+
+
+def probe_context_siblings(state: PlannerState, failed: StreamInstance) -> None:
+    """After the ``:fluents`` generator instance ``failed`` produced nothing in its
+    context (the state's fluent facts), call its never-called *siblings* in that same
+    context, up to :data:`CONTEXT_SIBLING_PROBE_CALLS`: instances of the same stream over
+    real inputs that differ from its own in one value (a motion from another configuration
+    to the same goal, or from the same start to another goal). Only for a stream observed
+    cheap (:func:`.effort.observed_cheap`). Each sibling that produces nothing is recorded as
+    failed in that context (``failed_contexts``), so no search plans with it there; one that
+    succeeds adds a real output, valid in that context only.
+
+    A failed :fluents instance blocks only itself, and the search's next plan in the same
+    state is usually its sibling (kitchen_fluent seed 20, the pitcher carried past a tall
+    object: the motion to the mug's configuration failed from 5 starts in turn, one
+    search each; 20 searches, 2.1 s CPU, with the probe 10, 0.6 s)."""
+    name = failed.name
+    if not observed_cheap(state.history.get(name), state.stream_stats.get(name)):
+        return
+    context = failed.fluent_facts
+    calls = 0
+    for inputs in list(state.open_real_bindings(state.externals[name])):
+        if calls >= CONTEXT_SIBLING_PROBE_CALLS:
+            break
+        if sum(a != b for a, b in zip(inputs, failed.inputs, strict=True)) != 1:
+            continue
+        sibling = state.instance(name, inputs, context)
+        if sibling.num_calls or sibling.exhausted:
+            continue
+        state.call(sibling)
+        calls += 1
+        if sibling.exhausted and not sibling.results:
+            state.record_failure(sibling)
 
 
 # When a plan's shared placeholders are refined (the search runs again), the plan's cheap
 # generators over real inputs are first tried with the plan's tests, up to this many
 # outputs each (0: off); see probe_refined_plan.
 REFINEMENT_PROBE_OUTPUTS = 4
+
+
+# A speculative search (adaptive) leaves out the never-called generator instances whose
+# sibling failed (:func:`.optimistic.failed_siblings`); see solve_with_skeletons.
+HOLD_BACK_FAILED_SIBLINGS = True
 
 
 def probe_refined_plan(state: PlannerState, evaluation: OptimisticEvaluation,
@@ -506,12 +540,19 @@ def _cheap_or_unmeasured(state: PlannerState, name: str) -> bool:
 
 
 def _probe(state: PlannerState, instance: StreamInstance, outputs: tuple[str, ...],
-           tests: list[tuple[str, tuple[str, ...]]], limit: int) -> None:
+           tests: list[tuple[str, tuple[str, ...]]], limit: int, *,
+           real_test_domains: bool = True) -> None:
     """Call the generator ``instance`` until an output (bound to the placeholders
     ``outputs``) passes every one of ``tests`` (stream name, inputs over those placeholders
-    and real values), it
-    runs out, or ``limit`` outputs were tried; a test whose domain facts are not all real
-    is not called. A run-out instance is recorded as failed."""
+    and real values), it runs out, it is found costly after a call
+    (:func:`.effort.observed_cheap`), or ``limit`` outputs were tried. A run-out instance
+    is recorded as failed.
+
+    With ``real_test_domains`` a test whose domain facts are not all real is skipped (the
+    refined plan's tests: a later entry of the plan may certify them); without it every
+    test is called (the sibling probe's tests come from a stream plan that bound them).
+    The sibling probe enters only with a generator observed cheap, so the costly stop
+    does not change it in practice."""
     for index in range(limit):
         if index >= len(instance.results):
             if instance.exhausted or (instance.num_calls and not observed_cheap(
@@ -524,21 +565,30 @@ def _probe(state: PlannerState, instance: StreamInstance, outputs: tuple[str, ..
         accepted = True
         for test, test_inputs in tests:
             inputs = tuple(bound.get(x, x) for x in test_inputs)
-            external = state.externals[test]
-            domain = instantiate_atoms(external_domain(external), dict(
-                zip(external_inputs(external), inputs, strict=True)))
-            if not all(fact in state.facts.members for fact in domain):
+            if real_test_domains and not _domain_real(state, test, inputs):
                 continue
             checked = state.instance(test, inputs)
             if checked.num_calls == 0:
                 state.call(checked)
             if not checked.value:
                 accepted = False
+                if all(x in bound.values() or x in state.problem.objects for x in inputs):
+                    # rejected against the problem's own values (see record_rejection)
+                    state.rejected_outputs.setdefault(
+                        (instance.name, instance.inputs), set()).add(instance.results[index])
                 break
         if accepted:
             break
     if instance.exhausted:
         state.record_failure(instance)
+
+
+def _domain_real(state: PlannerState, name: str, inputs: tuple[str, ...]) -> bool:
+    """Whether every domain fact of external ``name`` over real ``inputs`` is known."""
+    external = state.externals[name]
+    domain = instantiate_atoms(external_domain(external),
+                               dict(zip(external_inputs(external), inputs, strict=True)))
+    return all(fact in state.facts.members for fact in domain)
 
 
 def state_dependent(instance: StreamInstance) -> bool:
@@ -627,7 +677,12 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
                 speculative_in_a_row = speculative_in_a_row + 1 if speculative else 0
                 facts_at_search = len(state.facts.members)
                 sampling.failures = 0
-                evaluation = optimistic_evaluation(state, complexity, placeholders)
+                # A speculative search leaves out the never-called siblings of generators
+                # that failed (see HOLD_BACK_FAILED_SIBLINGS); a full search sees them.
+                evaluation = optimistic_evaluation(
+                    state, complexity, placeholders,
+                    failed_siblings(state) if speculative and HOLD_BACK_FAILED_SIBLINGS
+                    else None)
                 # The most advanced binding's plan, with what it bound so far, is checked
                 # first: once sampling made its facts real it is usually still a plan.
                 # Rebased onto this task (partial_guess) only without action costs: with
