@@ -25,7 +25,11 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from types import FrameType
 from typing import Generic, TypeVar
+
+from ltamp_cli.planner.gc_pacing import PACE_S
+from ltamp_cli.planner.reclaim import Reclaimer, capture_stack
 
 T = TypeVar("T")
 
@@ -33,6 +37,10 @@ T = TypeVar("T")
 # own clock checks normally end it well within this; the rest of the 1 s bound is left for
 # building the result.
 ABANDON_GRACE_S = 0.5
+# Seconds before the deadline at which the worker's stack is first captured (see
+# :func:`run_until`): a solve that ends within this of its deadline frees its locals in the
+# background, one that ends earlier frees them before returning (with time to spare).
+CAPTURE_LEAD_S = 1.0
 
 
 @dataclass(frozen=True)
@@ -73,14 +81,23 @@ class _Outcome(Generic[T]):
 
 
 def run_until(work: Callable[[], T], deadline: float, tracker: CallTracker,
-              name: str = "ltamp-solve") -> tuple[bool, T | None]:
+              name: str = "ltamp-solve", *, reclaimer: Reclaimer | None = None,
+              tick: Callable[[], None] | None = None) -> tuple[bool, T | None]:
     """Run ``work()`` in a daemon thread and wait for it until ``deadline`` (a
     ``time.perf_counter`` value, ``inf`` for no limit) plus :data:`ABANDON_GRACE_S`.
 
     Returns ``(True, value)`` when it finished (its exception, if any, is re-raised here) or
     ``(False, None)`` when it was abandoned (``tracker`` is then cancelled).
+
+    While waiting, calls ``tick()`` every :data:`~.gc_pacing.PACE_S` seconds (the solve's
+    garbage collection). With a ``reclaimer``, the worker's stack is captured
+    :data:`CAPTURE_LEAD_S` before the deadline and at it (:func:`.reclaim.capture_stack`),
+    so that the functions running then do not free their locals when they return (one
+    uninterruptible deallocation each, up to seconds under load): the reclaimer gets them,
+    to free in the background once the caller has the result.
     """
     outcome: _Outcome[T] = _Outcome()
+    finished = threading.Event()
 
     def target() -> None:
         try:
@@ -89,13 +106,33 @@ def run_until(work: Callable[[], T], deadline: float, tracker: CallTracker,
             outcome.error = error
         finally:
             outcome.done = True
+            finished.set()
 
     worker = threading.Thread(target=target, name=name, daemon=True)
     worker.start()
-    timeout = deadline + ABANDON_GRACE_S - time.perf_counter()
-    # A limit beyond what a lock wait takes (max_time=1e308) is no limit: join() would
-    # raise OverflowError ("timestamp out of range for platform time_t").
-    worker.join(None if timeout >= threading.TIMEOUT_MAX else max(0.0, timeout))
+    captures = [deadline - CAPTURE_LEAD_S, deadline] if reclaimer is not None else []
+    abandon_at = deadline + ABANDON_GRACE_S
+    captured: list[FrameType] = []
+    while True:
+        now = time.perf_counter()
+        while captures and now >= captures[0]:
+            captures.pop(0)
+            captured.extend(capture_stack(worker.ident, target.__code__))
+        if now >= abandon_at:
+            break
+        wake = min(abandon_at, captures[0] if captures else abandon_at)
+        if tick is not None:
+            wake = min(wake, now + PACE_S)
+        # A limit beyond what a lock wait takes (max_time=1e308) is no limit: wait() would
+        # raise OverflowError ("timestamp out of range for platform time_t").
+        timeout = wake - now
+        if finished.wait(None if timeout >= threading.TIMEOUT_MAX else max(0.0, timeout)):
+            break
+        if tick is not None:
+            tick()
+    if reclaimer is not None:
+        reclaimer.give_frames(captured)
+        del captured
     if not outcome.done:
         tracker.cancel()
         return False, None

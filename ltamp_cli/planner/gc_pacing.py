@@ -1,0 +1,158 @@
+"""The cyclic garbage collector during a solve: run by the solve's waiting thread, at times
+that keep every collection clear of the deadline.
+
+A collection is one C call that holds the GIL: generation-1 and full collections of a
+large solve took 0.24-0.54 s of wall time under load, one of them at 56 s of a 60 s solve,
+and nothing (neither the planner's clock checks nor the watchdog) can run inside one
+(issue #19). So while a solve runs, automatic collection is off (:class:`PausedCollection`)
+and the thread that waits for the solve's worker collects instead
+(:class:`CollectionPacer`): by CPython's own rule (generation thresholds, a full
+collection once the heap grew by a quarter), but only when the collection's expected
+length, measured on this solve's earlier collections, ends well before the deadline.
+A collection that would not is skipped (a younger generation's is run instead, if it
+fits). When the last solve ends, the objects in the young generations are moved to the
+oldest one without a collection (``gc.freeze`` and ``gc.unfreeze``, two list splices),
+so the caller's collector, back on, does not start with the skipped collections due: they
+would run at its next allocation, before the solve has even returned (1.0-1.5 s of wall
+time at load 9 for hidden robots2_4 and handoff_2 with ``max_time`` 15).
+"""
+
+from __future__ import annotations
+
+import gc
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+# Generation-0 threshold while a solve runs (CPython's default is 700). Search and grounding
+# allocate many short-lived tuples, sets and dicts that reference counting frees anyway; at
+# the default threshold the collector ran often enough to cost ~5-10 % of the CPU time of
+# kitchen_symbolic and tamp2d_4blocks. Not disabled outright: a long solve with learned
+# samplers could otherwise accumulate cyclic garbage without bound.
+SOLVE_GC_THRESHOLD0 = 50_000
+# Seconds between two looks at the collector's counts by the waiting thread.
+PACE_S = 0.02
+# A collection starts only if the deadline is further than this many times its expected
+# wall time (estimates are from this solve's own earlier collections, at its load).
+DEADLINE_SAFETY = 4.0
+# Wall seconds per object examined assumed before a collection of this solve was measured
+# (measured: 10-30 ns of CPU per object, times the wall/CPU ratio of a loaded machine).
+DEFAULT_WALL_PER_OBJECT_S = 2e-7
+# Estimates use the slowest of this many last measured rates (the machine's load varies).
+RATES_KEPT = 3
+# A full collection is due once the heap grew by this factor since the last one (CPython
+# runs it once the objects awaiting one exceed a quarter of those that survived one).
+FULL_GROWTH = 1.25
+
+
+class PausedCollection:
+    """Automatic garbage collection off while at least one solve runs.
+
+    The collector's switch is process-wide, so it is turned off only while a solve is in
+    progress and restored when the last concurrent one ends (also on exceptions): the lock
+    and the depth count mirror that interpreter-wide state and hold no planner data, so
+    planners in different threads still do not interfere. A caller that had switched the
+    collector off keeps it off, and its solves collect nothing (:attr:`caller_enabled`).
+    """
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._depth = 0
+        self._enabled = gc.isenabled()
+
+    @property
+    def caller_enabled(self) -> bool:
+        """Whether the collector was on when the outermost running solve began."""
+        return self._enabled
+
+    @contextmanager
+    def __call__(self) -> Iterator[None]:
+        with self._lock:
+            if self._depth == 0:
+                self._enabled = gc.isenabled()
+                gc.disable()
+            self._depth += 1
+        try:
+            yield
+        finally:
+            with self._lock:
+                self._depth -= 1
+                if self._depth == 0 and self._enabled:
+                    _age_young_objects()
+                    gc.enable()
+
+
+def _age_young_objects() -> None:
+    """Move every object of the young generations to the oldest one, without examining
+    any (see the module doc). Not done when the caller froze objects itself:
+    ``gc.unfreeze`` would unfreeze those too."""
+    if gc.get_freeze_count() == 0:
+        gc.freeze()
+        gc.unfreeze()
+
+
+class CollectionPacer:
+    """Collects garbage for one solve from the thread waiting for it (see the module doc).
+
+    ``deadline``: ``time.perf_counter`` seconds (``inf``: no limit); ``enabled``: whether
+    the caller's collector was on (off: never collect).
+    """
+
+    def __init__(self, deadline: float, enabled: bool) -> None:
+        self.deadline = deadline
+        self.enabled = enabled
+        _, threshold1, threshold2 = gc.get_threshold()
+        self.thresholds = (SOLVE_GC_THRESHOLD0, threshold1, threshold2)
+        self.rates: list[float] = []  # wall seconds per object, last collections
+        self.blocks_after_full = sys.getallocatedblocks()
+        self.collections = [0, 0, 0]  # run, per generation
+        self.skipped = [0, 0, 0]  # due but too near the deadline, per generation
+
+    def due(self) -> int | None:
+        """The generation CPython would collect now (``None``: none)."""
+        count = gc.get_count()
+        threshold0, threshold1, threshold2 = self.thresholds
+        if count[0] <= threshold0:
+            return None
+        if (count[2] > threshold2
+                and sys.getallocatedblocks() > FULL_GROWTH * self.blocks_after_full):
+            return 2
+        return 1 if count[1] > threshold1 else 0
+
+    def expected_objects(self, generation: int) -> int:
+        """The objects a collection of ``generation`` examines (those of the younger
+        generations too): counted for the young generations (a few ms for 10^5 objects),
+        bounded by the interpreter's allocated memory blocks for a full collection (some of
+        which are not objects the collector follows: an upper bound)."""
+        if generation == 2:
+            return sys.getallocatedblocks()
+        return sum(len(gc.get_objects(younger)) for younger in range(generation + 1))
+
+    def wall_per_object(self) -> float:
+        """Expected wall seconds per object examined (the slowest recent rate)."""
+        return max(self.rates[-RATES_KEPT:], default=DEFAULT_WALL_PER_OBJECT_S)
+
+    def tick(self) -> None:
+        """Collect what is due, unless it could still run at the deadline: then the
+        youngest generations' collection that fits, if any."""
+        if not self.enabled:
+            return
+        due = self.due()
+        if due is None:
+            return
+        now = time.perf_counter()
+        for generation in range(due, -1, -1):
+            objects = self.expected_objects(generation)
+            if now + DEADLINE_SAFETY * objects * self.wall_per_object() <= self.deadline:
+                break
+            self.skipped[generation] += 1
+        else:
+            return
+        gc.collect(generation)
+        wall = time.perf_counter() - now
+        self.collections[generation] += 1
+        self.rates = [*self.rates[-RATES_KEPT + 1:], wall / max(objects, 1)]
+        if generation == 2:
+            self.blocks_after_full = sys.getallocatedblocks()
