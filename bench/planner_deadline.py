@@ -87,7 +87,8 @@ def run_child(tree: Path, problem: str, seed: int, max_time: float) -> dict[str,
                  "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"})
     lines = [line for line in done.stdout.splitlines() if line.startswith("{")]
     if not lines:
-        return {"status": f"error: {done.stderr.strip()[-300:]}", "late_s": None}
+        return {"status": "error", "returncode": done.returncode,
+                "stderr": done.stderr.strip()[-2000:], "late_s": None}
     row: dict[str, Any] = json.loads(lines[-1])
     row["load_before"] = load_before
     row["load_after"] = os.getloadavg()[0]
@@ -128,8 +129,10 @@ def main() -> None:
                     row = run_child(Path(tree).resolve(), problem, seed, max_time)
                     row.update(version=label, problem=problem, seed=seed, max_time=max_time)
                     rows.append(row)
+                    late = row.get("late_s")
                     print(f"{label:8s} {problem:20s} seed {seed} max_time {max_time:g}: "
-                          f"{row['status']:8s} late {row.get('late_s', float('nan')):+.3f} s "
+                          f"{row['status']:8s} late "
+                          f"{'error' if late is None else f'{late:+.3f} s'} "
                           f"cpu {row.get('cpu_s', float('nan')):.2f} s "
                           f"load {row.get('load_before', 0):.1f}", flush=True)
     summary = {label: summarise([r for r in rows if r["version"] == label])

@@ -40,7 +40,7 @@ DEADLINE_SAFETY = 4.0
 # Wall seconds per object examined assumed before a collection of this solve was measured
 # (measured: 10-30 ns of CPU per object, times the wall/CPU ratio of a loaded machine).
 DEFAULT_WALL_PER_OBJECT_S = 2e-7
-# Estimates use the slowest of this many last measured rates (the machine's load varies).
+# Estimates use the slowest of this many last measured rates of a generation.
 RATES_KEPT = 3
 # A full collection is due once the heap grew by this factor since the last one (CPython
 # runs it once the objects awaiting one exceed a quarter of those that survived one).
@@ -98,6 +98,13 @@ class CollectionPacer:
 
     ``deadline``: ``time.perf_counter`` seconds (``inf``: no limit); ``enabled``: whether
     the caller's collector was on (off: never collect).
+
+    A collection's length is predicted from a size measure per generation that is safe to
+    read while the worker runs (:meth:`size`) times the wall seconds per unit of it that
+    this solve's recent collections of that generation took (the slowest of the last
+    :data:`RATES_KEPT`: the machine's load varies). ``gc.get_objects`` would count exactly,
+    but it hands out objects the worker is still constructing (a tuple being built saw its
+    reference count change and raised ``SystemError``).
     """
 
     def __init__(self, deadline: float, enabled: bool) -> None:
@@ -105,7 +112,8 @@ class CollectionPacer:
         self.enabled = enabled
         _, threshold1, threshold2 = gc.get_threshold()
         self.thresholds = (SOLVE_GC_THRESHOLD0, threshold1, threshold2)
-        self.rates: list[float] = []  # wall seconds per object, last collections
+        # Wall seconds per unit of :meth:`size`, last collections, per generation.
+        self.rates: tuple[list[float], ...] = ([], [], [])
         self.blocks_after_full = sys.getallocatedblocks()
         self.collections = [0, 0, 0]  # run, per generation
         self.skipped = [0, 0, 0]  # due but too near the deadline, per generation
@@ -121,18 +129,29 @@ class CollectionPacer:
             return 2
         return 1 if count[1] > threshold1 else 0
 
-    def expected_objects(self, generation: int) -> int:
-        """The objects a collection of ``generation`` examines (those of the younger
-        generations too): counted for the young generations (a few ms for 10^5 objects),
-        bounded by the interpreter's allocated memory blocks for a full collection (some of
-        which are not objects the collector follows: an upper bound)."""
-        if generation == 2:
-            return sys.getallocatedblocks()
-        return sum(len(gc.get_objects(younger)) for younger in range(generation + 1))
+    def size(self, generation: int) -> int:
+        """A measure of what a collection of ``generation`` examines: the objects allocated
+        since the last collection (young), plus one generation-0 threshold per collection
+        since the last generation-1 one (a bound on their survivors), or the interpreter's
+        allocated memory blocks (full: all objects, and some the collector does not follow)."""
+        count = gc.get_count()
+        if generation == 0:
+            return count[0]
+        if generation == 1:
+            return count[0] + count[1] * self.thresholds[0]
+        return sys.getallocatedblocks()
 
-    def wall_per_object(self) -> float:
-        """Expected wall seconds per object examined (the slowest recent rate)."""
-        return max(self.rates[-RATES_KEPT:], default=DEFAULT_WALL_PER_OBJECT_S)
+    def wall_per_unit(self, generation: int) -> float:
+        """Expected wall seconds per unit of :meth:`size` for ``generation`` (a younger
+        generation's rate until one of its own was measured)."""
+        for younger in range(generation, -1, -1):
+            if self.rates[younger]:
+                return max(self.rates[younger][-RATES_KEPT:])
+        return DEFAULT_WALL_PER_OBJECT_S
+
+    def expected_s(self, generation: int) -> float:
+        """Expected wall seconds of a collection of ``generation`` now."""
+        return self.size(generation) * self.wall_per_unit(generation)
 
     def tick(self) -> None:
         """Collect what is due, unless it could still run at the deadline: then the
@@ -144,15 +163,17 @@ class CollectionPacer:
             return
         now = time.perf_counter()
         for generation in range(due, -1, -1):
-            objects = self.expected_objects(generation)
-            if now + DEADLINE_SAFETY * objects * self.wall_per_object() <= self.deadline:
+            if now + DEADLINE_SAFETY * self.expected_s(generation) <= self.deadline:
                 break
             self.skipped[generation] += 1
         else:
             return
+        size = self.size(generation)
         gc.collect(generation)
         wall = time.perf_counter() - now
         self.collections[generation] += 1
-        self.rates = [*self.rates[-RATES_KEPT + 1:], wall / max(objects, 1)]
+        rates = self.rates[generation]
+        rates.append(wall / max(size, 1))
+        del rates[:-RATES_KEPT]
         if generation == 2:
             self.blocks_after_full = sys.getallocatedblocks()

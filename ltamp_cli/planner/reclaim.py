@@ -23,9 +23,9 @@ never touched (a suspended generator may still be resumed by its owner).
 from __future__ import annotations
 
 import inspect
+import itertools
 import sys
 import threading
-import time
 import weakref
 from collections import defaultdict
 from collections.abc import Iterable
@@ -37,7 +37,7 @@ _MUTABLE_CONTAINERS = (dict, defaultdict, list, set)
 # A container found inside another is taken apart only above this size; smaller ones
 # are freed whole (a cascade of at most a few hundred objects each).
 SMALL_CONTAINER = 256
-# Items freed between two voluntary releases of the GIL (``time.sleep(0)``).
+# Items removed from a container and freed at once: ~1 ms of CPU for small tuples.
 ITEMS_PER_SLICE = 2048
 _GENERATOR_FLAGS = (inspect.CO_GENERATOR | inspect.CO_COROUTINE
                     | inspect.CO_ASYNC_GENERATOR | inspect.CO_ITERABLE_COROUTINE)
@@ -182,20 +182,16 @@ def _locals_of(frames: list[FrameType]) -> list[object]:
 def take_apart(values: list[object]) -> None:
     """Drop ``values`` (a list the caller gives up: it is emptied), taking apart in small
     pieces every container and object in it that is referenced from here only, so that no
-    single deallocation frees more than a few hundred objects at once."""
+    single deallocation frees more than a few thousand objects at once."""
     stack = values
-    done = 0
     while stack:
         value = stack.pop()
-        done += 1
-        if done % ITEMS_PER_SLICE == 0:
-            time.sleep(0)  # let the caller's threads run
         # References: ``value`` (this frame) only.
         if not _exclusive(value, 1):
             continue
         kind = type(value)
         if kind in _MUTABLE_CONTAINERS:
-            done += _empty_into(value, stack)  # type: ignore[arg-type]
+            _empty_into(value, stack)  # type: ignore[arg-type]
         elif _plain_instance(value):
             attributes = vars(value)
             # The attribute dict's references: the instance and ``attributes``.
@@ -213,34 +209,23 @@ def _plain_instance(value: object) -> bool:
 
 
 def _empty_into(container: dict[object, object] | list[object] | set[object],
-                stack: list[object]) -> int:
-    """Empty ``container`` item by item, pushing its large containers onto ``stack`` (they
-    are taken apart in turn) and freeing the other items one at a time. Returns the number
-    of items removed."""
-    removed = 0
-    if isinstance(container, dict):
-        while container:
-            key, item = container.popitem()
-            _keep_if_large(key, stack)
-            _keep_if_large(item, stack)
-            removed += 1
-            if removed % ITEMS_PER_SLICE == 0:
-                time.sleep(0)
-    elif isinstance(container, list):
-        while container:
-            _keep_if_large(container.pop(), stack)
-            removed += 1
-            if removed % ITEMS_PER_SLICE == 0:
-                time.sleep(0)
-    else:
-        while container:
-            _keep_if_large(container.pop(), stack)
-            removed += 1
-            if removed % ITEMS_PER_SLICE == 0:
-                time.sleep(0)
-    return removed
-
-
-def _keep_if_large(item: object, stack: list[object]) -> None:
-    if type(item) in _MUTABLE_CONTAINERS and len(item) > SMALL_CONTAINER:  # type: ignore[arg-type]
-        stack.append(item)
+                stack: list[object]) -> None:
+    """Empty ``container`` :data:`ITEMS_PER_SLICE` items at a time (one C call removes
+    them, one frees them), pushing its large containers onto ``stack`` (taken apart in
+    turn). Between slices, the interpreter hands the GIL to a thread that waits for it
+    (within its switch interval, 5 ms)."""
+    while container:
+        if isinstance(container, dict):
+            size = min(ITEMS_PER_SLICE, len(container))
+            pairs = [container.popitem() for _ in range(size)]
+            piece: list[object] = [part for pair in pairs for part in pair]
+            del pairs
+        elif isinstance(container, list):
+            piece = container[-ITEMS_PER_SLICE:]
+            del container[-ITEMS_PER_SLICE:]
+        else:
+            piece = list(itertools.islice(container, ITEMS_PER_SLICE))
+            container.difference_update(piece)
+        stack.extend([item for item in piece if type(item) in _MUTABLE_CONTAINERS
+                      and len(item) > SMALL_CONTAINER])  # type: ignore[arg-type]
+        del piece  # frees the slice's other items

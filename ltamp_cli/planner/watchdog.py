@@ -21,6 +21,7 @@ streams are called thousands of times per solve.
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections.abc import Callable
@@ -89,12 +90,13 @@ def run_until(work: Callable[[], T], deadline: float, tracker: CallTracker,
     Returns ``(True, value)`` when it finished (its exception, if any, is re-raised here) or
     ``(False, None)`` when it was abandoned (``tracker`` is then cancelled).
 
-    While waiting, calls ``tick()`` every :data:`~.gc_pacing.PACE_S` seconds (the solve's
-    garbage collection). With a ``reclaimer``, the worker's stack is captured
-    :data:`CAPTURE_LEAD_S` before the deadline and at it (:func:`.reclaim.capture_stack`),
-    so that the functions running then do not free their locals when they return (one
-    uninterruptible deallocation each, up to seconds under load): the reclaimer gets them,
-    to free in the background once the caller has the result.
+    While waiting, calls ``tick()`` every :data:`~.gc_pacing.PACE_S` seconds until the
+    deadline (the solve's garbage collection). With a ``reclaimer``, the worker's stack is
+    captured :data:`CAPTURE_LEAD_S` before the deadline and every ``PACE_S`` from the
+    deadline on (:func:`.reclaim.capture_stack`), so that the functions running then do not
+    free their locals when they return (one uninterruptible deallocation each, up to
+    seconds under load): the reclaimer gets them, to free in the background once the caller
+    has the result.
     """
     outcome: _Outcome[T] = _Outcome()
     finished = threading.Event()
@@ -110,17 +112,19 @@ def run_until(work: Callable[[], T], deadline: float, tracker: CallTracker,
 
     worker = threading.Thread(target=target, name=name, daemon=True)
     worker.start()
-    captures = [deadline - CAPTURE_LEAD_S, deadline] if reclaimer is not None else []
+    next_capture = deadline - CAPTURE_LEAD_S if reclaimer is not None else math.inf
     abandon_at = deadline + ABANDON_GRACE_S
-    captured: list[FrameType] = []
+    captured: dict[int, FrameType] = {}  # by id (each frame is kept alive here)
     while True:
         now = time.perf_counter()
-        while captures and now >= captures[0]:
-            captures.pop(0)
-            captured.extend(capture_stack(worker.ident, target.__code__))
+        if now >= next_capture:
+            for frame in capture_stack(worker.ident, target.__code__):
+                captured.setdefault(id(frame), frame)
+            # Past the deadline, the frames the worker enters while it stops are taken too.
+            next_capture = max(deadline, now + PACE_S)
         if now >= abandon_at:
             break
-        wake = min(abandon_at, captures[0] if captures else abandon_at)
+        wake = min(abandon_at, next_capture)
         if tick is not None:
             wake = min(wake, now + PACE_S)
         # A limit beyond what a lock wait takes (max_time=1e308) is no limit: wait() would
@@ -128,11 +132,11 @@ def run_until(work: Callable[[], T], deadline: float, tracker: CallTracker,
         timeout = wake - now
         if finished.wait(None if timeout >= threading.TIMEOUT_MAX else max(0.0, timeout)):
             break
-        if tick is not None:
+        if tick is not None and time.perf_counter() < deadline:
             tick()
     if reclaimer is not None:
-        reclaimer.give_frames(captured)
-        del captured
+        reclaimer.give_frames(captured.values())
+        captured.clear()
     if not outcome.done:
         tracker.cancel()
         return False, None
