@@ -75,12 +75,14 @@ print(json.dumps({"status": result.status, "wall_s": returned - start,
 """
 
 
-def run_child(tree: Path, problem: str, seed: int, max_time: float) -> dict[str, Any]:
-    """One solve in a child process importing the planner from ``tree``."""
+def run_child(tree: Path, problem: str, seed: int, max_time: float,
+              suite: Path = SUITE) -> dict[str, Any]:
+    """One solve of ``suite/problem.yaml`` in a child process importing the planner from
+    ``tree``."""
     load_before = os.getloadavg()[0]
     with tempfile.TemporaryDirectory() as scratch:
         done = subprocess.run(
-            [sys.executable, "-c", CHILD, str(SUITE / f"{problem}.yaml"), str(seed),
+            [sys.executable, "-c", CHILD, str(suite / f"{problem}.yaml"), str(seed),
              str(max_time)], capture_output=True, text=True, cwd=scratch,
             timeout=max_time + 300,
             env={**os.environ, "PYTHONPATH": str(tree), "OMP_NUM_THREADS": "1",
@@ -117,6 +119,9 @@ def main() -> None:
     parser.add_argument("--problems", default=",".join(BIG_PROBLEMS))
     parser.add_argument("--seeds", type=int, default=5)
     parser.add_argument("--max-time", type=float, action="append")
+    parser.add_argument("--suite", type=Path, default=SUITE,
+                        help="folder of the problems (e.g. problems/examples: solved "
+                        "problems, to compare CPU time)")
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
     args = parser.parse_args()
     trees = dict(entry.split("=", 1) for entry in args.tree)
@@ -126,7 +131,8 @@ def main() -> None:
         for problem in args.problems.split(","):
             for seed in range(args.seeds):
                 for label, tree in trees.items():
-                    row = run_child(Path(tree).resolve(), problem, seed, max_time)
+                    row = run_child(Path(tree).resolve(), problem, seed, max_time,
+                                    args.suite.resolve())
                     row.update(version=label, problem=problem, seed=seed, max_time=max_time)
                     rows.append(row)
                     late = row.get("late_s")

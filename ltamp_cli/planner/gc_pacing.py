@@ -37,9 +37,12 @@ PACE_S = 0.02
 # A collection starts only if the deadline is further than this many times its expected
 # wall time (estimates are from this solve's own earlier collections, at its load).
 DEADLINE_SAFETY = 4.0
-# Wall seconds per object examined assumed before a collection of this solve was measured
-# (measured: 10-30 ns of CPU per object, times the wall/CPU ratio of a loaded machine).
-DEFAULT_WALL_PER_OBJECT_S = 2e-7
+# Wall seconds per unit of size (:meth:`CollectionPacer.size`) assumed for a generation no
+# collection of which was measured yet in this solve: 10-30 ns of CPU per object, times the
+# wall/CPU ratio of a loaded machine. A full collection of hidden handoff_2 at load 12.8
+# took 1.8 s, about 5e-7 s per allocated block, after one estimated from the young
+# generations' rate (a different unit) had started 0.8 s before the deadline.
+DEFAULT_WALL_PER_UNIT_S = 1e-6
 # Estimates use the slowest of this many last measured rates of a generation.
 RATES_KEPT = 3
 # A full collection is due once the heap grew by this factor since the last one (CPython
@@ -142,12 +145,11 @@ class CollectionPacer:
         return sys.getallocatedblocks()
 
     def wall_per_unit(self, generation: int) -> float:
-        """Expected wall seconds per unit of :meth:`size` for ``generation`` (a younger
-        generation's rate until one of its own was measured)."""
-        for younger in range(generation, -1, -1):
-            if self.rates[younger]:
-                return max(self.rates[younger][-RATES_KEPT:])
-        return DEFAULT_WALL_PER_OBJECT_S
+        """Expected wall seconds per unit of :meth:`size` for ``generation`` (generation
+        1: generation 0's rate until one of its own was measured; the size of generation 1
+        bounds the objects of generation 0 from above, so that errs long)."""
+        rates = self.rates[generation] or (self.rates[0] if generation == 1 else [])
+        return max(rates[-RATES_KEPT:], default=DEFAULT_WALL_PER_UNIT_S)
 
     def expected_s(self, generation: int) -> float:
         """Expected wall seconds of a collection of ``generation`` now."""

@@ -23,17 +23,19 @@ never touched (a suspended generator may still be resumed by its owner).
 from __future__ import annotations
 
 import inspect
-import itertools
 import sys
 import threading
 import weakref
 from collections import defaultdict
 from collections.abc import Iterable
+from itertools import repeat
+from operator import itemgetter
 from types import CodeType, FrameType
 
 # Containers emptied item by item (exactly these types: a subclass may have a finalizer or
 # custom removal). Tuples and frozensets cannot be emptied and are freed whole.
 _MUTABLE_CONTAINERS = (dict, defaultdict, list, set)
+_CONTAINER_TYPES = frozenset(_MUTABLE_CONTAINERS)
 # A container found inside another is taken apart only above this size; smaller ones
 # are freed whole (a cascade of at most a few hundred objects each).
 SMALL_CONTAINER = 256
@@ -190,7 +192,7 @@ def take_apart(values: list[object]) -> None:
         if not _exclusive(value, 1):
             continue
         kind = type(value)
-        if kind in _MUTABLE_CONTAINERS:
+        if kind in _CONTAINER_TYPES:
             _empty_into(value, stack)  # type: ignore[arg-type]
         elif _plain_instance(value):
             attributes = vars(value)
@@ -210,22 +212,28 @@ def _plain_instance(value: object) -> bool:
 
 def _empty_into(container: dict[object, object] | list[object] | set[object],
                 stack: list[object]) -> None:
-    """Empty ``container`` :data:`ITEMS_PER_SLICE` items at a time (one C call removes
-    them, one frees them), pushing its large containers onto ``stack`` (taken apart in
+    """Empty ``container`` :data:`ITEMS_PER_SLICE` items at a time (removed in a C loop,
+    freed by one ``del``), pushing its large containers onto ``stack`` (taken apart in
     turn). Between slices, the interpreter hands the GIL to a thread that waits for it
-    (within its switch interval, 5 ms)."""
+    (within its switch interval, 5 ms). Only lists and dict values are searched for
+    containers: set members and dict keys are hashable, so never a dict, list or set."""
+    if isinstance(container, set):
+        pop = container.pop  # pop: iterating from the start would skip emptied slots
+        while container:
+            piece: list[object] = [pop() for _ in repeat(None, min(ITEMS_PER_SLICE,
+                                                                    len(container)))]
+            del piece
+        return
     while container:
         if isinstance(container, dict):
-            size = min(ITEMS_PER_SLICE, len(container))
-            pairs = [container.popitem() for _ in range(size)]
-            piece: list[object] = [part for pair in pairs for part in pair]
-            del pairs
-        elif isinstance(container, list):
+            popitem = container.popitem
+            pairs = [popitem() for _ in repeat(None, min(ITEMS_PER_SLICE, len(container)))]
+            piece = list(map(itemgetter(1), pairs))
+            del pairs  # the keys go; the values are held by ``piece``
+        else:
             piece = container[-ITEMS_PER_SLICE:]
             del container[-ITEMS_PER_SLICE:]
-        else:
-            piece = list(itertools.islice(container, ITEMS_PER_SLICE))
-            container.difference_update(piece)
-        stack.extend([item for item in piece if type(item) in _MUTABLE_CONTAINERS
-                      and len(item) > SMALL_CONTAINER])  # type: ignore[arg-type]
+        if not _CONTAINER_TYPES.isdisjoint(map(type, piece)):  # rare: look closer
+            stack.extend([item for item in piece if type(item) in _CONTAINER_TYPES
+                          and len(item) > SMALL_CONTAINER])  # type: ignore[arg-type]
         del piece  # frees the slice's other items
