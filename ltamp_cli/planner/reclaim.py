@@ -7,11 +7,13 @@ time past a solve's deadline (issue #19; ``docs/results/planner/issue19.md``). I
 when the algorithm's function returned (its locals freed) and when the solve's state was
 dropped, i.e. between the deadline and the caller getting its result.
 
-So the watchdog captures the worker's call stack shortly before and at the deadline
-(:func:`capture_stack`): a frame object that outlives its function keeps the function's
-locals alive (as a traceback does), so the functions then return at once and the result
-reaches the caller; a :class:`Reclaimer` thread then takes the captured locals (and the
-solve's state) apart in small pieces, letting other threads run between pieces.
+So the watchdog captures the worker's call stack 1 s before the deadline and every 20 ms
+from the deadline on (:func:`capture_stack`, :func:`.watchdog.run_until`): a frame object
+that outlives its function keeps the function's locals alive (as a traceback does), so the
+functions then return at once and the result reaches the caller; a :class:`Reclaimer`
+thread then takes the captured locals (and the solve's state) apart in slices of a few
+thousand items, and the interpreter lets other threads run between slices. Its CPU time
+is within 5 % of a plain ``del`` (``bench/reclaim.py``).
 
 Only what nobody else can reach is taken apart: a container or object whose only
 references are the reclaimer's own (reference count), with no weak references and no
