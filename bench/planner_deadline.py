@@ -102,7 +102,8 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
     late = sorted(r["late_s"] for r in rows if r.get("late_s") is not None)
     if not late:
         return {"runs": len(rows), "valid": 0}
-    quartiles = statistics.quantiles(late, n=4) if len(late) > 1 else [late[0]] * 3
+    quartiles = (statistics.quantiles(late, n=4, method="inclusive") if len(late) > 1
+                 else [late[0]] * 3)
     return {"runs": len(rows), "valid": len(late), "min_late_s": late[0],
             "q1_late_s": quartiles[0], "median_late_s": statistics.median(late),
             "q3_late_s": quartiles[2], "max_late_s": late[-1],
