@@ -103,12 +103,14 @@ def _hand_over(holder: list[PlannerState], reclaimer: Reclaimer, start: float,
     freeing them now: their deallocation takes at most about as long as building them did,
     so a solve that ends with more time left than it took frees them before returning (no
     thread is started), any other in the background, in bounded pieces (see
-    :mod:`.reclaim`). Emptied: nothing here keeps them alive."""
+    :mod:`.reclaim`), frozen from the collector meanwhile
+    (:meth:`.gc_pacing.PausedCollection.hold_frozen`). Emptied: nothing here keeps them
+    alive."""
     reclaimer.give(holder)
     holder.clear()
     now = time.perf_counter()
     if reclaimer.has_frames or deadline - now < now - start:
-        reclaimer.start()
+        reclaimer.start(when_done=_paused_gc.hold_frozen())
 
 
 def check_config(config: PlannerConfig) -> None:

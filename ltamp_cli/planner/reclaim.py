@@ -29,7 +29,7 @@ import sys
 import threading
 import weakref
 from collections import defaultdict
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from itertools import repeat
 from operator import itemgetter
 from types import CodeType, FrameType
@@ -82,6 +82,7 @@ class Reclaimer:
 
     def __init__(self, name: str = "ltamp-reclaim") -> None:
         self._name = name
+        self._when_done: Callable[[], None] | None = None
         self._lock = threading.Lock()
         self._pending: list[object] = []
         self._frames: list[FrameType] = []
@@ -109,10 +110,12 @@ class Reclaimer:
             self._frames_given += len(frames)
             self._wake()
 
-    def start(self) -> None:
-        """Begin freeing (in the background) what was and will be given."""
+    def start(self, when_done: Callable[[], None] | None = None) -> None:
+        """Begin freeing (in the background) what was and will be given; ``when_done`` is
+        called (in the background thread) once all of it was freed."""
         with self._lock:
             self._started = True
+            self._when_done = when_done
             self._wake()
 
     def join(self, timeout: float | None = None) -> bool:
@@ -141,13 +144,19 @@ class Reclaimer:
             return pending, frames
 
     def _run(self) -> None:
-        while True:
-            pending, frames = self._take()
-            if not pending and not frames:
-                return
-            pending.extend(_locals_of(frames))
-            del frames
-            take_apart(pending)
+        try:
+            while True:
+                pending, frames = self._take()
+                if not pending and not frames:
+                    return
+                pending.extend(_locals_of(frames))
+                del frames
+                take_apart(pending)
+        finally:  # also if taking apart failed: ``when_done`` may release a global hold
+            with self._lock:
+                when_done, self._when_done = self._when_done, None
+            if when_done is not None:
+                when_done()
 
 
 def _running_frames() -> set[int]:

@@ -128,6 +128,7 @@ def wait_until(condition: Callable[[], bool], timeout: float = 60.0) -> bool:
 def test_memory_of_a_solve_at_its_deadline_is_freed_after_it_returned(
         unreachable: Path, holding_ballast: list[str], algorithm: str) -> None:
     problem = load_problem(unreachable)
+    frozen = gc.get_freeze_count()
     start = time.perf_counter()
     result = api.solve(problem, PlannerConfig(algorithm=algorithm, max_time=MAX_TIME))
     wall = time.perf_counter() - start
@@ -137,6 +138,8 @@ def test_memory_of_a_solve_at_its_deadline_is_freed_after_it_returned(
     assert wait_until(lambda: len(holding_ballast) == CHUNKS)
     assert set(holding_ballast) == {"ltamp-reclaim"}
     assert wall <= BOUND_S
+    # Frozen from the collector while it was freed; unfrozen once it is.
+    assert wait_until(lambda: gc.get_freeze_count() == frozen)
 
 
 def test_a_solve_ending_early_frees_its_memory_before_returning(
