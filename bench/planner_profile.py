@@ -19,6 +19,7 @@ wrappers add a few percent, so compare runs of this script with each other, not 
 from __future__ import annotations
 
 import argparse
+import gc
 import json
 import statistics
 import sys
@@ -32,7 +33,8 @@ from typing import Any
 from planner import config_for
 
 from ltamp_cli.planner.algorithms import common, skeletons
-from ltamp_cli.planner.api import _relaxed_gc, _solve
+from ltamp_cli.planner.api import _solve
+from ltamp_cli.planner.gc_pacing import SOLVE_GC_THRESHOLD0
 from ltamp_cli.planner.problem import load_problem
 from ltamp_cli.planner.search import engine, heuristic, incremental, solve
 from ltamp_cli.planner.search.task import Task
@@ -121,6 +123,19 @@ def wrapped(phases: Counter, searches: list[dict[str, Any]]) -> Iterator[None]:
             setattr(owner, attribute, original)
 
 
+
+@contextmanager
+def solve_gc_threshold() -> Iterator[None]:
+    """Collect garbage as often as a solve does (generation 0 every
+    :data:`SOLVE_GC_THRESHOLD0` allocations), automatically: the profile runs the planner
+    in this thread, without the waiting thread that paces a solve's collections."""
+    saved = gc.get_threshold()
+    gc.set_threshold(SOLVE_GC_THRESHOLD0, *saved[1:])
+    try:
+        yield
+    finally:
+        gc.set_threshold(*saved)
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--example", default="kitchen_fluent")
@@ -151,7 +166,7 @@ def main(argv: list[str] | None = None) -> int:
         phases: Counter = Counter()
         searches: list[dict[str, Any]] = []
         start = time.thread_time()
-        with wrapped(phases, searches), _relaxed_gc():
+        with wrapped(phases, searches), solve_gc_threshold():
             result = _solve(problem, config, time.perf_counter(), CallTracker(), [])
         cpu = time.thread_time() - start
         phases["search engine, without heuristic"] = (

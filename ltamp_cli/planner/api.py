@@ -2,12 +2,9 @@
 
 from __future__ import annotations
 
-import gc
 import math
-import threading
 import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -27,8 +24,10 @@ from ltamp_cli.planner.algorithms.multiplicity import (
     relaxed_goal_reachable,
 )
 from ltamp_cli.planner.algorithms.skeletons import solve_with_skeletons
+from ltamp_cli.planner.gc_pacing import CollectionPacer, PausedCollection
 from ltamp_cli.planner.pddl.syntax import Stream
 from ltamp_cli.planner.problem import PlanningProblem
+from ltamp_cli.planner.reclaim import Reclaimer
 from ltamp_cli.planner.result import INFEASIBLE, TIMEOUT, Certificate, PlanResult
 from ltamp_cli.planner.search.engine import SEARCH_ALGORITHMS, SearchTimeout
 from ltamp_cli.planner.search.normalize import GoalFormulaError
@@ -43,48 +42,11 @@ from ltamp_cli.seeds import usable_seed
 from ltamp_cli.threads import limited_threads
 
 COST_EPSILON = 1e-6
-# Generation-0 threshold while a solve runs (CPython's default is 700). Search and grounding
-# allocate many short-lived tuples, sets and dicts that reference counting frees anyway; at
-# the default threshold the collector ran often enough to cost ~5-10 % of the CPU time of
-# kitchen_symbolic and tamp2d_4blocks. Not disabled outright: a long solve with learned
-# samplers could otherwise accumulate cyclic garbage without bound.
-SOLVE_GC_THRESHOLD0 = 50_000
 # Tries at reading an abandoned worker's state while it may still change it.
 ABANDONED_READ_ATTEMPTS = 5
-
-
-class _GcRelaxation:
-    """Collect garbage less often while at least one solve runs.
-
-    The collector's settings are process-wide, so they are changed only while a solve is in
-    progress and restored when the last concurrent one ends (also on exceptions): the lock and
-    the depth count mirror that interpreter-wide state and hold no planner data, so planners
-    in different threads still do not interfere. (``gc.freeze`` of the caller's objects was
-    tried too: unfreezing them at the end triggered a full collection costing ~40 ms.)
-    """
-
-    def __init__(self) -> None:
-        self._lock = threading.Lock()
-        self._depth = 0
-        self._saved: tuple[int, ...] = gc.get_threshold()
-
-    @contextmanager
-    def __call__(self) -> Iterator[None]:
-        with self._lock:
-            if self._depth == 0:
-                self._saved = gc.get_threshold()
-                gc.set_threshold(SOLVE_GC_THRESHOLD0, *self._saved[1:])
-            self._depth += 1
-        try:
-            yield
-        finally:
-            with self._lock:
-                self._depth -= 1
-                if self._depth == 0:
-                    gc.set_threshold(*self._saved)
-
-
-_relaxed_gc = _GcRelaxation()
+# Automatic garbage collection is off while solves run (see :mod:`.gc_pacing`): one switch
+# for the process, shared by concurrent solves.
+_paused_gc = PausedCollection()
 
 
 def _algorithm(name: str) -> Callable[[PlannerState], PlanResult]:
@@ -105,7 +67,10 @@ def solve(problem: PlanningProblem, config: PlannerConfig | None = None) -> Plan
     Returns within ``config.max_time`` seconds plus about half a second whatever the stream
     bindings do: the planner runs in a worker thread that is abandoned when a binding blocks
     past the deadline (see :mod:`ltamp_cli.planner.watchdog`); the result is then a timeout
-    whose ``diagnostics["stopped_in"]`` names the stream call.
+    whose ``diagnostics["stopped_in"]`` names the stream call. Garbage collection while it
+    runs is timed to keep clear of the deadline (:mod:`.gc_pacing`), and the memory of a
+    solve that ends near its deadline is freed in the background after it returned
+    (:mod:`.reclaim`): neither runs as one uninterruptible step past the deadline.
     """
     config = config or PlannerConfig()
     if isinstance(config.seed, bool) or not isinstance(config.seed, int):
@@ -114,22 +79,43 @@ def solve(problem: PlanningProblem, config: PlannerConfig | None = None) -> Plan
     check_config(config)
     config = resolve_constraints(problem, config)
     start = time.perf_counter()
+    deadline = start + config.max_time
     tracker = CallTracker()
     holder: list[PlannerState] = []
+    reclaimer = Reclaimer()
     refuse_unsupported(problem, config.algorithm)
     try:
-        with _relaxed_gc(), limited_threads(config.threads):
+        with _paused_gc(), limited_threads(config.threads):
+            pacer = CollectionPacer(deadline, _paused_gc.caller_enabled)
             finished, result = run_until(
-                lambda: _solve(problem, config, start, tracker, holder),
-                start + config.max_time, tracker)
+                lambda: _solve(problem, config, start, tracker, holder), deadline, tracker,
+                reclaimer=reclaimer, tick=pacer.tick)
     except GoalFormulaError as error:
         if problem.goal_location is None:
             raise
         raise InputError(error.message, problem.goal_location) from None
-    if finished:
-        assert result is not None
-        return result
-    return _abandoned_result(holder[0] if holder else None, config, start, tracker)
+    if not finished:
+        result = _abandoned_result(holder[0] if holder else None, config, start, tracker)
+    assert result is not None
+    _hand_over(holder, reclaimer, start, deadline)
+    return result
+
+
+def _hand_over(holder: list[PlannerState], reclaimer: Reclaimer, start: float,
+               deadline: float) -> None:
+    """Give the solve's state (and the worker's locals captured near the deadline, already
+    given) to ``reclaimer``, freed in the background when the deadline is too near for
+    freeing them now: their deallocation takes at most about as long as building them did,
+    so a solve that ends with more time left than it took frees them before returning (no
+    thread is started), any other in the background, in bounded pieces (see
+    :mod:`.reclaim`), frozen from the collector meanwhile
+    (:meth:`.gc_pacing.PausedCollection.hold_frozen`). Emptied: nothing here keeps them
+    alive."""
+    reclaimer.give(holder)
+    holder.clear()
+    now = time.perf_counter()
+    if reclaimer.has_frames or deadline - now < now - start:
+        reclaimer.start(when_done=_paused_gc.hold_frozen())
 
 
 def check_config(config: PlannerConfig) -> None:

@@ -21,11 +21,16 @@ streams are called thousands of times per solve.
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from types import FrameType
 from typing import Generic, TypeVar
+
+from ltamp_cli.planner.gc_pacing import PACE_S
+from ltamp_cli.planner.reclaim import Reclaimer, capture_stack
 
 T = TypeVar("T")
 
@@ -33,6 +38,10 @@ T = TypeVar("T")
 # own clock checks normally end it well within this; the rest of the 1 s bound is left for
 # building the result.
 ABANDON_GRACE_S = 0.5
+# Seconds before the deadline at which the worker's stack is first captured (see
+# :func:`run_until`): a solve that ends within this of its deadline frees its locals in the
+# background, one that ends earlier frees them before returning (with time to spare).
+CAPTURE_LEAD_S = 1.0
 
 
 @dataclass(frozen=True)
@@ -73,14 +82,24 @@ class _Outcome(Generic[T]):
 
 
 def run_until(work: Callable[[], T], deadline: float, tracker: CallTracker,
-              name: str = "ltamp-solve") -> tuple[bool, T | None]:
+              name: str = "ltamp-solve", *, reclaimer: Reclaimer | None = None,
+              tick: Callable[[], None] | None = None) -> tuple[bool, T | None]:
     """Run ``work()`` in a daemon thread and wait for it until ``deadline`` (a
     ``time.perf_counter`` value, ``inf`` for no limit) plus :data:`ABANDON_GRACE_S`.
 
     Returns ``(True, value)`` when it finished (its exception, if any, is re-raised here) or
     ``(False, None)`` when it was abandoned (``tracker`` is then cancelled).
+
+    While waiting, calls ``tick()`` every :data:`~.gc_pacing.PACE_S` seconds until the
+    deadline (the solve's garbage collection). With a ``reclaimer``, the worker's stack is
+    captured :data:`CAPTURE_LEAD_S` before the deadline and every ``PACE_S`` from the
+    deadline on (:func:`.reclaim.capture_stack`), so that the functions running then do not
+    free their locals when they return (one uninterruptible deallocation each, up to
+    seconds under load): the reclaimer gets them, to free in the background once the caller
+    has the result.
     """
     outcome: _Outcome[T] = _Outcome()
+    finished = threading.Event()
 
     def target() -> None:
         try:
@@ -89,13 +108,35 @@ def run_until(work: Callable[[], T], deadline: float, tracker: CallTracker,
             outcome.error = error
         finally:
             outcome.done = True
+            finished.set()
 
     worker = threading.Thread(target=target, name=name, daemon=True)
     worker.start()
-    timeout = deadline + ABANDON_GRACE_S - time.perf_counter()
-    # A limit beyond what a lock wait takes (max_time=1e308) is no limit: join() would
-    # raise OverflowError ("timestamp out of range for platform time_t").
-    worker.join(None if timeout >= threading.TIMEOUT_MAX else max(0.0, timeout))
+    next_capture = deadline - CAPTURE_LEAD_S if reclaimer is not None else math.inf
+    abandon_at = deadline + ABANDON_GRACE_S
+    captured: dict[int, FrameType] = {}  # by id (each frame is kept alive here)
+    while True:
+        now = time.perf_counter()
+        if now >= next_capture:
+            for frame in capture_stack(worker.ident, target.__code__):
+                captured.setdefault(id(frame), frame)
+            # Past the deadline, the frames the worker enters while it stops are taken too.
+            next_capture = max(deadline, now + PACE_S)
+        if now >= abandon_at:
+            break
+        wake = min(abandon_at, next_capture)
+        if tick is not None:
+            wake = min(wake, now + PACE_S)
+        # A limit beyond what a lock wait takes (max_time=1e308) is no limit: wait() would
+        # raise OverflowError ("timestamp out of range for platform time_t").
+        timeout = wake - now
+        if finished.wait(None if timeout >= threading.TIMEOUT_MAX else max(0.0, timeout)):
+            break
+        if tick is not None and time.perf_counter() < deadline:
+            tick()
+    if reclaimer is not None:
+        reclaimer.give_frames(captured.values())
+        captured.clear()
     if not outcome.done:
         tracker.cancel()
         return False, None

@@ -114,8 +114,9 @@ def test_interleaved_planners_do_not_interfere(solved) -> None:  # type: ignore[
 
 def test_solve_restores_garbage_collector(solved, monkeypatch: pytest.MonkeyPatch  # type: ignore[no-untyped-def]
                                           ) -> None:
-    # solve() collects less often while it runs (process-wide settings): overlapping solves
-    # in threads and a solve that raises must all leave the collector as they found it.
+    # solve() switches automatic collection off while it runs (process-wide setting; the
+    # waiting thread collects instead, see gc_pacing): overlapping solves in threads and a
+    # solve that raises must all leave the collector as they found it.
     import gc
 
     from ltamp_cli.planner import api
@@ -138,7 +139,7 @@ def test_solve_restores_garbage_collector(solved, monkeypatch: pytest.MonkeyPatc
     assert (gc.get_threshold(), gc.get_freeze_count(), gc.isenabled()) == before
 
     def fail(*args: object) -> None:
-        assert gc.get_threshold()[0] == api.SOLVE_GC_THRESHOLD0  # relaxed while solving
+        assert not gc.isenabled()  # paced by the waiting thread while solving
         raise RuntimeError("boom")
 
     monkeypatch.setattr(api, "initial_state", fail)
