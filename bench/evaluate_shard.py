@@ -12,6 +12,11 @@ context ``--start`` - 1 it is the whole measurement, in two processes.
     OMP_NUM_THREADS=1 .venv/bin/python bench/evaluate_shard.py models/kitchen3d/scoop \\
         --trials 20 --start 12 --log docs/results/scoop3d/eval_trials_bed_shard.jsonl
 
+``--only random`` runs only the random baseline's trials (``--only theta_star`` only θ*'s):
+the contexts and the baseline's controls do not depend on the model (θ*'s search draws a
+fixed number of candidates), so the baseline can run before the model it is compared with
+exists (any model of the skill replays the draws), and be combined with a later θ*-only run.
+
 ``--combine MAIN.jsonl`` instead merges the stopped ``kitchen3d_models.py`` log (θ* then
 random per context, in order) with the ``--log`` files of shards (repeat ``--log``) and writes
 the rates with 95 % Wilson intervals to ``--out`` (a context's first record wins).
@@ -74,6 +79,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--log", type=Path, action="append", required=True)
     parser.add_argument("--combine", type=Path, help="the stopped kitchen3d_models.py log")
     parser.add_argument("--out", type=Path)
+    parser.add_argument("--only", choices=("theta_star", "random"),
+                        help="run only this kind of trial (see the module doc)")
     args = parser.parse_args(argv)
     if args.combine is not None:
         summary = combine(args.combine, args.log, args.trials)
@@ -106,6 +113,8 @@ def main(argv: list[str] | None = None) -> int:
         if len(valid):
             rows.append(("random", candidates[valid[0]]))
         for kind, chosen in rows:
+            if args.only is not None and kind != args.only:
+                continue
             start = time.process_time()
             result = physics.run_trial(skill, context, chosen, seed=seed * 100_003 + index)
             row = {"skill": skill, "index": index, "kind": kind,

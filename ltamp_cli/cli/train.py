@@ -37,13 +37,25 @@ def heldout_from_records(records: list[Any], spec: Any) -> Any:
     return HeldOutSet(contexts, controls, scores)
 
 
-def read_records(path: Path, option: str) -> list[Any]:
+def read_records(path: Path, option: str, kind: Any = None, skill: str | None = None
+                 ) -> list[Any]:
+    """The trial records of ``path`` (each repeated trial once, with a warning). With
+    ``kind`` (a :class:`~ltamp_cli.trials.physics.TrialKind`), every record of ``skill``
+    must be of that kind: another backend, robot setup or physics is one ``file:line``
+    error naming both values."""
     from ltamp_cli.textfile import not_a_file
+    from ltamp_cli.trials.physics import check_trial_kind
     from ltamp_cli.trials.record import TrialDataset, without_duplicates
 
     if not path.is_file():
         raise InputError(f"{option}: {not_a_file(path)}")
-    records, repeats = without_duplicates(TrialDataset(path).read())
+    numbered = list(TrialDataset(path).iter_numbered())
+    if kind is not None:
+        check_trial_kind(((f"{path}:{line}", r) for line, r in numbered
+                          if r.skill == skill), kind, f"{option}: expected as --backend runs them",
+                         "collect the pool with this --backend (and --robot), or pass the "
+                         "ones it was collected with")
+    records, repeats = without_duplicates([r for _line, r in numbered])
     if repeats:
         typer.echo(f"ltamp: warning: {option}: {path} repeats {repeats} trial record(s) with the "
                    "same (seed, index); each trial is used once", err=True)
@@ -147,6 +159,7 @@ def train_command(
     from ltamp_cli.learning.curves import plot_curves
     from ltamp_cli.learning.metrics import SkillEvaluator
     from ltamp_cli.threads import use_one_thread
+    from ltamp_cli.trials.physics import TrialKind
     from ltamp_cli.trials.record import TrialDataset, is_success
 
     use_one_thread()
@@ -216,9 +229,11 @@ def train_command(
                 raise InputError("--curve/--eval-every on a physical backend needs --test-data")
         progress = progress_enabled()
         if data is not None:
-            pool = read_records(data, "--data")
+            kind = TrialKind.of_backend(physics, skill)
+            pool = read_records(data, "--data", kind, skill)
             try:
-                result = learn_from_pool(spec, pool, config, evaluator, eval_every, progress)
+                result = learn_from_pool(spec, pool, config, evaluator, eval_every, progress,
+                                         kind=kind)
             except ValueError as error:
                 raise InputError(f"--data: {error}") from None
             trials_file = str(data.resolve())

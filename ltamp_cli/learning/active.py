@@ -94,7 +94,7 @@ from ltamp_cli.learning.outcomes import (
 )
 from ltamp_cli.seeds import usable_seed
 from ltamp_cli.threads import limits_threads
-from ltamp_cli.trials.physics import backend_physics, check_physics
+from ltamp_cli.trials.physics import TrialKind, backend_physics, check_physics, check_trial_kind
 from ltamp_cli.trials.record import (
     TrialDataset,
     TrialRecord,
@@ -710,8 +710,14 @@ def learn_from_pool(
     progress: bool = False,
     evaluate_success: bool = True,
     final_fit: bool = True,
+    kind: TrialKind | None = None,
 ) -> LearningResult:
     """Learn from pre-collected trials, choosing each next one from the pool without replacement.
+
+    The pool's trials of the skill must be of one :class:`~ltamp_cli.trials.physics.TrialKind`
+    (backend, robot setup, physics; ``kind`` when given, e.g. the backend's the model is
+    for, else the first trial's): another is an :class:`~ltamp_cli.errors.InputError` naming
+    the pool record and both values (imported real-world trials are exempt).
 
     Active strategies pick the remaining trial with the largest straddle ψ (``lse``: over the
     whole pool; ``lse2``: among the ``pool_neighbourhood`` fraction of remaining trials whose
@@ -725,6 +731,9 @@ def learn_from_pool(
     pool = [r for r in pool if r.skill == spec.name]
     if not pool:
         raise ValueError(f"the pool has no trials of skill {spec.name!r}")
+    check_trial_kind(((f"pool record {i}", r) for i, r in enumerate(pool)), kind,
+                     "the expected kind" if kind is not None else "",
+                     "learn from trials of one kind")
     # as `ltamp train --data` reads its file: a trial repeated (two writers once shared the
     # file) is used once, else it would be chosen, and weigh, twice
     pool, repeats = without_duplicates(pool)

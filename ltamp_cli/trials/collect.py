@@ -70,6 +70,8 @@ class CollectJob:
     ``setup``: the versioned trial setup its records carry (``"panda-r3"``;
     :func:`~ltamp_cli.backends.protocol.trial_setup`), filled in from the backend by
     :func:`with_setup` (:func:`collect` does): a file never mixes two setups either.
+    ``physics``: the physics tag its records carry (``"pybullet@v1.1"``,
+    :func:`~ltamp_cli.trials.physics.backend_physics`), filled in by :func:`with_setup` too.
     """
 
     skill: str
@@ -80,6 +82,7 @@ class CollectJob:
     backend_options: Mapping[str, Any] | None = None
     robot: str = "none"
     setup: str | None = None
+    physics: str | None = None
 
     @property
     def tag(self) -> str:
@@ -95,12 +98,14 @@ class CollectJob:
 
 
 def with_setup(job: CollectJob) -> CollectJob:
-    """``job`` with the trial setup of its backend's skill (:attr:`CollectJob.setup`); an
-    unknown skill is an :class:`InputError` naming the backend's skills."""
+    """``job`` with the trial setup and physics of its backend's skill
+    (:attr:`CollectJob.setup`, :attr:`CollectJob.physics`); an unknown skill is an
+    :class:`InputError` naming the backend's skills."""
     backend = load_backend(job.backend, **job.options())
     try:
         skill_spec(backend, job.skill)  # backends without setups know their skills too
-        return replace(job, setup=trial_setup(backend, job.skill))
+        return replace(job, setup=trial_setup(backend, job.skill),
+                       physics=backend_physics(backend, job.skill))
     except KeyError as error:
         raise InputError(str(error).strip("'\"")) from None
     finally:
@@ -194,26 +199,25 @@ class TrialRunner:
 
 
 def pending_indices(dataset: TrialDataset, job: CollectJob, physics: str | None = None,
-                    *, same_physics: bool = False) -> list[int]:
-    """Indices of ``job`` not yet in ``dataset``; refuses a file from a different job (another
-    skill, backend, robot or trial setup: ``job.setup`` as :func:`with_setup` fills it), and
-    with ``same_physics`` one whose trials were simulated with another physics than
-    ``physics`` (the job's backend's tag, :func:`backend_physics`)."""
+                    *, same_physics: bool = True) -> list[int]:
+    """Indices of ``job`` not yet in ``dataset``; refuses (one line, ``file:line``) a file
+    from a different job: another skill, backend, robot, trial setup (``job.setup``) or
+    physics (``physics``, default ``job.physics``; both as :func:`with_setup` fills them).
+    ``same_physics=False`` skips the physics check (a caller that knows better)."""
+    expected = physics if physics is not None else job.physics
     done: dict[int, int] = {}
-    for line, record in enumerate(dataset.iter_records(), start=1):
+    for line, record in dataset.iter_numbered():
+        where = f"{dataset.path}:{line}"
         if record.skill != job.skill or record.backend != job.tag:
             raise InputError(
-                f"{dataset.path}: holds {record.backend}/{record.skill} trials, not "
-                f"{job.tag}/{job.skill}; use another --out file"
-            )
+                f"{where}: holds {record.backend}/{record.skill} trials, not "
+                f"{job.tag}/{job.skill}; use another --out file")
         if record.setup != job.setup:
             raise InputError(
-                f"{dataset.path}:{line}: holds {job.tag}/{job.skill} trials of "
-                f"{setup_words(record.setup)}, not {setup_words(job.setup)} (their labels "
-                "differ); use another --out file"
-            )
+                f"{where}: holds {job.tag}/{job.skill} trials of {setup_words(record.setup)}, "
+                f"not {setup_words(job.setup)} (their labels differ); use another --out file")
         if same_physics:
-            check_physics((record,), physics, str(dataset.path), "use another --out file")
+            check_physics((record,), expected, where, "use another --out file")
         if 0 <= record.index < job.n and record.seed != trial_seed(job.seed, record.index):
             raise InputError(
                 f"{dataset.path}: trial {record.index} was collected with a different "
@@ -353,18 +357,10 @@ def collect(
         raise InputError("--ray: expected 'local' or a Ray cluster address, got ''")
     job = replace(job, seed=usable_seed(job.seed))
     dataset = TrialDataset(out)
-    job = with_setup(job)  # also checks the skill
-    backend_check = load_backend(job.backend, **job.options())
-    try:
-        skill_spec(backend_check, job.skill)
-        physics = backend_physics(backend_check, job.skill)
-    except KeyError as error:
-        raise InputError(str(error).strip("'\"")) from None
-    finally:
-        backend_check.close()
+    job = with_setup(job)  # also checks the skill; fills the setup and physics
     with ExitStack() as session:
         session.enter_context(exclusive_writer(out, is_directory=False, wait=wait))
-        indices = pending_indices(dataset, job, physics, same_physics=True)
+        indices = pending_indices(dataset, job)
         stream: Iterator[TrialRecord]
         if ray_address is not None:
             from ltamp_cli.trials.ray_collect import import_ray, ray_session, ray_stream

@@ -16,10 +16,16 @@ revisions), so the 5-iteration scoop trials of an older file are refused by a sc
 from __future__ import annotations
 
 from collections.abc import Iterable
+from dataclasses import dataclass
 from typing import Any
 
 from ltamp_cli.errors import InputError
-from ltamp_cli.trials.record import TrialRecord
+from ltamp_cli.trials.record import TrialRecord, setup_words
+
+#: The ``backend`` field of records imported from outside any simulator (``ltamp import``:
+#: ``import:<file name>``), e.g. real-robot trials: they have no physics or setup of ours to
+#: compare, so :func:`check_trial_kind` lets them into any pool (as pools always have).
+IMPORTED_PREFIX = "import:"
 
 
 def backend_physics(backend: Any, skill: str) -> str | None:
@@ -83,3 +89,62 @@ def check_physics(records: Iterable[TrialRecord], expected: str | None, where: s
                 f"{physics or 'unversioned'}, not {expected or 'unversioned'} as this backend "
                 f"runs them; {advice}"
             )
+
+
+@dataclass(frozen=True)
+class TrialKind:
+    """What two trials must share for their labels to be learned together: the records'
+    ``backend`` tag (``pybullet``, ``pybullet+panda``), the robot ``setup`` and the
+    ``physics`` (:func:`record_physics`; ``None`` for an unversioned engine)."""
+
+    backend: str
+    setup: str | None
+    physics: str | None
+
+    @classmethod
+    def of_record(cls, record: TrialRecord) -> TrialKind:
+        return cls(record.backend, record.setup, record_physics(record))
+
+    @classmethod
+    def of_backend(cls, backend: Any, skill: str) -> TrialKind:
+        """The kind of ``skill``'s trials run on ``backend`` now (its name, ``trial_setup``
+        and ``physics_tag``)."""
+        from ltamp_cli.backends.protocol import trial_setup
+
+        return cls(str(backend.name), trial_setup(backend, skill), backend_physics(backend, skill))
+
+    def differences(self, expected: TrialKind) -> list[str]:
+        """``"<field> <mine>, not <expected's>"`` for each field that differs."""
+        words = []
+        if self.backend != expected.backend:
+            words.append(f"backend {self.backend}, not {expected.backend}")
+        if self.setup != expected.setup:
+            words.append(f"{setup_words(self.setup)}, not {setup_words(expected.setup)}")
+        if self.physics != expected.physics:
+            words.append(f"physics {self.physics or 'unversioned'}, not "
+                         f"{expected.physics or 'unversioned'}")
+        return words
+
+
+def check_trial_kind(records: Iterable[tuple[str, TrialRecord]],
+                     expected: TrialKind | None, against: str, advice: str) -> TrialKind | None:
+    """Raise :class:`InputError` at the first record whose :class:`TrialKind` is not
+    ``expected``, in one line: the record's location (``where``, e.g. ``file:line``), each
+    differing field with both values, ``against`` (what the expected kind is) and
+    ``advice``. ``expected=None``: the first record's kind, so the records must at least be
+    of one kind. Records imported from outside any simulator (:data:`IMPORTED_PREFIX`) are
+    not checked. Returns the kind checked against (``None`` if there was none)."""
+    for where, record in records:
+        if record.backend.startswith(IMPORTED_PREFIX):
+            continue
+        kind = TrialKind.of_record(record)
+        if expected is None:
+            expected, against = kind, f"as in {where}"
+            continue
+        differences = kind.differences(expected)
+        if differences:
+            raise InputError(
+                f"{where}: a {record.backend}/{record.skill} trial of "
+                f"{'; '.join(differences)} ({against}); labels of two kinds of trial differ: "
+                f"{advice}")
+    return expected

@@ -178,6 +178,12 @@ class TrialDataset:
         return list(self.iter_records())
 
     def iter_records(self) -> Iterator[TrialRecord]:
+        for _line, record in self.iter_numbered():
+            yield record
+
+    def iter_numbered(self) -> Iterator[tuple[int, TrialRecord]]:
+        """``(line, record)`` for every complete record, ``line`` 1-based in the file (blank
+        lines count), for messages that point at a record."""
         if not self.path.exists():
             return
         with self.path.open("rb") as handle:
@@ -200,13 +206,14 @@ class TrialDataset:
                 missing = [name for name in _REQUIRED_FIELDS if name not in data]
                 if missing:
                     raise KeyError(", ".join(missing))
-                yield TrialRecord.from_dict(data)
+                record = TrialRecord.from_dict(data)
             except (ValueError, KeyError, TypeError, RecursionError) as error:
                 raise InputError(
                     f"not a trial record ({type(error).__name__}: {error}); expected one JSON "
                     f"object per line with fields {', '.join(_REQUIRED_FIELDS)}",
                     location_in(self.path, number, 1),
                 ) from None
+            yield number, record
 
     def append(self, records: TrialRecord | Iterable[TrialRecord]) -> None:
         """Append records durably; each call is one atomic ``write``."""

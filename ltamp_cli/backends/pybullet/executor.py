@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
+from contextlib import AbstractContextManager
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
@@ -90,7 +91,7 @@ from ltamp_cli.backends.pybullet.tamp.skill_paths import (
     push_finger_gap,
 )
 from ltamp_cli.backends.pybullet.tamp.values import ArmPath
-from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig
+from ltamp_cli.backends.pybullet.world import PhysicsWorld, WorldConfig, skill_world_config
 from ltamp_cli.backends.skills3d.pour import POUR_SPEED_M_S, PourSettings
 from ltamp_cli.backends.skills3d.scoop import ScoopSettings
 from ltamp_cli.backends.skills3d.stir import STIR_ANGULAR_SPEED
@@ -108,13 +109,18 @@ PUSH_TOLERANCE_M = 0.03
 #: least this many beads, in ``c``.
 SCOOP_CONTAINS_FRACTION = 0.5
 SCOOP_CONTAINS_MIN_BEADS = 3
-#: Contact breaking threshold (m) while a push slides an object. The world's 4 mm (fast bead
-#: piles) keeps one contact point per pair: a sliding base stands on one corner, a different
-#: one each step, and its yaw and path drift at random (push_to_reach seed 0 came to rest
-#: 0.032 m off target, or 0.027 m, by luck of the plan). Bullet's default 2 cm keeps a
-#: multi-point manifold for the push and its settling (as the push trials' world,
-#: :data:`~.world.SKILL_CONTACT_BREAKING_M`); the bead threshold is restored after.
-PUSH_CONTACT_BREAKING_M = 0.02
+#: The skill whose trials' physics (solver iterations, contact breaking threshold:
+#: :func:`~.world.skill_world_config`, the one place the trials take theirs from) each skill
+#: action of a plan runs under (:meth:`Kitchen3DRun.skill_physics`); the world's own
+#: settings are restored after. Other actions (transit, carries, picks, places, the dump)
+#: keep the world's. E.g. the scoop steps at 50 solver iterations as its trials do (issue
+#: #20: executed at 5, the under-converged bead contacts shed spoonfuls during the lift that
+#: its model was trained to keep), and the push at Bullet's 2 cm threshold (the world's 4 mm,
+#: made for fast bead piles, keeps one contact point per pair: a sliding base stands on one
+#: corner, a different one each step, and push_to_reach seed 0 came to rest 0.032 m off
+#: target, or 0.027 m, by luck of the plan).
+ACTION_SKILLS: Mapping[str, str] = MappingProxyType({
+    "pour": "pour", "scoop": "scoop", "stir": "stir", "push": "push"})
 #: Joint motor force (N·m) holding a driven arm's joint velocities during a push step.
 DRIVE_FORCE_N = 500.0
 #: A pick looks at its object first: when the object stands more than this far (m) or
@@ -340,6 +346,13 @@ class Kitchen3DRun:
         self.world.close()
 
     # Simulation --------------------------------------------------------------------------
+
+    def skill_physics(self, action: str) -> AbstractContextManager[None]:
+        """Step with the physics of the trials of ``action``'s skill inside the block
+        (:data:`ACTION_SKILLS`; their world's solver iterations and contact breaking
+        threshold, :func:`~.world.skill_world_config`), so a learned skill executes in the
+        physics its model was trained in. Raises ``KeyError`` for an action of no skill."""
+        return self.world.skill_physics(skill_world_config(ACTION_SKILLS[action]))
 
     def _step(self) -> None:
         for name, (position, quaternion) in self.pinned.items():
@@ -608,20 +621,24 @@ class Kitchen3DRun:
 
     def pour(self, path: ArmPath) -> None:
         """Tilt the held cup along the pour path at the pour skill's own speeds (those of
-        the trials its model learned from), hold, and carry it back upright."""
-        self.follow_skill(path)
-        self.step_n(self.world.steps_for(self.settings.pour_hold_s))
-        self.follow(path.arm, path.configurations[::-1], self.settings.carry_speed)
-        self.step_n(self.world.steps_for(self.settings.settle_s))
+        the trials its model learned from), hold, and carry it back upright (all in the
+        pour trials' physics, :meth:`skill_physics`)."""
+        with self.skill_physics("pour"):
+            self.follow_skill(path)
+            self.step_n(self.world.steps_for(self.settings.pour_hold_s))
+            self.follow(path.arm, path.configurations[::-1], self.settings.carry_speed)
+            self.step_n(self.world.steps_for(self.settings.settle_s))
         self.log.append({"action": "pour", "counts": self.counts()})
 
     def scoop(self, spoon: str, bowl: str, material: str, path: ArmPath) -> None:
         """Drag the held spoon through ``bowl`` and lift it out (forward only); record the
-        spoonful of ``material`` once the beads in the head have settled."""
+        spoonful of ``material`` once the beads in the head have settled (both in the scoop
+        trials' physics, :meth:`skill_physics`)."""
         if material not in self.beads:
             raise ActionFailed(f"scoop: no beads of {material!r} in the kitchen")
-        self.follow_skill(path)
-        self.step_n(self.world.steps_for(self.settings.settle_s))
+        with self.skill_physics("scoop"):
+            self.follow_skill(path)
+            self.step_n(self.world.steps_for(self.settings.settle_s))
         spoonful = int(self.inside(spoon, self.material_positions(material)).sum())
         self.spoonfuls[material] = spoonful
         self.log.append({"action": "scoop", "spoon": spoon, "bowl": bowl, "material": material,
@@ -655,11 +672,13 @@ class Kitchen3DRun:
 
         self.probe = track
         try:
-            self.follow_skill(path)
-            self.follow_skill(path, reverse=True)
+            with self.skill_physics("stir"):
+                self.follow_skill(path)
+                self.follow_skill(path, reverse=True)
         finally:
             self.probe = None
-        self.step_n(self.world.steps_for(self.settings.settle_s))
+        with self.skill_physics("stir"):
+            self.step_n(self.world.steps_for(self.settings.settle_s))
         record = {"action": "stir", "stirrer": stirrer, "cup": cup, **tracker.to_json(),
                   "counts_before": before, "counts_after": self.counts()}
         self.stirs.setdefault(cup, []).append(record)
@@ -687,7 +706,7 @@ class Kitchen3DRun:
         gap = self.push_finger_gap(path.arm, name, goal)
         self.scene.arms[path.arm].set_finger_opening(gap)
         start = self.object_xy(name)
-        with self.world.contact_breaking(PUSH_CONTACT_BREAKING_M):
+        with self.skill_physics("push"):
             self.follow(path.arm, path.configurations, self.settings.push_speed, drive=True)
             self.step_n(self.world.steps_for(self.settings.settle_s))
         rest = self.object_xy(name)

@@ -185,6 +185,33 @@ class PhysicsWorld:
         finally:
             self.contact_breaking_m = previous
 
+    @contextmanager
+    def skill_physics(self, config: WorldConfig) -> Iterator[None]:
+        """Step with ``config``'s solver iterations and contact breaking threshold inside the
+        block (a skill's trial settings, :func:`skill_world_config`, for one action of a plan
+        whose world otherwise keeps its own); this world's settings are restored after.
+        Raises ``ValueError`` if ``config``'s time step is not this world's (the step count
+        of every motion depends on it)."""
+        if config.time_step != self.config.time_step:
+            raise ValueError(f"skill physics time step {config.time_step} s differs from the "
+                             f"world's {self.config.time_step} s")
+        self._set_solver_iterations(config.solver_iterations)
+        try:
+            with self.contact_breaking(config.contact_breaking_threshold):
+                yield
+        finally:
+            self._set_solver_iterations(self.config.solver_iterations)
+
+    def solver_iterations(self) -> int:
+        """The solver iterations per step the client runs now (read back from PyBullet)."""
+        params = p.getPhysicsEngineParameters(physicsClientId=self.client)
+        return int(params["numSolverIterations"])
+
+    def _set_solver_iterations(self, iterations: int) -> None:
+        # Per client, unlike the contact breaking threshold: no need to re-set it per step.
+        p.setPhysicsEngineParameter(numSolverIterations=int(iterations),
+                                    physicsClientId=self.client)
+
     def steps_for(self, seconds: float) -> int:
         """Number of simulation steps covering ``seconds`` of simulated time."""
         return max(1, round(seconds / self.config.time_step))

@@ -23,12 +23,14 @@ from __future__ import annotations
 
 import os
 import sys
+from contextlib import AbstractContextManager, nullcontext
 from typing import Any
 
 import numpy as np
 import pybullet as p
 
 from ltamp_cli.backends.pybullet.executor import (
+    ACTION_SKILLS,
     FINGER_CONTACT_M,
     PLACE_TOLERANCE_M,
     TOOL_KINDS,
@@ -325,6 +327,13 @@ class SapienKitchen3DRun(Kitchen3DRun):
         self.model.close()
 
     # Simulation --------------------------------------------------------------------------
+
+    def skill_physics(self, action: str) -> AbstractContextManager[None]:
+        """No change: SAPIEN trials run every skill in one world config (the backend's,
+        :class:`~.world.SapienWorldConfig` as shipped), the one this run builds; ``KeyError``
+        for an action of no skill, as in PyBullet."""
+        ACTION_SKILLS[action]
+        return nullcontext()
 
     def _step(self) -> None:
         for arm in self.sapien_arms:
