@@ -271,23 +271,36 @@ def trial_setup(backend: SkillBackend, skill: str) -> str | None:
     A plugin's answer that is neither ``None`` nor a non-empty string is one
     :class:`~ltamp_cli.errors.InputError` line naming the backend.
     """
+    return optional_version(backend, "trial_setup", skill)
+
+
+def optional_version(backend: Any, method_name: str, skill: str) -> str | None:
+    """Ask ``backend``'s optional per-skill version hook ``method_name(skill)`` (``trial_setup``,
+    ``physics_tag``): ``None`` if the backend has no such method or answers ``None``.
+
+    A record stores the answer verbatim, so anything but ``None`` or a non-empty string (a
+    ``str()`` of it would be written into every record and refuse the plugin's own older
+    files), or an exception other than ``KeyError`` (an unknown skill, as
+    :func:`skill_spec` reports it), is one :class:`~ltamp_cli.errors.InputError` line naming
+    the backend, not a traceback.
+    """
     from ltamp_cli.errors import InputError
 
-    method = getattr(backend, "trial_setup", None)
+    method = getattr(backend, method_name, None)
     if method is None:
         return None
     where = f"backend {getattr(backend, 'name', '?')!r} ({type(backend).__module__})"
     try:
-        setup = method(skill)
+        answer = method(skill)
     except KeyError:
-        raise  # an unknown skill, as skill_spec reports it
-    except Exception as error:  # a plugin's bug: one line naming it, not a traceback
-        raise InputError(f"{where}: trial_setup({skill!r}) raised "
+        raise
+    except Exception as error:  # a plugin's bug
+        raise InputError(f"{where}: {method_name}({skill!r}) raised "
                          f"{type(error).__name__}: {error}") from None
-    if setup is None or (isinstance(setup, str) and setup.strip()):
-        return setup
-    raise InputError(f"{where}: trial_setup({skill!r}) returned {setup!r:.40}: expected None "
-                     "or a non-empty string")
+    if answer is None or (isinstance(answer, str) and answer.strip()):
+        return answer
+    raise InputError(f"{where}: {method_name}({skill!r}) returned {answer!r:.40}: expected "
+                     "None or a non-empty string")
 
 
 def skill_spec(backend: SkillBackend, skill: str) -> SkillSpec:

@@ -38,21 +38,9 @@ def backend_physics(backend: Any, skill: str) -> str | None:
     :class:`InputError` line naming the backend — a ``str()`` of it would be written into
     every record (``"None"``, ``"5"``) and refuse the plugin's own older files.
     """
-    method = getattr(backend, "physics_tag", None)
-    if method is None:
-        return None
-    where = f"backend {getattr(backend, 'name', '?')!r} ({type(backend).__module__})"
-    try:
-        tag = method(skill)
-    except KeyError:
-        raise  # an unknown skill, as skill_spec reports it
-    except Exception as error:  # a plugin's bug: one line naming it, not a traceback
-        raise InputError(f"{where}: physics_tag({skill!r}) raised "
-                         f"{type(error).__name__}: {error}") from None
-    if tag is None or (isinstance(tag, str) and tag.strip()):
-        return tag
-    raise InputError(f"{where}: physics_tag({skill!r}) returned {tag!r:.40}: expected None "
-                     "or a non-empty string")
+    from ltamp_cli.backends.protocol import optional_version
+
+    return optional_version(backend, "physics_tag", skill)
 
 
 def legacy_physics(backend: str) -> str | None:
