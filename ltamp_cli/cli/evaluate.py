@@ -45,6 +45,7 @@ def evaluate_command(
     from ltamp_cli.learning.metrics import SkillEvaluator, wilson_interval
     from ltamp_cli.learning.model_dir import load_model
     from ltamp_cli.threads import use_one_thread
+    from ltamp_cli.trials.physics import TrialKind
 
     use_one_thread()
     if trials < 0 or n_test < 1:
@@ -57,6 +58,9 @@ def evaluate_command(
     try:
         if skill not in physics.skills():
             raise InputError(f"backend {backend_name!r} has no skill {skill!r}")
+        # F1 against labels of another backend, robot setup or physics says nothing about
+        # the model: the held-out trials must be the kind the live trials run now.
+        heldout_kind = TrialKind.of_backend(physics, skill)
         report: dict[str, object] = {
             "model": str(model_dir),
             "kind": model.kind,
@@ -68,7 +72,8 @@ def evaluate_command(
                 physics, skill, n_test, max(trials, 0), seed + 12345
             )
             if data is not None:
-                evaluator.heldout = heldout_from_records(read_records(data, "--data"), model.spec)
+                evaluator.heldout = heldout_from_records(
+                    read_records(data, "--data", heldout_kind, skill), model.spec)
             result = evaluator.evaluate(model, int(metadata.get("training", {}).get("n_trials", 0)))
             report.update(
                 f1=result.f1,
@@ -82,7 +87,8 @@ def evaluate_command(
         else:
             f1 = None
             if data is not None:
-                heldout = heldout_from_records(read_records(data, "--data"), model.spec)
+                heldout = heldout_from_records(
+                    read_records(data, "--data", heldout_kind, skill), model.spec)
                 f1 = heldout.f1(model)
                 report["n_test"] = len(heldout.scores)
             report["f1"] = f1

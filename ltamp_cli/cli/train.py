@@ -52,9 +52,10 @@ def read_records(path: Path, option: str, kind: Any = None, skill: str | None = 
     numbered = list(TrialDataset(path).iter_numbered())
     if kind is not None:
         check_trial_kind(((f"{path}:{line}", r) for line, r in numbered
-                          if r.skill == skill), kind, f"{option}: expected as --backend runs them",
-                         "collect the pool with this --backend (and --robot), or pass the "
-                         "ones it was collected with")
+                          if r.skill == skill), kind,
+                         f"{option}: expected as the {kind.backend} backend runs them now",
+                         "use trials collected with the same backend, robot and physics, "
+                         "or the backend options they were collected with")
     records, repeats = without_duplicates([r for _line, r in numbered])
     if repeats:
         typer.echo(f"ltamp: warning: {option}: {path} repeats {repeats} trial record(s) with the "
@@ -221,7 +222,9 @@ def train_command(
         evaluator = None
         if eval_every > 0:
             if test_data is not None:
-                heldout = heldout_from_records(read_records(test_data, "--test-data"), spec)
+                heldout = heldout_from_records(
+                    read_records(test_data, "--test-data", TrialKind.of_backend(physics, skill),
+                                 skill), spec)
                 evaluator = SkillEvaluator(spec, heldout)
             elif hasattr(physics, "true_score"):
                 evaluator = SkillEvaluator.synthetic(physics, skill, seed=seed + 12345)

@@ -122,3 +122,32 @@ def test_collects_pending_count_refuses_a_file_of_another_physics(tmp_path: Path
     current = TrialDataset(tmp_path / "current.jsonl")
     current.append(scoop(5))
     assert pending_indices(current, job) == [0, 1]
+
+
+def run_cli(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, list[str]]:
+    with pytest.raises(SystemExit) as done:
+        main(argv)
+    err = capsys.readouterr().err
+    return int(done.value.code or 0), [line for line in err.splitlines() if line.strip()]
+
+
+def test_held_out_trials_of_another_physics_are_refused_by_evaluate_and_train(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """F1 against labels of another physics measures nothing about the model: `evaluate
+    --data` and `train --test-data` refuse such held-out files as `train --data` does."""
+    current = write(tmp_path / "pool.jsonl",
+                    [scoop(i, score=0.5 if i % 2 else -0.5) for i in range(4)])
+    code, lines = train_pool(current, tmp_path / "m", capsys)
+    assert code == 0, lines
+    stale = write(tmp_path / "stale.jsonl", [scoop(0), scoop(1, physics=None)])
+    code, lines = run_cli(["evaluate", str(tmp_path / "m"), "--data", str(stale),
+                           "--trials", "0", "--json"], capsys)
+    assert code == 2 and len(lines) == 1, lines
+    assert f"{stale}:2: " in lines[0] and "physics pybullet@v1, not pybullet@v1.1" in lines[0]
+    code, lines = train_pool(current, tmp_path / "m2", capsys, "--test-data", str(stale),
+                             "--eval-every", "2")
+    assert code == 2 and len(lines) == 1, lines
+    assert f"{stale}:2: " in lines[0] and "physics pybullet@v1, not pybullet@v1.1" in lines[0]
+    code, lines = run_cli(["evaluate", str(tmp_path / "m"), "--data", str(current),
+                           "--trials", "0", "--json"], capsys)
+    assert code == 0, lines
