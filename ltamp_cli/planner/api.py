@@ -187,9 +187,10 @@ def refuse_unsupported(problem: PlanningProblem, algorithm: str) -> None:
 WILD_FACTS_NOTE = "wild facts: the optimistic plans' failure proves nothing"
 EQUATED_NOTE = ("plan constraints equate arguments that optimistic plans keep apart: their "
                 "failure proves nothing")
-MULTIPLICITY_NOTE = ("a plan may need several distinct outputs of one stream instance (the "
-                     "goal is reachable in the merge-safe relaxation): one optimistic output "
-                     "per instance proves nothing")
+MULTIPLICITY_NOTE = ("a plan may need several distinct outputs of one stream instance, or a "
+                     ":fluents stream's outputs in another state (the goal is reachable in "
+                     "the merge-safe relaxation): one optimistic output per instance proves "
+                     "nothing")
 
 
 def _infeasibility_unproven(problem: PlanningProblem, config: PlannerConfig,

@@ -9,21 +9,28 @@ cannot hurt: no delete effects, no negative literals (preconditions, axiom bodie
 no inequalities, effect conditions assumed true, and each stream's certified facts
 asserted optimistically for an abstract output:
 
-* a stream instance over objects that exist now gets one abstract output (its real outputs
-  so far are real facts already), none when the instance is exhausted;
-* an instance with an abstract input gets the stream's single abstract output.
+* every instance that is not exhausted (over objects that exist now or over abstract
+  ones) certifies its facts for the stream's one abstract output tuple, and for every
+  output tuple that some instance of the same stream made so far; an exhausted instance
+  certifies nothing more (its real outputs are real facts already).
 
-Mapping every future stream output to its abstract output is a homomorphism that keeps
-positive facts, so every real plan, however many distinct outputs it uses, maps to a
-relaxed plan here. When the goal is unreachable in this finite relaxation, no plan exists
-and "infeasible" is proven; otherwise the caller must not claim it (it escalates).
-Not covered (as in the optimistic algorithms): a stream output that *equals* an object
-that exists already (objects are values), and facts a stream does not declare (wild
-facts, handled by the caller).
+One abstract output per stream, not per instance: objects are values, so two instances
+of a stream can make the same new value (``grasp(o1)`` and ``grasp(o2)`` both yield
+``"side"`` on their second call: red-team round 8); with one abstract output each, the
+facts both certify about it never met on one object and such a plan was called
+"infeasible". Mapping every future output of a stream to that stream's abstract output is
+a homomorphism that keeps positive facts, so every real plan, however many distinct
+outputs it uses, maps to a relaxed plan here. When the goal is unreachable in this finite
+relaxation, no plan exists and "infeasible" is proven; otherwise the caller must not claim
+it (it escalates). Not covered (as in the optimistic algorithms): a future output that
+equals an object made by *another* stream or given by the problem, or that repeats only
+part of an earlier output tuple of its stream (objects are values), and facts a stream
+does not declare (wild facts, handled by the caller).
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterable, Mapping
 
 from ltamp_cli.planner.algorithms.common import PlannerState, instantiate_atoms
@@ -33,6 +40,7 @@ from ltamp_cli.planner.pddl.syntax import (
     Stream,
     is_variable,
 )
+from ltamp_cli.planner.search.engine import SearchTimeout
 from ltamp_cli.planner.search.ground import (
     Fact,
     FactIndex,
@@ -68,6 +76,7 @@ def relaxed_goal_reachable(state: PlannerState) -> bool:
     objects: dict[str, str] = dict(state.object_types)
     index = FactIndex.of_sorted(sorted(state.facts.members), state.deadline)
     enumerated: dict[str, dict[str, int]] = {}
+    made = _outputs_made(state)
     delta: list[Fact] | None = None
     rule_set: RuleSet | None = None
     renormalize = True
@@ -86,7 +95,7 @@ def relaxed_goal_reachable(state: PlannerState) -> bool:
         if (GOAL_PREDICATE,) in index.members:
             return True
         before = len(objects)
-        delta = _stream_round(state, index, real, objects, enumerated)
+        delta = _stream_round(state, index, real, objects, enumerated, made)
         if not delta:
             return False
         renormalize = len(objects) != before
@@ -135,9 +144,18 @@ def _bound(args: Iterable[str], binding: Mapping[str, str]) -> tuple[str, ...]:
     return ground
 
 
+def _outputs_made(state: PlannerState) -> dict[str, list[tuple[str, ...]]]:
+    """Per stream, the output tuples its instances made so far (first made first)."""
+    made: dict[str, dict[tuple[str, ...], None]] = {}
+    for instance in list(state.instances.values()):
+        if instance.results:
+            made.setdefault(instance.name, {}).update(dict.fromkeys(instance.results))
+    return {name: list(outputs) for name, outputs in made.items()}
+
+
 def _stream_round(state: PlannerState, index: FactIndex, real: frozenset[str],
-                  objects: dict[str, str], enumerated: dict[str, dict[str, int]]
-                  ) -> list[Fact]:
+                  objects: dict[str, str], enumerated: dict[str, dict[str, int]],
+                  made: Mapping[str, list[tuple[str, ...]]]) -> list[Fact]:
     """Assert what every stream instance over ``index`` could certify (joined only over the
     facts added since the stream's last round); new abstract outputs join ``objects``.
     Returns the new facts."""
@@ -145,10 +163,13 @@ def _stream_round(state: PlannerState, index: FactIndex, real: frozenset[str],
     for external in state.externals.values():
         if not isinstance(external, Stream | ExternalPredicate):
             continue  # cost functions certify nothing
+        if time.perf_counter() > state.deadline:
+            raise SearchTimeout
         since = enumerated.get(external.name)
         enumerated[external.name] = index.sizes()
         for inputs in list(dict.fromkeys(state.bindings_of(external, index, since))):
-            for fact in _abstract_facts(state, external, inputs, real, objects):
+            for fact in _abstract_facts(state, external, inputs, real, objects,
+                                        made.get(external.name, ())):
                 if index.add(fact):
                     added.append(fact)
     return added
@@ -156,21 +177,27 @@ def _stream_round(state: PlannerState, index: FactIndex, real: frozenset[str],
 
 def _abstract_facts(state: PlannerState, external: Stream | ExternalPredicate,
                     inputs: tuple[str, ...], real: frozenset[str],
-                    objects: dict[str, str]) -> list[Fact]:
-    """The facts one instance may still certify, its outputs abstract; none when the
-    instance over existing objects is exhausted (what it certified is known already)."""
-    over_real = all(x in real for x in inputs)
-    if over_real:
+                    objects: dict[str, str], made: Iterable[tuple[str, ...]]
+                    ) -> list[Fact]:
+    """The facts one instance may still certify: for the stream's abstract output tuple and
+    for each tuple in ``made`` (see the module doc); none when the instance over existing
+    objects is exhausted (what it certified is known already). An instance of a
+    ``:fluents`` stream is never taken as exhausted: it was exhausted in the state it was
+    called in, another state may give it outputs."""
+    if all(x in real for x in inputs) and not getattr(external, "fluents", ()):
         found = state.instances.get((external.name, inputs))
         if found is not None and found.exhausted:
             return []
     if isinstance(external, ExternalPredicate):
         mapping = dict(zip(external.head.args, inputs, strict=True))
         return instantiate_atoms((external.head,), mapping)
-    mapping = dict(zip(external.inputs, inputs, strict=True))
-    owner = f"{external.name}({','.join(inputs)})" if over_real else external.name
-    for output in external.outputs:
-        name = f"{ABSTRACT_PREFIX}{owner}:{output}"
-        mapping[output] = name
+    abstract = tuple(f"{ABSTRACT_PREFIX}{external.name}:{output}"
+                     for output in external.outputs)
+    for name in abstract:
         objects.setdefault(name, OBJECT_TYPE)
-    return instantiate_atoms(external.certified, mapping)
+    facts: list[Fact] = []
+    for outputs in (abstract, *made):
+        mapping = dict(zip(external.inputs, inputs, strict=True))
+        mapping.update(zip(external.outputs, outputs, strict=True))
+        facts.extend(instantiate_atoms(external.certified, mapping))
+    return facts
