@@ -20,9 +20,11 @@ time at load 9 for hidden robots2_4 and handoff_2 with ``max_time`` 15).
 from __future__ import annotations
 
 import gc
+import os
 import sys
 import threading
 import time
+import weakref
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
@@ -65,6 +67,27 @@ class PausedCollection:
         self._depth = 0
         self._enabled = gc.isenabled()
         self._frozen_holds = 0  # background releases under way (see hold_frozen)
+        if hasattr(os, "register_at_fork"):  # not on Windows (no fork there)
+            method = weakref.WeakMethod(self._after_fork_in_child)
+            os.register_at_fork(after_in_child=lambda: _call_if_alive(method))
+
+    def _after_fork_in_child(self) -> None:
+        """In a child process forked while solves ran in other threads, or while a
+        reclaimer held memory frozen: those threads do not exist in the child, so nothing
+        would ever end their pause or release their hold. Before, such a child (a
+        ``multiprocessing`` pool forked while a solve runs in a thread) kept automatic
+        collection off for good, and its own solves never turned it back on (the depth
+        count never returned to 0). The child starts with no solve running: the caller's
+        collector setting comes back, the hold's freeze is undone, and the lock, which
+        another thread may have held at the fork, is new."""
+        self._lock = threading.Lock()
+        if self._frozen_holds:
+            self._frozen_holds = 0
+            gc.unfreeze()
+        if self._depth:
+            self._depth = 0
+            if self._enabled:
+                gc.enable()
 
     @property
     def caller_enabled(self) -> bool:
@@ -111,6 +134,13 @@ class PausedCollection:
             self._frozen_holds -= 1
             if self._frozen_holds == 0:
                 gc.unfreeze()
+
+
+def _call_if_alive(method: weakref.WeakMethod[Callable[[], None]]) -> None:
+    """Call a weakly referenced method, unless its object was freed."""
+    function = method()
+    if function is not None:
+        function()
 
 
 def _nothing() -> None:

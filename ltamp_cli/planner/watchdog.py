@@ -26,7 +26,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from types import FrameType
+from types import CodeType, FrameType
 from typing import Generic, TypeVar
 
 from ltamp_cli.planner.gc_pacing import PACE_S
@@ -112,13 +112,39 @@ def run_until(work: Callable[[], T], deadline: float, tracker: CallTracker,
 
     worker = threading.Thread(target=target, name=name, daemon=True)
     worker.start()
+    captured: dict[int, FrameType] = {}  # by id (each frame is kept alive here)
+    try:
+        _wait(worker, finished, deadline, reclaimer, tick, captured, target.__code__)
+    except BaseException:
+        # KeyboardInterrupt (or an error in ``tick``) in the waiting thread: the caller gets
+        # it, and the worker, which nobody waits for any more, is told to stop at its next
+        # clock check or stream call, as an abandoned one (before, an interrupted API solve
+        # went on calling the user's streams until its max_time, inf by default).
+        tracker.cancel()
+        raise
+    if reclaimer is not None:
+        reclaimer.give_frames(captured.values())
+        captured.clear()
+    if not outcome.done:
+        tracker.cancel()
+        return False, None
+    if outcome.error is not None:
+        raise outcome.error
+    return True, outcome.value
+
+
+def _wait(worker: threading.Thread, finished: threading.Event, deadline: float,
+          reclaimer: Reclaimer | None, tick: Callable[[], None] | None,
+          captured: dict[int, FrameType], stop_code: CodeType) -> None:
+    """The waiting loop of :func:`run_until`: until ``finished`` is set or the deadline
+    plus the grace period, capturing the worker's stack into ``captured`` (with a
+    ``reclaimer``) and calling ``tick``."""
     next_capture = deadline - CAPTURE_LEAD_S if reclaimer is not None else math.inf
     abandon_at = deadline + ABANDON_GRACE_S
-    captured: dict[int, FrameType] = {}  # by id (each frame is kept alive here)
     while True:
         now = time.perf_counter()
         if now >= next_capture:
-            for frame in capture_stack(worker.ident, target.__code__):
+            for frame in capture_stack(worker.ident, stop_code):
                 captured.setdefault(id(frame), frame)
             # Past the deadline, the frames the worker enters while it stops are taken too.
             next_capture = max(deadline, now + PACE_S)
@@ -134,12 +160,3 @@ def run_until(work: Callable[[], T], deadline: float, tracker: CallTracker,
             break
         if tick is not None and time.perf_counter() < deadline:
             tick()
-    if reclaimer is not None:
-        reclaimer.give_frames(captured.values())
-        captured.clear()
-    if not outcome.done:
-        tracker.cancel()
-        return False, None
-    if outcome.error is not None:
-        raise outcome.error
-    return True, outcome.value
