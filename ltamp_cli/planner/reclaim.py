@@ -20,6 +20,19 @@ references are the reclaimer's own (reference count), with no weak references an
 finalizer, so neither the caller, the result nor a still running worker can observe it.
 Anything else is just dropped, and freed by its last owner as usual. Generator frames are
 never touched (a suspended generator may still be resumed by its owner).
+
+Interpreters. Written for CPython 3.11 (the project's) and read against 3.12/3.13: their
+``frame.clear()`` refuses an executing or suspended frame with ``RuntimeError`` (skipped
+here), 3.13's ``frame.f_locals`` is a write-through proxy (only its values are read), and
+immortal objects report huge reference counts (never "exclusive"). Where the interpreter
+does not match the reference-count reading that safety rests on, nothing is taken apart
+and everything is only dropped (:func:`refcounts_exact`, checked on each
+:func:`take_apart`): a build without the GIL (3.13t; no GIL to hand over between slices,
+and counts of shared objects are not exact), one without ``sys.getrefcount``, or one whose
+counts omit the references a caller holds on its stack (3.14 loads some locals as borrowed
+references: a container the caller still held could then read as exclusive and be
+emptied). Without ``sys._current_frames`` no stack is captured: the worker's functions free
+their locals themselves when they return, as before the reclaimer.
 """
 
 from __future__ import annotations
@@ -52,9 +65,10 @@ def capture_stack(thread_id: int | None, stop_code: CodeType) -> list[FrameType]
     (innermost first; that frame and its callers are excluded), or ``[]`` when the thread
     is not running. While a reference is held, each frame keeps its function's locals
     alive after the function returns."""
-    if thread_id is None:
+    current_frames = getattr(sys, "_current_frames", None)
+    if thread_id is None or current_frames is None:
         return []
-    frame = sys._current_frames().get(thread_id)
+    frame = current_frames().get(thread_id)
     frames: list[FrameType] = []
     while frame is not None and frame.f_code is not stop_code:
         frames.append(frame)
@@ -62,6 +76,36 @@ def capture_stack(thread_id: int | None, stop_code: CodeType) -> list[FrameType]
     if frame is None:  # the thread is no longer inside ``stop_code``: nothing of ours
         return []
     return frames
+
+
+def refcounts_exact() -> bool:
+    """Whether :func:`_exclusive` and :func:`take_apart` read reference counts right on
+    this interpreter: a list held only by a local reads as exclusive and stops reading so
+    once another list holds it, and an instance's attribute dict is held by the instance
+    and one local only (see the module doc); with the GIL (no free-threaded build)."""
+    if not hasattr(sys, "getrefcount") or getattr(sys, "_is_gil_enabled", _true)() is False:
+        return False
+    stack: list[object] = [[]]
+    value = stack.pop()
+    alone = _exclusive(value, 1)
+    other = [value]
+    shared = _exclusive(value, 1)
+    del other
+    probe = _Probe()
+    attributes = vars(probe)
+    own_dict = sys.getrefcount(attributes) == 3
+    return alone and not shared and own_dict
+
+
+def _true() -> bool:
+    return True
+
+
+class _Probe:
+    """An instance with an attribute dict (:func:`refcounts_exact`)."""
+
+    def __init__(self) -> None:
+        self.attribute = None
 
 
 def _exclusive(value: object, held: int) -> bool:
@@ -175,6 +219,9 @@ def _locals_of(frames: list[FrameType]) -> list[object]:
     emptied: the frames are dropped). A frame still running (an abandoned worker's) keeps
     its locals: dropping the reference to it frees nothing."""
     values: list[object] = []
+    if not hasattr(sys, "_current_frames"):
+        frames.clear()
+        return values
     running = _running_frames()
     seen: set[int] = set()
     while frames:
@@ -196,6 +243,9 @@ def take_apart(values: list[object]) -> None:
     """Drop ``values`` (a list the caller gives up: it is emptied), taking apart in small
     pieces every container and object in it that is referenced from here only, so that no
     single deallocation frees more than a few thousand objects at once."""
+    if not refcounts_exact():
+        values.clear()  # dropped: each freed by its last owner, as without a reclaimer
+        return
     stack = values
     while stack:
         value = stack.pop()
