@@ -16,12 +16,13 @@ cannot reach a region, every pose sampled there gives a new kinematics instance 
 fails, and each new sample renews the optimistic plan that uses it (the hidden suite's
 handoff_2: 18 failed calls of ``inverse-kinematics(r1, a, pose in goal, .)``, one search
 each, and no success). A family with no success in :data:`FAMILY_MIN_FAILURES` calls or
-more gets a level *penalty* that grows with the logarithm of its failures
-(:meth:`StreamFamilies.penalty`); the optimistic evaluation adds it to the summed level of
-the family's new instances, so the plans that need them come after the others at the same
-bound. Never a cut: the penalty is finite and left out of the level by PDDLStream's rule,
-which decides "infeasible" (:func:`.optimistic.within_limit`), so a penalised family only
-waits for a higher bound.
+more gets a level *penalty* that doubles with each failure, up to :data:`MAX_PENALTY`
+(:meth:`StreamFamilies.penalty`; a linear or logarithmic one was outgrown by the bounds
+the search reaches, ``docs/results/planner/issue19.md``); the optimistic evaluation adds
+it to the summed level of the family's new instances, so the plans that need them come
+after the others at the same bound. Never a cut: the penalty is finite and left out of
+the level by PDDLStream's rule, which decides "infeasible"
+(:func:`.optimistic.within_limit`), so a penalised family only waits for a higher bound.
 """
 
 from __future__ import annotations
@@ -137,8 +138,8 @@ class StreamFamilies:
 
     def penalty(self, key: FamilyKey) -> int:
         """Extra levels for a new instance of family ``key``: 0 unless it had no success in
-        at least :data:`FAMILY_MIN_FAILURES` calls; then 1, plus one for each doubling of
-        its failures (2 -> 1, 4 -> 2, 8 -> 3, ...)."""
+        at least :data:`FAMILY_MIN_FAILURES` calls; then ``2 ** failures`` levels, at most
+        :data:`MAX_PENALTY` (2 -> 4, 3 -> 8, 6 or more -> 64)."""
         counts = self.counts.get(key)
         if counts is None or counts.successes or counts.calls < FAMILY_MIN_FAILURES:
             return 0
