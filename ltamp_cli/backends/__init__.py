@@ -84,6 +84,15 @@ def load_backend(name: str, **options: Any) -> SkillBackend:
         raise InputError(f"backend {name!r} ({module.__name__}): {error}") from None
 
 
+def load_tagged_backend(tag: str) -> SkillBackend:
+    """The backend that writes trials tagged ``tag`` (a record's or a model's ``backend``
+    field): ``pybullet+panda`` is ``pybullet`` with ``robot="panda"``, a plain name is
+    :func:`load_backend` of it. (``ltamp evaluate`` of a model trained with ``--robot panda``
+    loaded ``"pybullet+panda"`` as a backend's name: "unknown backend".)"""
+    name, _, robot = tag.partition("+")
+    return load_backend(name, **({"robot": robot} if robot else {}))
+
+
 __all__ = [
     "BUILTIN_BACKENDS",
     "ENTRY_POINT_GROUP",
@@ -94,4 +103,5 @@ __all__ = [
     "backend_module",
     "discover_backends",
     "load_backend",
+    "load_tagged_backend",
 ]

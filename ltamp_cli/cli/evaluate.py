@@ -39,7 +39,7 @@ def evaluate_command(
     On the synthetic backend both use the true score function; on a physical backend F1 needs
     --data and the success rate runs one live trial of θ* per sampled context.
     """
-    from ltamp_cli.backends import load_backend
+    from ltamp_cli.backends import load_tagged_backend
     from ltamp_cli.cli.conventions import emit
     from ltamp_cli.cli.train import heldout_from_records, read_records
     from ltamp_cli.learning.metrics import SkillEvaluator, wilson_interval
@@ -54,7 +54,7 @@ def evaluate_command(
     model, metadata = loaded.model, loaded.metadata
     skill = model.spec.name
     backend_name = str(metadata.get("backend", "synthetic"))
-    physics = load_backend(backend_name)
+    physics = load_tagged_backend(backend_name)
     try:
         if skill not in physics.skills():
             raise InputError(f"backend {backend_name!r} has no skill {skill!r}")

@@ -133,10 +133,10 @@ def _spec_with_units(spec: SkillSpec, backend_name: object) -> SkillSpec:
     when only that one names units (models saved before specs had units)."""
     if spec.context.units or spec.control.units or not isinstance(backend_name, str):
         return spec
-    from ltamp_cli.backends import load_backend
+    from ltamp_cli.backends import load_tagged_backend
 
     try:
-        backend = load_backend(backend_name)
+        backend = load_tagged_backend(backend_name)
     except (InputError, ImportError, RuntimeError):
         return spec  # only labels are at stake: plot without units
     try:

@@ -728,10 +728,13 @@ def learn_from_pool(
     result's model is then the last one fitted (refitted on all trials only if no checkpoint
     fell on the last trial); the curve is the same either way (the final fit comes after it).
     """
-    pool = [r for r in pool if r.skill == spec.name]
+    # Numbered in the pool as given (before, among its trials of this skill only, so a pool
+    # of several skills had the wrong record named).
+    numbered = [(i, r) for i, r in enumerate(pool) if r.skill == spec.name]
+    pool = [r for _i, r in numbered]
     if not pool:
         raise ValueError(f"the pool has no trials of skill {spec.name!r}")
-    check_trial_kind(((f"pool record {i}", r) for i, r in enumerate(pool)), kind,
+    check_trial_kind(((f"pool record {i}", r) for i, r in numbered), kind,
                      "the expected kind" if kind is not None else "",
                      "learn from trials of one kind")
     # as `ltamp train --data` reads its file: a trial repeated (two writers once shared the

@@ -102,11 +102,10 @@ def _previous_model(directory: Path) -> SkillModel | None:
 def backend_spec(backend_name: str, skill: str) -> SkillSpec | None:
     """The skill as backend ``backend_name`` declares it (``"pybullet+panda"``: with that
     robot), or ``None`` when the backend cannot be loaded here or lacks the skill."""
-    from ltamp_cli.backends import load_backend
+    from ltamp_cli.backends import load_tagged_backend
 
-    name, _, robot = backend_name.partition("+")
     try:
-        backend = load_backend(name, **({"robot": robot} if robot else {}))
+        backend = load_tagged_backend(backend_name)
     except Exception:  # an unknown plugin, a missing optional dependency: no outcome
         return None
     try:
