@@ -168,6 +168,8 @@ def _stream_round(state: PlannerState, index: FactIndex, real: frozenset[str],
         since = enumerated.get(external.name)
         enumerated[external.name] = index.sizes()
         for inputs in list(dict.fromkeys(state.bindings_of(external, index, since))):
+            if time.perf_counter() > state.deadline:
+                raise SearchTimeout
             for fact in _abstract_facts(state, external, inputs, real, objects,
                                         made.get(external.name, ())):
                 if index.add(fact):
@@ -195,9 +197,17 @@ def _abstract_facts(state: PlannerState, external: Stream | ExternalPredicate,
                      for output in external.outputs)
     for name in abstract:
         objects.setdefault(name, OBJECT_TYPE)
-    facts: list[Fact] = []
-    for outputs in (abstract, *made):
-        mapping = dict(zip(external.inputs, inputs, strict=True))
-        mapping.update(zip(external.outputs, outputs, strict=True))
-        facts.extend(instantiate_atoms(external.certified, mapping))
+    mapping = dict(zip(external.inputs, inputs, strict=True))
+    mapping.update(zip(external.outputs, abstract, strict=True))
+    facts = instantiate_atoms(external.certified, mapping)
+    # For an earlier output tuple, only the atoms that link an input to an output are new:
+    # those over outputs only hold already (its call certified them), and those over
+    # inputs only are among the abstract tuple's facts.
+    linking = tuple(atom for atom in external.certified
+                    if any(a in external.inputs for a in atom.args)
+                    and any(a in external.outputs for a in atom.args))
+    if linking:
+        for outputs in made:
+            mapping.update(zip(external.outputs, outputs, strict=True))
+            facts.extend(instantiate_atoms(linking, mapping))
     return facts
