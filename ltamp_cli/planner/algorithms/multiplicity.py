@@ -227,7 +227,9 @@ def check_infeasibility(state: PlannerState) -> Check:
         return Check(False, f"abstract task: not representable ({error})")
     stats: dict[str, object] = {
         "abstract_operators": verdict.operators, "abstract_expanded": verdict.expanded,
-        "abstract_demoted": verdict.demoted, "abstract_time_s": round(verdict.time_s, 6)}
+        "abstract_demoted": verdict.demoted,
+        "abstract_demoted_predicates": list(verdict.demoted_predicates),
+        "abstract_time_s": round(verdict.time_s, 6)}
     if verdict.reachable is False:
         return Check(True, ABSTRACT_PROOF, stats)
     if verdict.reachable is None:
