@@ -188,6 +188,22 @@ CORPUS: tuple[CorpusProblem, ...] = (
     _visits("visits_two_outputs", "solved",
             "red team round 7: two distinct configurations of one instance", 2,
             precondition="(not (Seen ?q))"),
+    _visits("visits_four_outputs", "solved",
+            "as visits_two_outputs with four visits (more than the values sampled before "
+            "the check)", 4, precondition="(not (Seen ?q))"),
+    _visits("visits_when_fresh", "solved",
+            "go needs (Fresh), which a revisit deletes (a conditional effect): five "
+            "distinct configurations keep it", 5,
+            init=("(Fresh)",), precondition="(Fresh)", predicates="(Fresh)",
+            effect="(when (Seen ?q) (not (Fresh)))"),
+    _visits("visits_busy_derived", "solved",
+            "go needs (not (Busy)), Busy while a visit is pending (derived); finish ends "
+            "it; each configuration once", 3,
+            precondition="(not (Busy)) (not (Seen ?q))",
+            effect="(Pending ?q)", predicates="(Pending ?q) (Busy)",
+            more="(:derived (Busy) (exists (?x) (Pending ?x)))\n"
+                 "  (:action finish :parameters (?q) :precondition (Pending ?q)\n"
+                 "    :effect (not (Pending ?q)))"),
     _visits("visits_unreachable", "infeasible",
             "(Seen r): r is no configuration (the relaxation proves it)", 2,
             goal="(and (Stage s2) (Seen r))"),
