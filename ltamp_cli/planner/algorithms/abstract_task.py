@@ -56,6 +56,25 @@ reached by the mapped actions (choosing the split copy that agrees with the real
 whose exact part equals the exact facts of ``s`` and whose monotone part contains the
 image of every monotone fact of ``s``. So the goal (the upper copy of ``%goal``)
 unreachable here proves that no plan exists, however many distinct outputs it would use.
+
+**The search.** Monotone facts are never deleted and only read positively (negated ones
+are dropped, lower copies never read them, upper copies and relaxed conditions only gain
+from them), so a state with more of them can do all that one with fewer can. States are
+therefore merged by their exact part, each holding the union of the monotone facts of
+every path found to it; the induction above still holds (each real state's image is
+covered by the merged state of its exact part). Demoting any fact (or every fact of a
+predicate) from exact to monotone keeps the argument (its real value is then only
+over-approximated), so when a round runs out of expansions the fluent predicate with the
+most exact facts is demoted (typically the robot's configuration) and the coarser task is
+searched again.
+
+Cases where reading a literal exactly would be unsound, each a solvable problem in
+``bench/infeasible_corpus.py`` that such a reading answers "infeasible" (and
+``tests/planner/test_abstract_infeasibility.py`` solves): a negated fact of an output
+(``visits_four_outputs``), an inequality between two outputs of one instance
+(``looks_three_three_tokens``), a conditional effect on a known fact whose condition
+mentions an output (``visits_when_fresh``), a derived fact about known objects derived
+through an output (``visits_busy_derived``).
 """
 
 from __future__ import annotations
@@ -98,6 +117,8 @@ MAX_SPLIT_EFFECTS = 3
 # before it gives up (unproven).
 MAX_EXPANSIONS = 2_000
 MAX_ROUNDS = 4
+# Rule instances turned into abstract actions between two deadline checks.
+DEADLINE_STRIDE = 256
 
 
 class Unrepresentable(Exception):
@@ -221,7 +242,7 @@ def _task(instances: list[_Instance], kinds: _Kinds, deadline: float) -> Task:
     """The abstract task under ``kinds`` (demoting the facts of effects that would split
     an action too often, until none does)."""
     while True:
-        grounding, demote = _build(instances, kinds)
+        grounding, demote = _build(instances, kinds, deadline)
         if not demote:
             break
         kinds.demoted.update(demote)
@@ -411,13 +432,15 @@ def _equality(fact: Fact, positive: bool, kinds: _Kinds, mode: str,
         raise _Dead
 
 
-def _build(instances: list[_Instance], kinds: _Kinds
+def _build(instances: list[_Instance], kinds: _Kinds, deadline: float
            ) -> tuple[Grounding, set[Fact]]:
     """The abstract grounding, and the facts to demote (non-empty: build again)."""
     actions: list[GroundAction] = []
     axioms: list[GroundAxiom] = []
     demote: set[Fact] = set()
-    for rule, binding in instances:
+    for number, (rule, binding) in enumerate(instances):
+        if number % DEADLINE_STRIDE == 0:
+            check_deadline(deadline)
         source = rule.source
         if isinstance(source, NormalAxiom):
             axioms.extend(_axiom_copies(rule, source, binding, kinds))

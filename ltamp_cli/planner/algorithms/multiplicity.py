@@ -16,7 +16,11 @@ asserted optimistically for an abstract output:
 Mapping every future stream output to its abstract output is a homomorphism that keeps
 positive facts, so every real plan, however many distinct outputs it uses, maps to a
 relaxed plan here. When the goal is unreachable in this finite relaxation, no plan exists
-and "infeasible" is proven; otherwise the caller must not claim it (it escalates).
+and "infeasible" is proven. When it is reachable, :func:`check_infeasibility` searches the
+finer abstract task of :mod:`.abstract_task`, which keeps deletes, negation and
+inequalities exact wherever only known objects are concerned (merging touches only the
+stand-ins); unreachable there is a proof too, otherwise the caller must not claim
+"infeasible" (it escalates).
 Not covered (as in the optimistic algorithms): a stream output that *equals* an object
 that exists already (objects are values), and facts a stream does not declare (wild
 facts, handled by the caller).
