@@ -117,6 +117,8 @@ MAX_SPLIT_EFFECTS = 3
 # before it gives up (unproven).
 MAX_EXPANSIONS = 2_000
 MAX_ROUNDS = 4
+# Least wall seconds the abstract search may take (see budget_deadline).
+MIN_BUDGET_S = 1.0
 # Rule instances turned into abstract actions between two deadline checks.
 DEADLINE_STRIDE = 256
 
@@ -506,7 +508,7 @@ def _action_copies(rule: _Rule, source: NormalAction, binding: dict[str, str],
     if len(split) > MAX_SPLIT_EFFECTS:
         demote.update(effect.fact for effect in split)
         return []
-    args = tuple(binding[p] for p in source.parameters)
+    args = _bound(source.parameters, binding)
     copies = []
     for chosen in itertools.product((True, False), repeat=len(split)):
         effects = certain + [e for e, keep in zip(split, chosen, strict=True) if keep]
@@ -515,10 +517,13 @@ def _action_copies(rule: _Rule, source: NormalAction, binding: dict[str, str],
     return copies
 
 
-def budget_deadline(deadline: float, share: float = 0.5) -> float:
-    """The abstract search's deadline: ``share`` of the time left before ``deadline``
-    (the rest is the incremental fallback's), no limit when the solve has none."""
+def budget_deadline(deadline: float, spent: float, share: float = 0.5) -> float:
+    """The abstract search's deadline (``perf_counter`` seconds): at most ``share`` of the
+    time left before ``deadline`` (the rest is the incremental fallback's, which may find a
+    plan that needs distinct outputs) and at most as long as the solve has run so far
+    (``spent`` s, but at least :data:`MIN_BUDGET_S`); no limit when the solve has none (only
+    the expansion budget: the fallback may never end then)."""
     if math.isinf(deadline):
         return deadline
     now = time.perf_counter()
-    return now + max(0.0, deadline - now) * share
+    return now + min(max(0.0, deadline - now) * share, max(MIN_BUDGET_S, spent))

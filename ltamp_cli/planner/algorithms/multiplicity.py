@@ -28,6 +28,7 @@ facts, handled by the caller).
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
@@ -215,7 +216,8 @@ def check_infeasibility(state: PlannerState) -> Check:
     the relaxation of the module docstring, then in the abstract task of
     :mod:`.abstract_task` (deletes and negation exact over known objects), searched for at
     most half of the time left (:func:`.abstract_task.budget_deadline`) and
-    :data:`.abstract_task.MAX_EXPANSIONS` expansions. Past the solve's deadline, on a
+    :data:`.abstract_task.MAX_EXPANSIONS` expansions per round, and no longer than the solve
+    has run so far (at least :data:`.abstract_task.MIN_BUDGET_S`). Past the deadline, on a
     construct either cannot represent, or when the search's budget runs out: unproven."""
     try:
         closure = relaxed_closure(state)
@@ -224,11 +226,16 @@ def check_infeasibility(state: PlannerState) -> Check:
     if (GOAL_PREDICATE,) not in closure.index.members:
         return Check(True, RELAXATION_PROOF)
     try:
-        verdict = search_abstract_task(closure, budget_deadline(state.deadline))
+        verdict = search_abstract_task(closure, budget_deadline(
+            state.deadline, time.perf_counter() - state.start_time))
     except SearchTimeout:
         return Check(False, "abstract task: out of time")
     except Unrepresentable as error:
         return Check(False, f"abstract task: not representable ({error})")
+    except (RecursionError, MemoryError, ValueError, KeyError, TypeError) as error:
+        # A construct this check mishandles must not turn a solve into a traceback: the
+        # fallback answers as it did before the check existed.
+        return Check(False, f"abstract task: failed ({type(error).__name__})")
     stats: dict[str, object] = {
         "abstract_operators": verdict.operators, "abstract_expanded": verdict.expanded,
         "abstract_demoted": verdict.demoted,
