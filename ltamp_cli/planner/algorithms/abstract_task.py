@@ -23,7 +23,8 @@ fact over ``R ∪ A`` (``A`` the stand-ins) is
 * *open* when its predicate is certified by a stream and not changed by actions, and
   either an argument is a stand-in or the fact is over ``R``, in ``M`` but not in ``F0``
   (a stream may still certify it); also, for simplicity, every fact of a predicate that is
-  both certified and changed by actions;
+  both certified and changed by actions, and of one certified by a stream whose facts hold
+  only in some states (``:fluents``, a :domain fact that actions change);
 * *monotone* when its predicate is changed by actions and not certified and an argument is
   a stand-in (or it was *demoted*, below): a state variable that is added but never
   deleted.
@@ -151,6 +152,8 @@ class _Kinds:
     fluent: frozenset[str]
     derived: frozenset[str]
     certified: frozenset[str]
+    # Certified by :fluents or exogenous streams: true only in some states.
+    contextual: frozenset[str] = frozenset()
     demoted: set[Fact] = field(default_factory=set)
     demoted_predicates: set[str] = field(default_factory=set)
 
@@ -160,6 +163,8 @@ class _Kinds:
     def kind(self, fact: Fact) -> str:
         """'static', 'fluent' (exact), 'open' or 'monotone' (a basic fact)."""
         predicate = fact[0]
+        if predicate in self.contextual:
+            return "open"
         if predicate in self.fluent:
             if predicate in self.certified:
                 return "open"
@@ -189,15 +194,21 @@ class Closure:
     externals: Iterable[object]
 
 
-def certified_predicates(externals: Iterable[object]) -> frozenset[str]:
-    """Predicates some stream or external predicate certifies."""
+def certified_predicates(externals: Iterable[object]
+                         ) -> tuple[frozenset[str], frozenset[str]]:
+    """Predicates some stream or external predicate certifies, and those certified by a
+    stream whose facts hold only in some states (``:fluents``, or a :domain fact that
+    actions change)."""
     names: set[str] = set()
+    contextual: set[str] = set()
     for external in externals:
         if isinstance(external, Stream):
             names.update(atom.predicate for atom in external.certified)
+            if external.fluents or external.fluent_domain:
+                contextual.update(atom.predicate for atom in external.certified)
         elif isinstance(external, ExternalPredicate):
             names.add(external.head.predicate)
-    return frozenset(names)
+    return frozenset(names), frozenset(contextual)
 
 
 def search_abstract_task(source: Closure, deadline: float,
@@ -213,10 +224,11 @@ def search_abstract_task(source: Closure, deadline: float,
     times. A reachable goal ends the rounds (coarser tasks reach it too)."""
     start = time.perf_counter()
     derived = frozenset(axiom.predicate for axiom in source.axioms)
+    certified, contextual = certified_predicates(source.externals)
     kinds = _Kinds(
         source.real, source.known, source.index.members,
         frozenset(e.predicate for a in source.actions for e in a.effects),
-        derived, certified_predicates(source.externals))
+        derived, certified, contextual)
     instances = _ground_instances(source, deadline)
     verdict = Verdict(None)
     for _ in range(max_rounds):
