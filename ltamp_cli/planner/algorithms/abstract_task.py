@@ -118,6 +118,8 @@ MAX_SPLIT_EFFECTS = 3
 # before it gives up (unproven).
 MAX_EXPANSIONS = 2_000
 MAX_ROUNDS = 4
+# A predicate with more exact facts than this is monotone in the first, coarse try.
+COARSE_FACTS = 12
 # Least wall seconds the abstract search may take (see budget_deadline).
 MIN_BUDGET_S = 1.0
 # Rule instances turned into abstract actions between two deadline checks.
@@ -231,25 +233,52 @@ def search_abstract_task(source: Closure, deadline: float,
         derived, certified, contextual)
     instances = _ground_instances(source, deadline)
     verdict = Verdict(None)
+    task = _task(instances, kinds, deadline)
+    coarse = {predicate for predicate, count in _exact_counts(task, kinds).items()
+              if count > COARSE_FACTS}
+    if coarse:
+        # First a cheap try with every predicate of many exact facts monotone (a proof
+        # that needs none of them exact comes in a few expansions); then from fully exact.
+        fine_demoted = set(kinds.demoted)
+        kinds.demoted_predicates = coarse
+        verdict = _round(_task(instances, kinds, deadline), kinds, deadline, max_expansions,
+                         verdict, start)
+        if verdict.reachable is False:
+            return verdict
+        kinds.demoted_predicates, kinds.demoted = set(), fine_demoted
     for _ in range(max_rounds):
-        task = _task(instances, kinds, deadline)
-        monotone = frozenset(
-            number for number, fact in enumerate(task.facts)
-            if not task.is_derived[number] and fact[0] in kinds.fluent
-            and kinds.kind(fact) == "monotone")
-        reachable, expanded = _explore(task, monotone, deadline, max_expansions)
-        verdict = Verdict(reachable, len(task.operators), verdict.expanded + expanded,
-                          len(kinds.demoted), time.perf_counter() - start,
-                          tuple(sorted(kinds.demoted_predicates)))
-        if reachable is not None:
+        verdict = _round(task, kinds, deadline, max_expansions, verdict, start)
+        if verdict.reachable is not None:
             break
-        counts = Counter(fact[0] for number, fact in enumerate(task.facts)
-                         if number not in monotone and not task.is_derived[number]
-                         and kinds.kind(fact) == "fluent")
+        counts = _exact_counts(task, kinds)
         if not counts:
             break
         kinds.demoted_predicates.add(counts.most_common(1)[0][0])
+        task = _task(instances, kinds, deadline)
     return verdict
+
+
+def _round(task: Task, kinds: _Kinds, deadline: float, max_expansions: int,
+           previous: Verdict, start: float) -> Verdict:
+    """One search of ``task`` (expansions added to ``previous``'s)."""
+    monotone = frozenset(
+        number for number, fact in enumerate(task.facts)
+        if not task.is_derived[number] and fact[0] in kinds.fluent
+        and kinds.kind(fact) == "monotone")
+    if any(axiom.head == (GOAL_PREDICATE,) for axiom in task.axioms):
+        reachable, expanded = _explore(task, monotone, deadline, max_expansions)
+    else:  # no goal rule survived (each needs a fact both true and false, say)
+        reachable, expanded = False, 0
+    return Verdict(reachable, len(task.operators), previous.expanded + expanded,
+                   len(kinds.demoted), time.perf_counter() - start,
+                   tuple(sorted(kinds.demoted_predicates)))
+
+
+def _exact_counts(task: Task, kinds: _Kinds) -> Counter[str]:
+    """Exact fluent facts of ``task`` per predicate."""
+    return Counter(fact[0] for number, fact in enumerate(task.facts)
+                   if not task.is_derived[number] and fact[0] in kinds.fluent
+                   and kinds.kind(fact) == "fluent")
 
 
 def _task(instances: list[_Instance], kinds: _Kinds, deadline: float) -> Task:
@@ -277,6 +306,7 @@ def _explore(task: Task, monotone: frozenset[int], deadline: float, max_expansio
     task is covered by one of the merged states, and the search visits each exact part
     again only when its monotone facts grew (without merging, the subsets of monotone
     facts multiply the states: 20,000 expansions did not finish a two-block problem)."""
+    plain = _plain_effects(task, monotone)
     init_exact = task.init - monotone
     grown: dict[frozenset[int], frozenset[int]] = {init_exact: task.init & monotone}
     queue: deque[frozenset[int]] = deque([init_exact])
@@ -285,7 +315,7 @@ def _explore(task: Task, monotone: frozenset[int], deadline: float, max_expansio
     while queue:
         if expanded >= max_expansions:
             return None, expanded
-        if expanded % 64 == 0:
+        if expanded % 16 == 0:
             check_deadline(deadline)
         exact = queue.popleft()
         queued.discard(exact)
@@ -294,17 +324,43 @@ def _explore(task: Task, monotone: frozenset[int], deadline: float, max_expansio
         if task.is_goal(vector):
             return True, expanded
         expanded += 1
-        for op in task.applicable(vector):
-            child = task.successor(state, vector, int(op))
-            child_exact, child_monotone = child - monotone, child & monotone
-            known = grown.get(child_exact)
-            if known is not None and child_monotone <= known:
+        # Operators without conditional effects are grouped by their effect on the exact
+        # part (moves between configurations differ only in monotone facts): one child
+        # per group, with the union of the group's monotone adds.
+        children: dict[tuple[frozenset[int], frozenset[int]], set[int]] = {}
+        for op in task.applicable(vector).tolist():
+            entry = plain[op]
+            if entry is not None:
+                children.setdefault(entry[0], set()).update(entry[1])
                 continue
-            grown[child_exact] = child_monotone if known is None else known | child_monotone
+            child = task.successor(state, vector, op)
+            key = (exact - child, child - monotone - exact)
+            children.setdefault(key, set()).update(child & monotone)
+        for (deletes, adds), monotone_adds in children.items():
+            child_exact = (exact - deletes) | adds
+            known = grown.get(child_exact)
+            if known is not None and monotone_adds <= known and grown[exact] <= known:
+                continue
+            more = grown[exact].union(monotone_adds)
+            grown[child_exact] = more if known is None else known | more
             if child_exact not in queued:
                 queued.add(child_exact)
                 queue.append(child_exact)
     return False, expanded
+
+
+def _plain_effects(task: Task, monotone: frozenset[int]
+                   ) -> list[tuple[tuple[frozenset[int], frozenset[int]], frozenset[int]] | None]:
+    """Per operator without conditional effects: ((exact deletes, exact adds), monotone
+    adds); ``None`` for the others (their effects depend on the state)."""
+    plain: list[tuple[tuple[frozenset[int], frozenset[int]], frozenset[int]] | None] = []
+    for op in task.operators:
+        if op.conditional:
+            plain.append(None)
+            continue
+        adds = frozenset(op.adds)
+        plain.append(((frozenset(op.deletes) - monotone, adds - monotone), adds & monotone))
+    return plain
 
 
 _Instance = tuple[_Rule, dict[str, str]]
@@ -474,7 +530,8 @@ def _axiom_copies(rule: _Rule, source: NormalAxiom, binding: dict[str, str],
     try:
         _literals((*rule.positive, *rule.negative, *rule.equalities), binding, kinds,
                   "upper", upper)
-        copies.append(GroundAxiom(head, tuple(upper.pos), tuple(upper.neg)))
+        if not set(upper.pos) & set(upper.neg):  # else it never holds
+            copies.append(GroundAxiom(head, tuple(upper.pos), tuple(upper.neg)))
     except _Dead:
         pass
     if source.predicate == GOAL_PREDICATE or kinds.abstract(head) or any(
@@ -486,8 +543,9 @@ def _axiom_copies(rule: _Rule, source: NormalAxiom, binding: dict[str, str],
                   "lower", lower)
     except _Dead:
         return copies
-    copies.append(GroundAxiom((LOWER_PREFIX + head[0], *head[1:]), tuple(lower.pos),
-                              tuple(lower.neg)))
+    if not set(lower.pos) & set(lower.neg):
+        copies.append(GroundAxiom((LOWER_PREFIX + head[0], *head[1:]), tuple(lower.pos),
+                                  tuple(lower.neg)))
     return copies
 
 
@@ -499,6 +557,8 @@ def _action_copies(rule: _Rule, source: NormalAction, binding: dict[str, str],
                   "upper", pre)
     except _Dead:
         return []
+    if set(pre.pos) & set(pre.neg):
+        return []  # never applicable
     certain: list[GroundEffect] = []
     split: list[GroundEffect] = []
     for effect in source.effects:
