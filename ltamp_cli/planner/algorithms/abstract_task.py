@@ -67,7 +67,9 @@ covered by the merged state of its exact part). Demoting any fact (or every fact
 predicate) from exact to monotone keeps the argument (its real value is then only
 over-approximated), so when a round runs out of expansions the fluent predicate with the
 most exact facts is demoted (typically the robot's configuration) and the coarser task is
-searched again.
+searched again; a first, coarse try demotes every predicate of many exact facts at once.
+Operators that act alike on the exact part are expanded as one (their monotone adds
+united), as the merged states allow.
 
 Cases where reading a literal exactly would be unsound, each a solvable problem in
 ``bench/infeasible_corpus.py`` that such a reading answers "infeasible" (and
