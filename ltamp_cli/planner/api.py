@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import math
 import time
 from collections.abc import Callable
@@ -18,18 +19,14 @@ from ltamp_cli.planner.algorithms.common import (
 )
 from ltamp_cli.planner.algorithms.focused import solve_focused
 from ltamp_cli.planner.algorithms.incremental import solve_incremental
-from ltamp_cli.planner.algorithms.multiplicity import (
-    UnsupportedConstruct,
-    has_generators,
-    relaxed_goal_reachable,
-)
+from ltamp_cli.planner.algorithms.multiplicity import check_infeasibility, has_generators
 from ltamp_cli.planner.algorithms.skeletons import solve_with_skeletons
 from ltamp_cli.planner.gc_pacing import CollectionPacer, PausedCollection
 from ltamp_cli.planner.pddl.syntax import Stream
 from ltamp_cli.planner.problem import PlanningProblem
 from ltamp_cli.planner.reclaim import Reclaimer
 from ltamp_cli.planner.result import INFEASIBLE, TIMEOUT, Certificate, PlanResult
-from ltamp_cli.planner.search.engine import SEARCH_ALGORITHMS, SearchTimeout
+from ltamp_cli.planner.search.engine import SEARCH_ALGORITHMS
 from ltamp_cli.planner.search.normalize import GoalFormulaError
 from ltamp_cli.planner.search.skeleton import (
     check_constraints,
@@ -42,6 +39,7 @@ from ltamp_cli.seeds import usable_seed
 from ltamp_cli.threads import limited_threads
 
 COST_EPSILON = 1e-6
+LOGGER = logging.getLogger("ltamp")
 # Tries at reading an abandoned worker's state while it may still change it.
 ABANDONED_READ_ATTEMPTS = 5
 # Automatic garbage collection is off while solves run (see :mod:`.gc_pacing`): one switch
@@ -194,13 +192,15 @@ MULTIPLICITY_NOTE = ("a plan may need several distinct outputs of one stream ins
 
 
 def _infeasibility_unproven(problem: PlanningProblem, config: PlannerConfig,
-                            state: PlannerState) -> str | None:
+                            state: PlannerState, stats: dict[str, object] | None = None
+                            ) -> str | None:
     """Why an optimistic algorithm's "infeasible" may be wrong (``None``: it is proven):
     some stream certifies facts it does not declare (wild outputs seen, or a stream with no
     :certified facts), which no optimistic plan can anticipate; plan constraints equate
     arguments that optimistic plans keep apart (distinct stream instances have distinct
     placeholders, yet their real outputs may be one object); or a plan may need two
-    distinct outputs of one instance (:func:`_multiplicity_may_matter`)."""
+    distinct outputs of one instance (:func:`.multiplicity.check_infeasibility` did not
+    prove the goal unreachable; what it found goes to ``stats``)."""
     if config.algorithm == "incremental" or problem.stream_file is None:
         return None
     if config.constraints is not None:
@@ -214,23 +214,13 @@ def _infeasibility_unproven(problem: PlanningProblem, config: PlannerConfig,
     _probe_uncalled_instances(state)
     if state.saw_wild_facts:
         return WILD_FACTS_NOTE
-    if _multiplicity_may_matter(state):
-        return MULTIPLICITY_NOTE
-    return None
-
-
-def _multiplicity_may_matter(state: PlannerState) -> bool:
-    """Whether a plan might need several distinct outputs of one stream instance, which one
-    optimistic placeholder per instance cannot stand for: only if some stream makes objects
-    and the goal is reachable in the relaxation where merging objects cannot hurt
-    (:func:`.multiplicity.relaxed_goal_reachable`); past the deadline, or on a construct
-    the relaxation cannot represent, it may."""
     if not has_generators(state):
-        return False
-    try:
-        return relaxed_goal_reachable(state)
-    except (SearchTimeout, UnsupportedConstruct):
-        return True
+        return None
+    check = check_infeasibility(state)
+    if stats is not None:
+        stats["infeasibility_check"] = check.by
+        stats.update(check.stats)
+    return None if check.proven else f"{MULTIPLICITY_NOTE}; {check.by}"
 
 
 def _probe_uncalled_instances(state: PlannerState) -> None:
@@ -259,6 +249,12 @@ def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
         result = state.result(TIMEOUT, None)
         result.diagnostics["infeasibility_unproven"] = note
         return result
+    if math.isinf(remaining):
+        # No time limit: this solve ends only with a plan or once every stream instance is
+        # exhausted, possibly never; say why while it runs.
+        LOGGER.warning("ltamp: no plan found by %s and infeasibility unproven (%s); the "
+                       "incremental algorithm continues without a time limit (give max_time "
+                       "to bound it)", config.algorithm, note)
     statistics.update(state.stream_stats)
     fallback = initial_state(problem, replace(config, algorithm="incremental",
                                               max_time=remaining))
@@ -285,9 +281,11 @@ def _solve(problem: PlanningProblem, config: PlannerConfig, start: float,
     run = _algorithm(config.algorithm)
     best = run(state)
     if best.status == INFEASIBLE:
-        unproven = _infeasibility_unproven(problem, config, state)
+        check: dict[str, object] = {}
+        unproven = _infeasibility_unproven(problem, config, state, check)
         if unproven is not None:
             best = _complete_with_incremental(problem, config, state, statistics, unproven)
+        best.stats.update(check)
     improvements = [best.cost] if best.solved else []
     while (best.solved and best.cost > config.success_cost + COST_EPSILON
            and not state.timed_out()):

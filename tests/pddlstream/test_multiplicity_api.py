@@ -70,3 +70,17 @@ def test_relaxed_infeasible_variant_answers_without_the_time_limit(tmp_path: Pat
     assert result.status == "infeasible"
     solution = solve(visits_problem(tmp_path, goal), algorithm=algorithm, verbose=False)
     assert solution.plan is None
+
+
+@pytest.mark.parametrize("algorithm", ("adaptive", "binding", "focused"))
+def test_deleted_stages_answer_without_the_time_limit(tmp_path: Path, algorithm: str) -> None:
+    """s0 and s2 at once: reachable in the relaxation (deletes dropped), unreachable in the
+    abstract task exact over known objects, so max_time=inf ends with "no plan" (a
+    timeout before: the incremental fallback never runs out of samples)."""
+    goal = And(("Stage", "s2"), ("Stage", "s0"))
+    problem = to_planning_problem(visits_problem(tmp_path, goal))
+    result = plan(problem, PlannerConfig(algorithm=algorithm, max_time=float("inf")))
+    assert result.status == "infeasible"
+    assert "completed_by" not in result.stats
+    solution = solve(visits_problem(tmp_path, goal), algorithm=algorithm, verbose=False)
+    assert solution.plan is None

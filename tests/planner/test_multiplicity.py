@@ -15,7 +15,7 @@ from conftest import ALGORITHMS, MakeProblem
 from test_cli import ltamp
 
 from ltamp_cli.planner.algorithms.common import PlannerConfig, initial_state
-from ltamp_cli.planner.algorithms.multiplicity import relaxed_goal_reachable
+from ltamp_cli.planner.algorithms.multiplicity import ABSTRACT_PROOF, relaxed_goal_reachable
 from ltamp_cli.planner.api import MULTIPLICITY_NOTE, solve
 from ltamp_cli.planner.problem import PlanningProblem, load_problem
 from ltamp_cli.planner.validate import validate_plan
@@ -116,13 +116,16 @@ def test_too_few_outputs_is_infeasible_once_exhausted(make_problem: MakeProblem,
     assert MULTIPLICITY_NOTE in result.stats["completed_by"]
 
 
-def test_unproven_infeasibility_is_a_timeout(make_problem: MakeProblem) -> None:
-    """Both s0 and s2 can hold only in the relaxation (stages are deleted), and sample(r)
-    never ends: nothing proves infeasibility, so the answer is a timeout."""
+def test_deleted_stages_are_proven_infeasible(make_problem: MakeProblem) -> None:
+    """Both s0 and s2 hold only in the relaxation (stages are deleted): the abstract task,
+    exact over known objects, proves it although sample(r) never ends (this was a timeout
+    before it)."""
     problem = load_problem(visits(make_problem, stages=2, goal="(and (Stage s2) (Stage s0))"))
-    result = solve(problem, PlannerConfig(algorithm="binding", max_time=0.5))
-    assert result.status == "timeout"
+    result = solve(problem, PlannerConfig(algorithm="binding", max_time=30))
+    assert result.status == "infeasible"
     assert result.plan is None
+    assert result.stats["infeasibility_check"] == ABSTRACT_PROOF
+    assert "completed_by" not in result.stats
 
 
 def relaxed(problem: PlanningProblem) -> bool:

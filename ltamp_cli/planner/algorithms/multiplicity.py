@@ -22,7 +22,10 @@ facts both certify about it never met on one object and such a plan was called
 a homomorphism that keeps positive facts, so every real plan, however many distinct
 outputs it uses, maps to a relaxed plan here. When the goal is unreachable in this finite
 relaxation, no plan exists and "infeasible" is proven; otherwise the caller must not claim
-it (it escalates). Not covered (as in the optimistic algorithms): a future output that
+it yet: :func:`check_infeasibility` then searches the finer abstract task of
+:mod:`.abstract_task`, which keeps deletes, negation and inequalities exact wherever only
+known objects are concerned (merging touches only the stand-ins); unreachable there is a
+proof too. Not covered (as in the optimistic algorithms): a future output that
 equals an object made by *another* stream or given by the problem, or that repeats only
 part of an earlier output tuple of its stream (objects are values), and facts a stream
 does not declare (wild facts, handled by the caller).
@@ -32,7 +35,14 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
 
+from ltamp_cli.planner.algorithms.abstract_task import (
+    Closure,
+    Unrepresentable,
+    budget_deadline,
+    search_abstract_task,
+)
 from ltamp_cli.planner.algorithms.common import PlannerState, instantiate_atoms
 from ltamp_cli.planner.pddl.syntax import (
     OBJECT_TYPE,
@@ -40,7 +50,7 @@ from ltamp_cli.planner.pddl.syntax import (
     Stream,
     is_variable,
 )
-from ltamp_cli.planner.search.engine import SearchTimeout
+from ltamp_cli.planner.search.clock import SearchTimeout
 from ltamp_cli.planner.search.ground import (
     Fact,
     FactIndex,
@@ -71,6 +81,13 @@ def relaxed_goal_reachable(state: PlannerState) -> bool:
 
     Raises :class:`~ltamp_cli.planner.search.engine.SearchTimeout` past the solve's deadline
     and :class:`UnsupportedConstruct` (both mean: not proven)."""
+    return (GOAL_PREDICATE,) in relaxed_closure(state).index.members
+
+
+def relaxed_closure(state: PlannerState) -> Closure:
+    """Every fact the relaxation of the module docstring reaches (a fixpoint of the rules
+    and the streams), with the rules normalised over the final objects (known ones and
+    stand-ins): what :func:`.abstract_task.search_abstract_task` grounds."""
     problem = state.problem
     real = frozenset(state.object_types)
     objects: dict[str, str] = dict(state.object_types)
@@ -80,6 +97,7 @@ def relaxed_goal_reachable(state: PlannerState) -> bool:
     delta: list[Fact] | None = None
     rule_set: RuleSet | None = None
     renormalize = True
+    known = set(state.facts.members)
     while True:
         if renormalize:
             # Quantifiers and forall effects expand over the objects: again when new
@@ -88,16 +106,16 @@ def relaxed_goal_reachable(state: PlannerState) -> bool:
                 problem.domain, objects, (), problem.goal, state.deadline)
             for fact in typed:
                 index.add(fact)
+                if fact[1] in real:
+                    known.add(fact)
             rule_set = RuleSet(actions, axioms)
             delta, renormalize = None, False
         assert rule_set is not None
         semi_naive_fixpoint(rule_set, index, delta, _RelaxedEmit(index), state.deadline)
-        if (GOAL_PREDICATE,) in index.members:
-            return True
         before = len(objects)
         delta = _stream_round(state, index, real, objects, enumerated, made)
         if not delta:
-            return False
+            return Closure(actions, axioms, index, real, known, state.externals.values())
         renormalize = len(objects) != before
 
 
@@ -211,3 +229,54 @@ def _abstract_facts(state: PlannerState, external: Stream | ExternalPredicate,
             mapping.update(zip(external.outputs, outputs, strict=True))
             facts.extend(instantiate_atoms(linking, mapping))
     return facts
+
+
+@dataclass
+class Check:
+    """Whether the goal is proven unreachable (``proven``), ``by`` what (or, unproven, why
+    not), and the abstract search's size for the solve's stats."""
+
+    proven: bool
+    by: str
+    stats: dict[str, object] = field(default_factory=dict)
+
+
+RELAXATION_PROOF = "merge-safe relaxation: goal unreachable"
+ABSTRACT_PROOF = "abstract task exact over known objects: goal unreachable"
+
+
+def check_infeasibility(state: PlannerState) -> Check:
+    """Prove the goal unreachable however many outputs each stream instance gives: first in
+    the relaxation of the module docstring, then in the abstract task of
+    :mod:`.abstract_task` (deletes and negation exact over known objects), searched for at
+    most half of the time left (:func:`.abstract_task.budget_deadline`) and
+    :data:`.abstract_task.MAX_EXPANSIONS` expansions per round, and no longer than the solve
+    has run so far (at least :data:`.abstract_task.MIN_BUDGET_S`). Past the deadline, on a
+    construct either cannot represent, or when the search's budget runs out: unproven."""
+    try:
+        closure = relaxed_closure(state)
+    except (SearchTimeout, UnsupportedConstruct) as error:
+        return Check(False, f"relaxation not finished ({type(error).__name__})")
+    if (GOAL_PREDICATE,) not in closure.index.members:
+        return Check(True, RELAXATION_PROOF)
+    try:
+        verdict = search_abstract_task(closure, budget_deadline(
+            state.deadline, time.perf_counter() - state.start_time))
+    except SearchTimeout:
+        return Check(False, "abstract task: out of time")
+    except Unrepresentable as error:
+        return Check(False, f"abstract task: not representable ({error})")
+    except (RecursionError, MemoryError, ValueError, KeyError, TypeError) as error:
+        # A construct this check mishandles must not turn a solve into a traceback: the
+        # fallback answers as it did before the check existed.
+        return Check(False, f"abstract task: failed ({type(error).__name__})")
+    stats: dict[str, object] = {
+        "abstract_operators": verdict.operators, "abstract_expanded": verdict.expanded,
+        "abstract_demoted": verdict.demoted,
+        "abstract_demoted_predicates": list(verdict.demoted_predicates),
+        "abstract_time_s": round(verdict.time_s, 6)}
+    if verdict.reachable is False:
+        return Check(True, ABSTRACT_PROOF, stats)
+    if verdict.reachable is None:
+        return Check(False, "abstract task: expansion budget spent", stats)
+    return Check(False, "goal reachable in the abstract task", stats)
