@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Generator
 
 from ltamp_cli.planner.algorithms.common import PlannerState
-from ltamp_cli.planner.algorithms.optimistic import evaluate_eager
+from ltamp_cli.planner.algorithms.optimistic import evaluate_eager_steps
 from ltamp_cli.planner.algorithms.preimage import plan_preimage
 from ltamp_cli.planner.result import INFEASIBLE, SOLVED, TIMEOUT, PlanResult
 from ltamp_cli.planner.search.engine import SearchTimeout
@@ -41,7 +41,7 @@ def incremental_steps(state: PlannerState) -> Generator[None, None, PlanResult]:
             # level per iteration: a new sample is then usable in the very next search
             # (tamp2d_4blocks 5-7 -> 3-5 searches; kitchen_symbolic 4-6 -> 2-3).
             before = _sizes(state)
-            evaluate_eager(state)
+            yield from evaluate_eager_steps(state)
             changed = changed or _sizes(state) != before
             if changed:
                 discrete = state.search(state.facts.members, state.object_types,

@@ -17,9 +17,9 @@ Neither member is better on every problem, so the solve runs both, in one thread
   they did before, plans included;
 * after that, between two iterations of the optimistic loop, the incremental member runs
   until its own CPU time reaches :data:`SHARE` times the CPU the optimistic member spent past
-  the grace. Its work is cut at every stream call and every search
-  (:func:`.incremental.incremental_steps` is resumable); a step that overshoots the share
-  (a search, an eager fixpoint) is a debt the member waits out.
+  the grace. Its work is cut at every stream call (those of its eager fixpoints too) and
+  every search (:func:`.incremental.incremental_steps` is resumable); a step that
+  overshoots the share (a search) is a debt the member waits out.
 
 Whichever member finds a plan first returns it; an "infeasible" from the incremental member
 is a proof (every instance exhausted, an exhaustive search) and is returned too. With share
