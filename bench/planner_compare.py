@@ -1,4 +1,5 @@
-"""Paired comparison of two ``bench/planner.py`` result files (before / after a change).
+"""Paired comparison of two ``bench/planner.py`` (or ``bench/planner_hidden.py``) result files
+(before / after a change).
 
 Runs are paired by (example, algorithm, history, seed). Per (example, algorithm, history):
 solved before / after with the Wilson 95 % interval of the after rate, median CPU seconds
@@ -49,7 +50,9 @@ def load_runs(path: Path) -> dict[Key, dict[int, dict[str, Any]]]:
         raise SystemExit(f"error: {path}: not a bench/planner.py result ({error})") from None
     grouped: dict[Key, dict[int, dict[str, Any]]] = {}
     for run in runs:
-        key = (run["example"], run["algorithm"], run.get("history", "cold"))
+        # bench/planner_hidden.py names the problem (and its mode) instead
+        example = run["example"] if "example" in run else run["problem"]
+        key = (example, run["algorithm"], run.get("history", run.get("mode", "cold")))
         grouped.setdefault(key, {})[int(run["seed"])] = run
     return grouped
 

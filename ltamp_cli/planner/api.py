@@ -128,7 +128,8 @@ def check_config(config: PlannerConfig) -> None:
     if (isinstance(max_time, bool) or not isinstance(max_time, int | float)
             or math.isnan(max_time) or max_time <= 0):
         raise InputError(f"max time: expected a positive number of seconds, got {max_time!r}")
-    for flag in ("unit_costs", "eager_cheap_streams", "incremental_grounding"):
+    for flag in ("unit_costs", "eager_cheap_streams", "incremental_grounding",
+                 "interleave"):
         value = getattr(config, flag)
         if not (isinstance(value, bool | np.bool_) or value in (0, 1)):  # "no" would be true
             raise InputError(f"{flag.replace('_', ' ')}: expected True or False, got "

@@ -161,7 +161,7 @@ def test_incremental_evaluates_eager_streams_before_each_search(
     assert eager.solved and [s.values for s in eager.plan] == [(0, 1), (1, 2), (2, 3)]
     # One level of values per iteration: position 3 is sampled in the third round, and its
     # eager goal test runs before the fourth search instead of one round later.
-    monkeypatch.setattr(incremental, "evaluate_eager", lambda state: None)
+    monkeypatch.setattr(incremental, "evaluate_eager_steps", lambda state: iter(()))
     lagging = solve(problem, config)
     assert lagging.solved and [s.values for s in lagging.plan] == [(0, 1), (1, 2), (2, 3)]
     assert eager.stats["searches"] == lagging.stats["searches"] - 1

@@ -100,6 +100,9 @@ class PlannerConfig:
     searches, -6 % (adaptive) and -14 % (binding) median CPU; it costs when each search
     brings mostly new instances (tamp2d problems with uniform placements: +10-25 %), so it
     is off by default (docs/results/planner/issue19.md).
+    ``interleave``: the optimistic algorithms give the incremental algorithm an equal share
+    of CPU once they have spent a grace period without a plan (a two-member portfolio, see
+    :mod:`.interleave`); the injected ``stream_cpu_clock``, when given, measures the shares.
     """
 
     algorithm: str = "adaptive"
@@ -118,6 +121,7 @@ class PlannerConfig:
     eager_cheap_streams: bool = False
     threads: int | None = 1  # thread-pool limit while solving (ltamp_cli.threads)
     incremental_grounding: bool = False
+    interleave: bool = True
     stream_cpu_clock: Callable[[], float] | None = None
 
 

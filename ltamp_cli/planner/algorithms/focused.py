@@ -10,6 +10,10 @@ the next search failure, which re-enables everything and raises the complexity b
 from __future__ import annotations
 
 from ltamp_cli.planner.algorithms.common import PlannerState, bound_plan
+from ltamp_cli.planner.algorithms.interleave import (
+    InterleavedIncremental,
+    interleaved_incremental,
+)
 from ltamp_cli.planner.algorithms.optimistic import (
     MAX_LOCAL_REPAIRS,
     ContextualStreamPlan,
@@ -134,6 +138,14 @@ def _output(state: PlannerState, instance: StreamInstance, index: int
 
 
 def solve_focused(state: PlannerState) -> PlanResult:
+    """Focused, interleaved with the incremental algorithm once a grace period passed
+    without a plan (:mod:`.interleave`)."""
+    member = interleaved_incremental(state)
+    result = _solve_focused(state, member)
+    return result if member is None else member.annotate(result)
+
+
+def _solve_focused(state: PlannerState, member: InterleavedIncremental | None) -> PlanResult:
     from ltamp_cli.planner.search.engine import SearchTimeout
 
     complexity = state.config.initial_complexity
@@ -141,6 +153,8 @@ def solve_focused(state: PlannerState) -> PlanResult:
     capped_task: frozenset[object] | None = None
     try:
         while not state.timed_out():
+            if member is not None and (settled := member.run()) is not None:
+                return settled
             state.iterations += 1
             evaluate_eager(state)
             evaluation = optimistic_evaluation(state, complexity, placeholders)

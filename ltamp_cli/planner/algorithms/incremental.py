@@ -8,14 +8,29 @@ iteration).
 
 from __future__ import annotations
 
+from collections.abc import Generator
+
 from ltamp_cli.planner.algorithms.common import PlannerState
-from ltamp_cli.planner.algorithms.optimistic import evaluate_eager
+from ltamp_cli.planner.algorithms.optimistic import evaluate_eager_steps
 from ltamp_cli.planner.algorithms.preimage import plan_preimage
 from ltamp_cli.planner.result import INFEASIBLE, SOLVED, TIMEOUT, PlanResult
 from ltamp_cli.planner.search.engine import SearchTimeout
 
 
 def solve_incremental(state: PlannerState) -> PlanResult:
+    """Run :func:`incremental_steps` to its result."""
+    steps = incremental_steps(state)
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            return done.value
+
+
+def incremental_steps(state: PlannerState) -> Generator[None, None, PlanResult]:
+    """The incremental algorithm as a resumable computation: yields after every stream call
+    and every search (so that another algorithm can interleave it in bounded slices, see
+    :mod:`.interleave`) and returns the result (``StopIteration.value``)."""
     changed = True
     capped = False
     try:
@@ -26,7 +41,7 @@ def solve_incremental(state: PlannerState) -> PlanResult:
             # level per iteration: a new sample is then usable in the very next search
             # (tamp2d_4blocks 5-7 -> 3-5 searches; kitchen_symbolic 4-6 -> 2-3).
             before = _sizes(state)
-            evaluate_eager(state)
+            yield from evaluate_eager_steps(state)
             changed = changed or _sizes(state) != before
             if changed:
                 discrete = state.search(state.facts.members, state.object_types,
@@ -35,11 +50,12 @@ def solve_incremental(state: PlannerState) -> PlanResult:
                     facts, terms = plan_preimage(discrete)
                     return state.result(SOLVED, discrete, facts | terms)
                 capped = discrete.capped
+                yield
             if state.timed_out():
                 return state.result(TIMEOUT, None)
             # A search stopped by its budget proves nothing: search again (with a larger
             # budget) even when sampling adds nothing.
-            changed = sample_all(state) or capped
+            changed = (yield from _sample_all_steps(state)) or capped
             if not changed and all(i.exhausted for i in state.instances.values()):
                 return state.result(INFEASIBLE, None)
     except SearchTimeout:
@@ -48,6 +64,16 @@ def solve_incremental(state: PlannerState) -> PlanResult:
 
 def sample_all(state: PlannerState) -> bool:
     """Create every new legal instance, then call each non-exhausted one once."""
+    steps = _sample_all_steps(state)
+    while True:
+        try:
+            next(steps)
+        except StopIteration as done:
+            return bool(done.value)
+
+
+def _sample_all_steps(state: PlannerState) -> Generator[None, None, bool]:
+    """:func:`sample_all`, yielding after each call; returns whether facts were added."""
     # Streams with :fluents see the initial state here (incremental plans are not
     # interleaved with sampling, so no later state is known when they are called).
     initial = [(atom.predicate, *atom.args) for atom in state.problem.init]
@@ -61,6 +87,7 @@ def sample_all(state: PlannerState) -> bool:
             break
         if not instance.exhausted:
             state.call(instance)
+            yield
     return _sizes(state) != before
 
 

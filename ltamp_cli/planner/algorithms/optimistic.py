@@ -48,7 +48,7 @@ and every plan returned is still validated against the real facts.
 
 from __future__ import annotations
 
-from collections.abc import Collection, Iterable, Mapping
+from collections.abc import Collection, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 
 from ltamp_cli.planner.algorithms.common import (
@@ -718,15 +718,23 @@ def evaluate_eager(state: PlannerState, complexity: int | None = None) -> None:
     cycle of the stream graph, on inputs below that level (see
     :meth:`PlannerState.eager_within_level`).
     """
-    _eager_fixpoint(state, complexity)
+    for _ in evaluate_eager_steps(state, complexity):
+        pass
+
+
+def evaluate_eager_steps(state: PlannerState, complexity: int | None = None
+                         ) -> Iterator[None]:
+    """:func:`evaluate_eager`, yielding after each stream call of its fixpoints (an
+    interleaved incremental member is cut there, see :mod:`.interleave`)."""
+    yield from _eager_fixpoint(state, complexity)
     if state.config.eager_cheap_streams:
         # After the fixpoint: the probe call then sees what the eager streams derived (a
         # sampler may use it, e.g. to offer last the places where objects already stand).
         probe_unmeasured(state)
-        _eager_fixpoint(state, complexity)
+        yield from _eager_fixpoint(state, complexity)
 
 
-def _eager_fixpoint(state: PlannerState, complexity: int | None) -> None:
+def _eager_fixpoint(state: PlannerState, complexity: int | None) -> Iterator[None]:
     changed = True
     while changed and not state.timed_out():
         changed = False
@@ -744,6 +752,7 @@ def _eager_fixpoint(state: PlannerState, complexity: int | None) -> None:
                 if instance.num_calls == 0:
                     state.call(instance)
                     changed = True
+                    yield
 
 
 def _below_level(state: PlannerState, external: External, complexity: int

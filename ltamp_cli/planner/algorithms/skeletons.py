@@ -54,6 +54,10 @@ from ltamp_cli.planner.algorithms.common import (
     instantiate_atoms,
 )
 from ltamp_cli.planner.algorithms.effort import observed_cheap
+from ltamp_cli.planner.algorithms.interleave import (
+    InterleavedIncremental,
+    interleaved_incremental,
+)
 from ltamp_cli.planner.algorithms.optimistic import (
     MAX_LOCAL_REPAIRS,
     InstanceKey,
@@ -628,6 +632,15 @@ def _local_repair(state: PlannerState, failed: Binding, consumed: tuple[str, ...
 
 
 def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
+    """Adaptive (``adaptive``) or binding, interleaved with the incremental algorithm once
+    a grace period passed without a plan (:mod:`.interleave`)."""
+    member = interleaved_incremental(state)
+    result = _solve_with_skeletons(state, adaptive, member)
+    return result if member is None else member.annotate(result)
+
+
+def _solve_with_skeletons(state: PlannerState, adaptive: bool,
+                          member: InterleavedIncremental | None) -> PlanResult:
     complexity = state.config.initial_complexity
     placeholders = Placeholders()
     queue = BindingQueue()
@@ -648,6 +661,8 @@ def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
     refined_expansions = 0  # expansions of the search whose plan was refined
     try:
         while not state.timed_out():
+            if member is not None and (settled := member.run()) is not None:
+                return settled
             state.iterations += 1
             evaluate_eager(state, complexity)
             head = queue.peek()
