@@ -18,6 +18,7 @@ import subprocess
 import sys
 import textwrap
 import threading
+import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -53,11 +54,18 @@ def test_an_interrupted_solve_stops_its_worker(unreachable: Path) -> None:
     workers: list[threading.Thread] = []
 
     def interrupt() -> None:
-        workers.extend(t for t in threading.enumerate() if t.name == "ltamp-solve"
-                       and t.is_alive())
+        # Interrupt once the worker runs (under load, a fixed delay could fall in the
+        # solve's set-up, before the caller waits for its worker): the interrupt must reach
+        # the waiting caller.
+        give_up = time.monotonic() + 60
+        while not workers and time.monotonic() < give_up:
+            time.sleep(0.05)
+            workers.extend(t for t in threading.enumerate() if t.name == "ltamp-solve"
+                           and t.is_alive())
+        time.sleep(0.5)
         _thread.interrupt_main()
 
-    timer = threading.Timer(1.0, interrupt)
+    timer = threading.Thread(target=interrupt, daemon=True)
     timer.start()
     with pytest.raises(KeyboardInterrupt):
         solve(problem, PlannerConfig(algorithm="adaptive", max_time=120))

@@ -250,8 +250,7 @@ def check_infeasibility(state: PlannerState) -> Check:
     the relaxation of the module docstring, then in the abstract task of
     :mod:`.abstract_task` (deletes and negation exact over known objects), searched for at
     most half of the time left (:func:`.abstract_task.budget_deadline`) and
-    :data:`.abstract_task.MAX_EXPANSIONS` expansions per round, and no longer than the solve
-    has run so far (at least :data:`.abstract_task.MIN_BUDGET_S`). Past the deadline, on a
+    :data:`.abstract_task.MAX_EXPANSIONS` expansions per round. Past the deadline, on a
     construct either cannot represent, or when the search's budget runs out: unproven."""
     try:
         closure = relaxed_closure(state)
@@ -260,8 +259,7 @@ def check_infeasibility(state: PlannerState) -> Check:
     if (GOAL_PREDICATE,) not in closure.index.members:
         return Check(True, RELAXATION_PROOF)
     try:
-        verdict = search_abstract_task(closure, budget_deadline(
-            state.deadline, time.perf_counter() - state.start_time))
+        verdict = search_abstract_task(closure, budget_deadline(state.deadline))
     except SearchTimeout:
         return Check(False, "abstract task: out of time")
     except Unrepresentable as error:
