@@ -28,3 +28,13 @@ def make_streams(world, rng):
             yield (p + 1,)
     return {"next": next_, "test-goal": lambda p: p == world["goal"]}
 """
+# A problem file over the line (domain folder ``dom``, bindings ``bindings.py``): ``next``
+# goes on forever and no value is the goal, so a solve runs to its deadline.
+UNREACHABLE = """
+domain: dom
+bindings: bindings.py
+world: {top: null, goal: -1}
+objects: {p0: 0}
+init: ["(Pos p0)", "(At p0)"]
+goal: (exists (?p) (and (At ?p) (Goal ?p)))
+"""

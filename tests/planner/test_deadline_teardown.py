@@ -21,7 +21,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from line_domain import LINE_BINDINGS, LINE_DOMAIN, LINE_STREAMS
+from line_domain import LINE_BINDINGS, LINE_DOMAIN, LINE_STREAMS, UNREACHABLE
 
 from ltamp_cli.planner import api
 from ltamp_cli.planner.algorithms.common import PlannerConfig, PlannerState
@@ -35,15 +35,6 @@ BOUND_S = MAX_TIME + 1.0
 CHUNKS = 150
 CHUNK_ENTRIES = 10_000
 
-# The goal value is never reached: ``next`` goes on forever, so the solve runs to its deadline.
-UNREACHABLE = """
-domain: dom
-bindings: bindings.py
-world: {top: null, goal: -1}
-objects: {p0: 0}
-init: ["(Pos p0)", "(At p0)"]
-goal: (exists (?p) (and (At ?p) (Goal ?p)))
-"""
 
 
 class Sentinel:

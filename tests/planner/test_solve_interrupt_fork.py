@@ -23,7 +23,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from line_domain import LINE_BINDINGS, LINE_DOMAIN, LINE_STREAMS
+from line_domain import LINE_BINDINGS, LINE_DOMAIN, LINE_STREAMS, UNREACHABLE
 
 from ltamp_cli.planner.algorithms.common import PlannerConfig
 from ltamp_cli.planner.api import solve
@@ -31,15 +31,6 @@ from ltamp_cli.planner.problem import load_problem
 
 MakeProblem = Callable[..., Path]
 REPO = Path(__file__).resolve().parents[2]
-# ``next`` goes on forever and no value is the goal: the solve runs to its deadline.
-UNREACHABLE = """
-domain: dom
-bindings: bindings.py
-world: {top: null, goal: -1}
-objects: {p0: 0}
-init: ["(Pos p0)", "(At p0)"]
-goal: (exists (?p) (and (At ?p) (Goal ?p)))
-"""
 
 
 @pytest.fixture
