@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import _thread
 import os
+import signal
 import subprocess
 import sys
 import textwrap
@@ -56,10 +57,16 @@ def test_an_interrupted_solve_stops_its_worker(unreachable: Path) -> None:
         time.sleep(0.5)
         _thread.interrupt_main()
 
+    # A process started in the background by a non-interactive shell (as CI may be) ignores
+    # SIGINT, and then ``interrupt_main`` does nothing: give the test Python's handler.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Thread(target=interrupt, daemon=True)
     timer.start()
-    with pytest.raises(KeyboardInterrupt):
-        solve(problem, PlannerConfig(algorithm="adaptive", max_time=120))
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            solve(problem, PlannerConfig(algorithm="adaptive", max_time=120))
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert workers, "the interrupt came before the solve's worker started"
     for worker in workers:
         worker.join(timeout=30)  # it stops at its next stream call or clock check
