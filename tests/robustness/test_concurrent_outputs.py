@@ -49,8 +49,17 @@ def test_a_gif_is_never_read_half_written(tmp_path: Path) -> None:
     _write(path, 0)
     expected = _whole_gif_frames(path)
     assert expected > 5
-    writers = [threading.Thread(target=lambda s=seed: [_write(path, s) for _ in range(3)])
-               for seed in (1, 2)]
+    enough_reads = threading.Event()
+
+    def keep_writing(seed: int) -> None:
+        # Write until the reader has looked often enough: a loaded CI machine may let the
+        # reader run only a few times during a fixed number of writes.
+        writes = 0
+        while writes < 3 or not enough_reads.is_set():
+            _write(path, seed)
+            writes += 1
+
+    writers = [threading.Thread(target=keep_writing, args=(seed,)) for seed in (1, 2)]
     for writer in writers:
         writer.start()
     torn = reads = 0
@@ -61,9 +70,11 @@ def test_a_gif_is_never_read_half_written(tmp_path: Path) -> None:
             frames = -1
         reads += 1
         torn += frames != expected
+        if reads >= 20:
+            enough_reads.set()
     for writer in writers:
         writer.join()
-    assert reads > 10 and torn == 0, f"{torn} of {reads} reads saw a torn GIF"
+    assert reads >= 20 and torn == 0, f"{torn} of {reads} reads saw a torn GIF"
     assert _whole_gif_frames(path) == expected
     assert [p.name for p in tmp_path.iterdir()] == ["out.gif"]  # no temporary left
 
