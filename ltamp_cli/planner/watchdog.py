@@ -13,7 +13,12 @@ caller's thread therefore waits on the worker with a timeout and, when that runs
 * a binding that never returns keeps its (daemon) thread, and whatever CPU it burns, until
   the process exits — Python cannot kill a thread. Its generator is never resumed again;
 * the caller gets a ``timeout`` result naming the stream call that was running
-  (:class:`CallTracker`) and the statistics gathered so far.
+  (:class:`CallTracker`) and the statistics gathered so far;
+* when the interpreter exits, it first waits (at most :data:`EXIT_WAIT_S` in all) for the
+  abandoned workers still alive (:class:`AbandonedWorkers`): a daemon thread still inside
+  native code while Python finalises can abort the process ("Fatal Python error:
+  PyGILState_Release ... finalizing", seen after timed-out PyBullet solves in plain
+  scripts); a cancelled worker normally ends as soon as its stream call returns.
 
 One worker thread per solve (tens of microseconds) rather than one per stream call: cheap
 streams are called thousands of times per solve.
@@ -21,6 +26,7 @@ streams are called thousands of times per solve.
 
 from __future__ import annotations
 
+import atexit
 import math
 import threading
 import time
@@ -42,6 +48,10 @@ ABANDON_GRACE_S = 0.5
 # :func:`run_until`): a solve that ends within this of its deadline frees its locals in the
 # background, one that ends earlier frees them before returning (with time to spare).
 CAPTURE_LEAD_S = 1.0
+# Seconds the interpreter's exit waits, in all, for abandoned workers to end (their stream
+# call to return: a motion planner's query is capped at a few seconds). Past it the process
+# exits as before (a binding that never returns cannot be waited for).
+EXIT_WAIT_S = 10.0
 
 
 @dataclass(frozen=True)
@@ -72,6 +82,36 @@ class CallTracker:
     @property
     def cancelled(self) -> bool:
         return self._cancelled.is_set()
+
+
+class AbandonedWorkers:
+    """The abandoned solve workers of the process, waited for when the interpreter exits
+    (an :mod:`atexit` hook registered at the first abandonment: nothing at import)."""
+
+    def __init__(self, wait_s: float = EXIT_WAIT_S) -> None:
+        self.wait_s = wait_s
+        self._lock = threading.Lock()
+        self._threads: list[threading.Thread] = []
+        self._registered = False
+
+    def add(self, thread: threading.Thread) -> None:
+        with self._lock:
+            self._threads = [t for t in self._threads if t.is_alive()]
+            self._threads.append(thread)
+            if not self._registered:
+                self._registered = True
+                atexit.register(self.wait)
+
+    def wait(self) -> None:
+        """Join the abandoned workers still alive, for at most ``wait_s`` seconds in all."""
+        with self._lock:
+            threads, self._threads = self._threads, []
+        end = time.monotonic() + self.wait_s
+        for thread in threads:
+            thread.join(max(0.0, end - time.monotonic()))
+
+
+_abandoned_workers = AbandonedWorkers()
 
 
 @dataclass
@@ -121,12 +161,15 @@ def run_until(work: Callable[[], T], deadline: float, tracker: CallTracker,
         # clock check or stream call, as an abandoned one (before, an interrupted API solve
         # went on calling the user's streams until its max_time, inf by default).
         tracker.cancel()
+        if not outcome.done:
+            _abandoned_workers.add(worker)
         raise
     if reclaimer is not None:
         reclaimer.give_frames(captured.values())
         captured.clear()
     if not outcome.done:
         tracker.cancel()
+        _abandoned_workers.add(worker)
         return False, None
     if outcome.error is not None:
         raise outcome.error
