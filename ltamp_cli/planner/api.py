@@ -256,9 +256,17 @@ def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
         LOGGER.warning("ltamp: no plan found by %s and infeasibility unproven (%s); the "
                        "incremental algorithm continues without a time limit (give max_time "
                        "to bound it)", config.algorithm, note)
+    try:
+        fallback = initial_state(problem, replace(config, algorithm="incremental"))
+    except InputError as error:  # a make_streams that refuses a second call
+        result = state.result(TIMEOUT, None)
+        result.diagnostics["infeasibility_unproven"] = (
+            f"{note}; the incremental algorithm could not run: {error.message}")
+        return result
     statistics.update(state.stream_stats)
-    fallback = initial_state(problem, replace(config, algorithm="incremental",
-                                              max_time=remaining))
+    # The solve's clock and deadline: its time_s and time_spent count from the solve's
+    # start, not from the completion's.
+    fallback.start_time = state.start_time
     fallback.history = statistics.totals
     fallback.tracker = state.tracker  # the watchdog follows (and may cancel) its calls too
     result = solve_incremental(fallback)
@@ -281,21 +289,27 @@ def _solve(problem: PlanningProblem, config: PlannerConfig, start: float,
     holder.append(state)
     run = _algorithm(config.algorithm)
     best = run(state)
-    if best.status == INFEASIBLE:
+    # The interleaved incremental member's "infeasible" is a proof already (every instance
+    # exhausted, an exhaustive search): neither checked nor completed again.
+    if best.status == INFEASIBLE and "solved_by" not in best.stats:
         check: dict[str, object] = {}
         unproven = _infeasibility_unproven(problem, config, state, check)
         if unproven is not None:
+            interleaved = best.stats.get("interleaved")
             best = _complete_with_incremental(problem, config, state, statistics, unproven)
+            if interleaved is not None:  # the optimistic solve's member, as reported
+                best.stats["interleaved"] = interleaved
         best.stats.update(check)
-    improvements = [best.cost] if best.solved else []
-    while (best.solved and best.cost > config.success_cost + COST_EPSILON
+    improvements = [plan_cost(best, config)] if best.solved else []
+    while (best.solved and plan_cost(best, config) > config.success_cost + COST_EPSILON
            and not state.timed_out()):
-        state.cost_bound = best.cost
+        state.cost_bound = plan_cost(best, config)
         better = run(state)
-        if not better.solved or better.cost >= best.cost - COST_EPSILON:
+        if (not better.solved
+                or plan_cost(better, config) >= plan_cost(best, config) - COST_EPSILON):
             break
         best = better
-        improvements.append(best.cost)
+        improvements.append(plan_cost(best, config))
     if improvements:
         best.stats["anytime_costs"] = improvements
     if tracker.cancelled:
@@ -304,6 +318,15 @@ def _solve(problem: PlanningProblem, config: PlannerConfig, start: float,
     statistics.save()
     best.stats["stream_history"] = statistics.summary()
     return best
+
+
+def plan_cost(result: PlanResult, config: PlannerConfig) -> float:
+    """A solved result's cost as the solve measures it: with ``unit_costs`` its number of
+    actions (PDDLStream's cost then; the anytime mode's ``success_cost`` and bound count
+    actions, else an "improvement" could be a longer plan), else its action costs."""
+    if config.unit_costs and result.plan is not None:
+        return float(len(result.plan))
+    return result.cost
 
 
 def _abandoned_result(state: PlannerState | None, config: PlannerConfig, start: float,

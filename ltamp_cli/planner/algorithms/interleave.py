@@ -51,9 +51,11 @@ import time
 from collections.abc import Callable, Generator
 from dataclasses import dataclass, replace
 
+from ltamp_cli.errors import InputError
 from ltamp_cli.planner.algorithms.common import PlannerState, initial_state
 from ltamp_cli.planner.algorithms.incremental import incremental_steps
 from ltamp_cli.planner.result import INFEASIBLE, SOLVED, PlanResult
+from ltamp_cli.planner.watchdog import RunningCall
 
 # CPU seconds the optimistic member runs alone: the issue's latency target for the largest
 # uniform tamp2d problem (8 blocks, 0.25 s median), so that solves meeting the targets are
@@ -79,6 +81,7 @@ class InterleavedIncremental:
     spent: float = 0.0  # CPU seconds of the incremental member so far
     slices: int = 0
     finished: bool = False
+    skipped: str | None = None  # why the member could not be made (see _make_member)
 
     def allowance(self) -> float:
         """CPU seconds the incremental member may still use now (<= 0: none)."""
@@ -97,6 +100,9 @@ class InterleavedIncremental:
         try:
             if self.steps is None:
                 self.member = self._make_member()
+                if self.member is None:
+                    self.finished = True
+                    return None
                 self.steps = incremental_steps(self.member)
             self.slices += 1
             while self.clock() - start < budget:
@@ -109,9 +115,22 @@ class InterleavedIncremental:
             self.spent += self.clock() - start
         return None
 
-    def _make_member(self) -> PlannerState:
+    def _make_member(self) -> PlannerState | None:
+        """The member's state (``None``, the reason in :attr:`skipped`, when the bindings'
+        ``make_streams`` refuses a second call: a resource held once per process, such as a
+        PyBullet GUI connection; the optimistic member, which has its bindings, goes on
+        alone rather than the solve failing where it would not without the portfolio)."""
         state = self.optimistic
-        member = initial_state(state.problem, replace(state.config, algorithm="incremental"))
+        tracker = state.tracker
+        tracker.running = RunningCall("make_streams", (), time.perf_counter())
+        try:
+            member = initial_state(state.problem,
+                                   replace(state.config, algorithm="incremental"))
+        except InputError as error:  # initial_state's one line for a failed make_streams
+            self.skipped = error.message
+            return None
+        finally:
+            tracker.running = None
         member.start_time = state.start_time  # the same deadline
         member.tracker = state.tracker  # the watchdog follows (and may cancel) its calls
         member.history = state.history
@@ -129,11 +148,19 @@ class InterleavedIncremental:
         # Both members' work: the solve's searches and iterations.
         result.stats["searches"] = self.optimistic.searches + result.stats["searches"]
         result.stats["iterations"] = self.optimistic.iterations + result.stats["iterations"]
+        # One thread ran both members: their seconds add up to at most the solve's.
+        optimistic = self.optimistic
+        for key, seconds in (("search_time_s", optimistic.search_time),
+                             ("grounding_time_s", optimistic.grounding_time),
+                             ("sampling_time_s", optimistic.sampling_time)):
+            result.stats[key] = round(result.stats[key] + seconds, 6)
         self.annotate(result)
         return result
 
     def annotate(self, result: PlanResult) -> PlanResult:
         """Record the member's work in ``result.stats["interleaved"]`` (when it ran)."""
+        if self.skipped is not None:
+            result.stats["interleaved"] = {"skipped": self.skipped}
         if self.member is not None:
             result.stats["interleaved"] = {
                 "slices": self.slices, "cpu_s": round(self.spent, 6),

@@ -124,14 +124,15 @@ def lazy_greedy(task: Task, deadline: float, boost: int = 1000,
 
 
 def weighted_astar(task: Task, deadline: float, weight: float = 2.0,
-                   cost_bound: float | None = None) -> SearchOutcome:
-    """Eager weighted A* on real action costs with the FF heuristic (reopening closed).
+                   cost_bound: float | None = None, unit_costs: bool = False) -> SearchOutcome:
+    """Eager weighted A* on real action costs with the FF heuristic (reopening closed);
+    ``unit_costs``: every action costs 1 (the plan's cost is its length).
 
     With ``cost_bound``, only plans cheaper than the bound are accepted (paths reaching it are
-    pruned): the anytime mode's "find a better plan".
+    pruned): the anytime mode's "find a better plan", in the unit the solve measures costs.
     """
     start_time = time.perf_counter()
-    heuristic = FFHeuristic(task, cost_bias=0.0)
+    heuristic = FFHeuristic(task, cost_bias=0.0, unit_costs=unit_costs)
     counter = itertools.count()
     parents: dict[frozenset[int], tuple[frozenset[int], int] | None] = {task.init: None}
     g_values = {task.init: 0.0}
@@ -157,7 +158,7 @@ def weighted_astar(task: Task, deadline: float, weight: float = 2.0,
         expanded += 1
         for op in task.applicable(vector):
             child = task.successor(state, vector, int(op))
-            g = g_values[state] + task.operators[op].cost
+            g = g_values[state] + (1.0 if unit_costs else task.operators[op].cost)
             if cost_bound is not None and g >= cost_bound - 1e-9:
                 continue
             if child in g_values and g_values[child] <= g:

@@ -168,7 +168,7 @@ def plan_discrete(
         grounding = constrain(grounding, skeleton)
     task = Task(grounding, facts, deadline)
     if cost_bound is not None:
-        outcome = weighted_astar(task, deadline, cost_bound=cost_bound)
+        outcome = weighted_astar(task, deadline, cost_bound=cost_bound, unit_costs=unit_costs)
     else:
         outcome = run_search(task, algorithm, deadline, unit_costs=unit_costs,
                              max_expansions=max_expansions,
