@@ -17,6 +17,7 @@ from ltamp_cli.planner.algorithms.common import (
     PlannerState,
     initial_state,
 )
+from ltamp_cli.planner.algorithms.companions import missed_outputs
 from ltamp_cli.planner.algorithms.focused import solve_focused
 from ltamp_cli.planner.algorithms.incremental import solve_incremental
 from ltamp_cli.planner.algorithms.multiplicity import check_infeasibility, has_generators
@@ -202,7 +203,12 @@ def _infeasibility_unproven(problem: PlanningProblem, config: PlannerConfig,
     placeholders, yet their real outputs may be one object); or a plan may need two
     distinct outputs of one instance (:func:`.multiplicity.check_infeasibility` did not
     prove the goal unreachable; what it found goes to ``stats``)."""
-    if config.algorithm == "incremental" or problem.stream_file is None:
+    if problem.stream_file is None:
+        return None
+    missed = missed_outputs(state, state.companions)
+    if missed is not None:
+        return missed
+    if config.algorithm == "incremental":
         return None
     if config.constraints is not None:
         known = {arg for atom in problem.init for arg in atom.args}
@@ -270,6 +276,11 @@ def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
     fallback.history = statistics.totals
     fallback.tracker = state.tracker  # the watchdog follows (and may cancel) its calls too
     result = solve_incremental(fallback)
+    if result.status == INFEASIBLE:
+        missed = missed_outputs(fallback, [state, *state.companions])
+        if missed is not None:  # its generators were spent by the solve's other states
+            result = fallback.result(TIMEOUT, None)
+            result.diagnostics["infeasibility_unproven"] = f"{note}; {missed}"
     state.stream_stats = fallback.stream_stats
     result.stats["completed_by"] = f"incremental ({note})"
     return result

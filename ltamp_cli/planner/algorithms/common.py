@@ -286,6 +286,9 @@ class PlannerState:
     # :mod:`.families`): a family that keeps failing gets its optimistic instances' level
     # raised.
     families: StreamFamilies = field(default_factory=StreamFamilies)
+    # Other states of this solve that call the same bindings (the interleaved member, see
+    # :mod:`.companions`): an "infeasible" is checked against what their instances made.
+    companions: list[PlannerState] = field(default_factory=list)
 
     @functools.cached_property
     def recursive(self) -> frozenset[str]:

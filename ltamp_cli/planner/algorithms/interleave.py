@@ -53,6 +53,7 @@ from dataclasses import dataclass, replace
 
 from ltamp_cli.errors import InputError
 from ltamp_cli.planner.algorithms.common import PlannerState, initial_state
+from ltamp_cli.planner.algorithms.companions import missed_outputs
 from ltamp_cli.planner.algorithms.incremental import incremental_steps
 from ltamp_cli.planner.result import INFEASIBLE, SOLVED, PlanResult
 from ltamp_cli.planner.watchdog import RunningCall
@@ -82,6 +83,7 @@ class InterleavedIncremental:
     slices: int = 0
     finished: bool = False
     skipped: str | None = None  # why the member could not be made (see _make_member)
+    unproven: str | None = None  # why its "infeasible" was no proof (.companions)
 
     def allowance(self) -> float:
         """CPU seconds the incremental member may still use now (<= 0: none)."""
@@ -136,6 +138,7 @@ class InterleavedIncremental:
         member.history = state.history
         if state.cost_bound is not None:
             member.cost_bound = state.cost_bound  # anytime mode: only cheaper plans
+        state.companions.append(member)  # its outputs check an "infeasible" (companions)
         return member
 
     def _outcome(self, result: PlanResult) -> PlanResult | None:
@@ -143,6 +146,12 @@ class InterleavedIncremental:
         labelled with the solve's algorithm."""
         if result.status not in (SOLVED, INFEASIBLE):
             return None
+        if result.status == INFEASIBLE and self.member is not None:
+            missed = missed_outputs(self.member, [self.optimistic,
+                                                  *self.optimistic.companions])
+            if missed is not None:  # values went to the optimistic member: no proof
+                self.unproven = missed
+                return None
         result.stats["algorithm"] = self.optimistic.config.algorithm
         result.stats["solved_by"] = "interleaved incremental"
         # Both members' work: the solve's searches and iterations.
@@ -161,6 +170,8 @@ class InterleavedIncremental:
         """Record the member's work in ``result.stats["interleaved"]`` (when it ran)."""
         if self.skipped is not None:
             result.stats["interleaved"] = {"skipped": self.skipped}
+        if self.unproven is not None:
+            result.stats["interleaved_infeasibility_unproven"] = self.unproven
         if self.member is not None:
             result.stats["interleaved"] = {
                 "slices": self.slices, "cpu_s": round(self.spent, 6),
