@@ -15,6 +15,7 @@ from ltamp_cli.planner.algorithms.common import (
     ALGORITHMS,
     PlannerConfig,
     PlannerState,
+    goal_atoms,
     initial_state,
 )
 from ltamp_cli.planner.algorithms.companions import missed_outputs
@@ -187,6 +188,8 @@ def refuse_unsupported(problem: PlanningProblem, algorithm: str) -> None:
 WILD_FACTS_NOTE = "wild facts: the optimistic plans' failure proves nothing"
 EQUATED_NOTE = ("plan constraints equate arguments that optimistic plans keep apart: their "
                 "failure proves nothing")
+COINCIDENCE_NOTE = ("a stream's future output may equal an object that exists already, "
+                    "which the optimistic plans and the relaxation take to be new")
 MULTIPLICITY_NOTE = ("a plan may need several distinct outputs of one stream instance, or a "
                      ":fluents stream's outputs in another state (the goal is reachable in "
                      "the merge-safe relaxation): one optimistic output per instance proves "
@@ -221,6 +224,9 @@ def _infeasibility_unproven(problem: PlanningProblem, config: PlannerConfig,
     _probe_uncalled_instances(state)
     if state.saw_wild_facts:
         return WILD_FACTS_NOTE
+    coincidence = _coinciding_outputs(problem, state)
+    if coincidence is not None:
+        return f"{COINCIDENCE_NOTE} ({coincidence})"
     if not has_generators(state):
         return None
     check = check_infeasibility(state)
@@ -228,6 +234,26 @@ def _infeasibility_unproven(problem: PlanningProblem, config: PlannerConfig,
         stats["infeasibility_check"] = check.by
         stats.update(check.stats)
     return None if check.proven else f"{MULTIPLICITY_NOTE}; {check.by}"
+
+
+def _coinciding_outputs(problem: PlanningProblem, state: PlannerState) -> str | None:
+    """Why a stream's future output may equal an object that exists already (``None``: no
+    sign of it), which the relaxations behind an optimistic "infeasible" do not cover (they
+    take every future output to be a new object): a stream output such an object already
+    (:attr:`.PlannerState.coinciding_output`), or the goal names an object that no
+    initial fact and no constant mentions, which only an output equal to it could bring in
+    (a grid's goal cell reached by a neighbour stream: red-team round 8's "infeasible")."""
+    if state.coinciding_output is not None:
+        return state.coinciding_output
+    if not has_generators(state):
+        return None
+    mentioned = {arg for atom in problem.init for arg in atom.args}
+    mentioned.update(constant.name for constant in problem.domain.constants)
+    for atom in goal_atoms(problem):
+        for name in atom[1:]:
+            if name in problem.objects and name not in mentioned:
+                return f"the goal names {name!r}, which no initial fact mentions"
+    return None
 
 
 def _probe_uncalled_instances(state: PlannerState) -> None:
@@ -283,6 +309,9 @@ def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
             result.diagnostics["infeasibility_unproven"] = f"{note}; {missed}"
     state.stream_stats = fallback.stream_stats
     result.stats["completed_by"] = f"incremental ({note})"
+    if not result.solved:  # the optimistic searches' explanation (incremental gives none)
+        result.diagnostics["unreachable_goal_facts"] = state.unreachable_goal
+        result.diagnostics["last_skeletons"] = state.last_skeletons
     return result
 
 

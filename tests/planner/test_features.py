@@ -129,11 +129,17 @@ def test_diagnostics_name_unreachable_goal_facts_and_idle_streams(make_problem) 
                         "init: [\"(Pos p0)\", \"(At p0)\"]\n"
                         "goal: (and (At p9) (Good p9))\n",
                         FEEDBACK_STREAMS, FEEDBACK_BINDINGS)
-    result = solve(load_problem(path), PlannerConfig(max_time=5))
-    assert result.status == "infeasible"
+    result = solve(load_problem(path), PlannerConfig(max_time=2))
+    # Not "infeasible" (red-team round 9): only an output of ``next`` equal to p9 could
+    # reach it, which the relaxation does not cover (with ``good`` true on multiples of 3
+    # the same problem is solved, 0-3-6-9, and was answered "infeasible"); the completion
+    # cannot end (next's chain is endless): a timeout that says why.
+    assert result.status == "timeout"
+    assert "the goal names 'p9'" in result.stats["completed_by"]
     assert "(good p9)" in result.diagnostics["unreachable_goal_facts"]
     assert "(at p9)" in result.diagnostics["unreachable_goal_facts"]
-    assert "goal" in result.diagnostics["streams_never_called"]
+    # The completion called every instance, the idle ``goal`` predicate's too.
+    assert "streams_never_called" in result.diagnostics
 
 
 def test_statistics_accumulate_across_runs(tmp_path: Path) -> None:

@@ -286,6 +286,10 @@ class PlannerState:
     # :mod:`.families`): a family that keeps failing gets its optimistic instances' level
     # raised.
     families: StreamFamilies = field(default_factory=StreamFamilies)
+    # The first stream output seen to equal an object the problem gives (one line):
+    # evidence against the relaxation's "future outputs are new objects" (see
+    # api._infeasibility_unproven).
+    coinciding_output: str | None = None
     # Other states of this solve that call the same bindings (the interleaved member, see
     # :mod:`.companions`): an "infeasible" is checked against what their instances made.
     companions: list[PlannerState] = field(default_factory=list)
@@ -454,6 +458,9 @@ class PlannerState:
         for output in outputs:
             for name in output:
                 self.object_types.setdefault(name, OBJECT_TYPE)
+                if self.coinciding_output is None and name in self.problem.objects:
+                    self.coinciding_output = (f"stream {instance.name!r} output the "
+                                              f"problem's object {name!r}")
                 if name not in self.problem.objects and level < self.object_level.get(
                         name, level + 1):
                     self.object_level[name] = level
