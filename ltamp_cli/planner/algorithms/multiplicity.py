@@ -28,7 +28,10 @@ known objects are concerned (merging touches only the stand-ins); unreachable th
 proof too. Not covered (as in the optimistic algorithms): a future output that
 equals an object made by *another* stream or given by the problem, or that repeats only
 part of an earlier output tuple of its stream (objects are values), and facts a stream
-does not declare (wild facts, handled by the caller).
+does not declare (wild facts, handled by the caller). The caller
+(:func:`.api._infeasibility_unproven`) does not ask for a proof when a stream has output an
+object the problem gives or the goal names an object no initial fact mentions (red team
+round 9: a grid's goal cell reached by a neighbour stream was "infeasible").
 """
 
 from __future__ import annotations
