@@ -148,3 +148,25 @@ def test_one_iterator_handed_to_both_members_gives_no_wrong_infeasible(algorithm
     else:
         assert "made outputs it never made here" in result.diagnostics[
             "infeasibility_unproven"]
+
+
+def test_a_completion_whose_make_streams_refuses_is_a_timeout_that_says_why() -> None:
+    """The wild-facts problem above with a ``make_streams`` that refuses a second call: the
+    completion cannot make its bindings; before, the solve raised "make_streams failed"."""
+    problem = to_planning_problem(PDDLProblem(WILD, {}, WILD_STREAM,
+                                              {"look": from_fn(lambda: (5,))}, [], ("Done",)))
+    factory = problem.streams_factory
+    assert factory is not None
+    made: list[int] = []
+
+    def once(world, rng):  # type: ignore[no-untyped-def]
+        if made:
+            raise RuntimeError("only one GUI connection per process")
+        made.append(1)
+        return factory(world, rng)
+
+    result = plan(replace(problem, streams_factory=once),
+                  PlannerConfig(algorithm="adaptive", max_time=30))
+    assert result.status == "timeout"
+    unproven = result.diagnostics["infeasibility_unproven"]
+    assert "wild facts" in unproven and "only one GUI connection" in unproven
