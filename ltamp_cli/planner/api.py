@@ -244,7 +244,10 @@ def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
                                note: str) -> PlanResult:
     """The incremental algorithm, which calls every stream instance (and so finds wild
     facts and distinct outputs of one instance), for the time left; a timeout (not
-    "infeasible") when it cannot run (:fluents). ``note``: why it runs."""
+    "infeasible") when it cannot run (:fluents). ``note``: why it runs. The solve's
+    interleaved incremental member (:mod:`.algorithms.interleave`) is run on when there is
+    one (also when the grace had not yet started it); a fresh incremental solve otherwise
+    (``PlannerConfig.interleave`` off), or when the member had already ended (a timeout)."""
     remaining = state.deadline - time.perf_counter()
     if remaining <= 0 or any(s.fluents for s in problem.stream_file.streams):  # type: ignore[union-attr]
         result = state.result(TIMEOUT, None)
@@ -257,6 +260,14 @@ def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
                        "incremental algorithm continues without a time limit (give max_time "
                        "to bound it)", config.algorithm, note)
     statistics.update(state.stream_stats)
+    member = state.interleaved
+    continued = member.finish() if member is not None else None
+    if continued is not None and member is not None and member.member is not None:
+        # The interleaved incremental member goes on where it stopped (its samples, rounds
+        # and search budget kept) rather than a fresh incremental solve redoing its work.
+        state.stream_stats = member.member.stream_stats
+        continued.stats["completed_by"] = f"incremental ({note})"
+        return continued
     fallback = initial_state(problem, replace(config, algorithm="incremental",
                                               max_time=remaining))
     fallback.history = statistics.totals
