@@ -5,7 +5,6 @@ from __future__ import annotations
 import logging
 import math
 import time
-from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -19,6 +18,7 @@ from ltamp_cli.planner.algorithms.common import (
 )
 from ltamp_cli.planner.algorithms.focused import solve_focused
 from ltamp_cli.planner.algorithms.incremental import solve_incremental
+from ltamp_cli.planner.algorithms.interleave import InterleavedIncremental, interleaved_incremental
 from ltamp_cli.planner.algorithms.multiplicity import check_infeasibility, has_generators
 from ltamp_cli.planner.algorithms.skeletons import solve_with_skeletons
 from ltamp_cli.planner.gc_pacing import CollectionPacer, PausedCollection
@@ -47,12 +47,17 @@ ABANDONED_READ_ATTEMPTS = 5
 _paused_gc = PausedCollection()
 
 
-def _algorithm(name: str) -> Callable[[PlannerState], PlanResult]:
+def _run(state: PlannerState) -> tuple[PlanResult, InterleavedIncremental | None]:
+    """One round of ``state``'s algorithm; for the optimistic ones, also the incremental
+    member interleaved with it (made here when one applies, see
+    :mod:`.algorithms.interleave`), which an unproven "infeasible" runs on."""
+    name = state.config.algorithm
     if name == "incremental":
-        return solve_incremental
+        return solve_incremental(state), None
+    member = interleaved_incremental(state)
     if name == "focused":
-        return solve_focused
-    return lambda state: solve_with_skeletons(state, adaptive=name == "adaptive")
+        return solve_focused(state, member), member
+    return solve_with_skeletons(state, name == "adaptive", member), member
 
 
 def solve(problem: PlanningProblem, config: PlannerConfig | None = None) -> PlanResult:
@@ -241,13 +246,14 @@ def _probe_uncalled_instances(state: PlannerState) -> None:
 
 def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
                                state: PlannerState, statistics: StreamStatistics,
-                               note: str) -> PlanResult:
+                               note: str, member: InterleavedIncremental | None = None
+                               ) -> PlanResult:
     """The incremental algorithm, which calls every stream instance (and so finds wild
     facts and distinct outputs of one instance), for the time left; a timeout (not
-    "infeasible") when it cannot run (:fluents). ``note``: why it runs. The solve's
-    interleaved incremental member (:mod:`.algorithms.interleave`) is run on when there is
-    one (also when the grace had not yet started it); a fresh incremental solve otherwise
-    (``PlannerConfig.interleave`` off), or when the member had already ended (a timeout)."""
+    "infeasible") when it cannot run (:fluents). ``note``: why it runs. ``member``: the
+    solve's interleaved incremental member (:mod:`.algorithms.interleave`), run on from
+    where it stopped (also when the grace had not yet started it); a fresh incremental
+    solve without one (``PlannerConfig.interleave`` off) or when it had ended (a timeout)."""
     remaining = state.deadline - time.perf_counter()
     if remaining <= 0 or any(s.fluents for s in problem.stream_file.streams):  # type: ignore[union-attr]
         result = state.result(TIMEOUT, None)
@@ -260,7 +266,6 @@ def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
                        "incremental algorithm continues without a time limit (give max_time "
                        "to bound it)", config.algorithm, note)
     statistics.update(state.stream_stats)
-    member = state.interleaved
     continued = member.finish() if member is not None else None
     if continued is not None and member is not None and member.member is not None:
         # The interleaved incremental member goes on where it stopped (its samples, rounds
@@ -290,19 +295,19 @@ def _solve(problem: PlanningProblem, config: PlannerConfig, start: float,
     state.tracker = tracker
     state.history = statistics.totals
     holder.append(state)
-    run = _algorithm(config.algorithm)
-    best = run(state)
+    best, member = _run(state)
     if best.status == INFEASIBLE:
         check: dict[str, object] = {}
         unproven = _infeasibility_unproven(problem, config, state, check)
         if unproven is not None:
-            best = _complete_with_incremental(problem, config, state, statistics, unproven)
+            best = _complete_with_incremental(problem, config, state, statistics, unproven,
+                                              member)
         best.stats.update(check)
     improvements = [best.cost] if best.solved else []
     while (best.solved and best.cost > config.success_cost + COST_EPSILON
            and not state.timed_out()):
         state.cost_bound = best.cost
-        better = run(state)
+        better, _ = _run(state)
         if not better.solved or better.cost >= best.cost - COST_EPSILON:
             break
         best = better

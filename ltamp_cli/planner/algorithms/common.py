@@ -6,7 +6,6 @@ import functools
 import time
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence, Sized
 from dataclasses import asdict, dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -52,9 +51,6 @@ from ltamp_cli.planner.streams import (
     resolve_bindings,
 )
 from ltamp_cli.planner.watchdog import CallTracker, RunningCall
-
-if TYPE_CHECKING:
-    from ltamp_cli.planner.algorithms.interleave import InterleavedIncremental
 
 ALGORITHMS = ("adaptive", "binding", "focused", "incremental")
 MAX_REMEMBERED_SKELETONS = 3
@@ -261,9 +257,6 @@ class PlannerState:
     iterations: int = 0
     searches: int = 0
     work: WorkCount = field(default_factory=WorkCount)
-    # The incremental member interleaved with this (optimistic) solve's latest round, if
-    # any (see :mod:`.interleave`).
-    interleaved: InterleavedIncremental | None = None
     # Grounds this solve's successive search tasks without redoing the joins.
     grounding_cache: GroundingCache = field(default_factory=GroundingCache)
     last_skeletons: list[list[str]] = field(default_factory=list)

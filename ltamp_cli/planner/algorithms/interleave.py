@@ -209,15 +209,10 @@ class InterleavedIncremental:
 
 def interleaved_incremental(state: PlannerState) -> InterleavedIncremental | None:
     """The incremental member for an optimistic solve of ``state`` (``None`` when it does not
-    apply: see the module's docstring); also kept as ``state.interleaved``, so that a solve
-    whose optimistic member ends without a plan or a proof can run it on
-    (:func:`.api._complete_with_incremental`)."""
+    apply: see the module's docstring)."""
     stream_file = state.problem.stream_file
     if (not state.config.interleave or state.config.algorithm == "incremental"
             or stream_file is None or any(s.fluents for s in stream_file.streams)):
-        state.interleaved = None
         return None
     clock = state.config.stream_cpu_clock or time.thread_time
-    member = InterleavedIncremental(state, clock, work_units(state.work))
-    state.interleaved = member
-    return member
+    return InterleavedIncremental(state, clock, work_units(state.work))
