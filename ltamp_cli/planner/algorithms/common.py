@@ -214,12 +214,15 @@ class WorkCount:
     incremental member's grace and share are measured in it, see :mod:`.interleave`):
     ``calls``: stream calls; ``facts``: facts in the initial states of the searched tasks;
     ``grounded``: their ground actions and axioms; ``evaluated``: states the searches
-    evaluated (a followed guess evaluates none)."""
+    evaluated (a followed guess evaluates none); ``heuristic``: the sum over searches of
+    evaluated states times ground actions and axioms (a state's heuristic costs about the
+    task's size)."""
 
     calls: int = 0
     facts: int = 0
     grounded: int = 0
     evaluated: int = 0
+    heuristic: int = 0
 
     def add_search(self, init_facts: int, result: DiscreteResult) -> None:
         """Count one search: ``init_facts`` facts grounded into ``result``'s task."""
@@ -229,6 +232,7 @@ class WorkCount:
         self.facts += init_facts
         self.grounded += size
         self.evaluated += evaluated
+        self.heuristic += evaluated * size
 
 
 @dataclass
