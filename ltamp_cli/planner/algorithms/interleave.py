@@ -13,8 +13,9 @@ incremental 10x faster).
 Neither member is better on every problem, so the solve runs both, in one thread, in
 turns decided by **work units** (:func:`work_units`: stream calls, facts and ground
 actions of searched tasks, evaluated states, each weighted by its typical CPU cost), never
-by a clock, so that a seed's plan, and which member found it, is the same on a quiet and
-a loaded machine (a CPU-timed share made them depend on the load):
+by a clock, so that when each member runs, and so which member's plan a seed returns, is
+the same on a quiet and a loaded machine (a CPU-timed share made them depend on the load;
+the algorithms' own CPU-timed rule, :func:`.effort.observed_cheap`, is another matter):
 
 * for its first :data:`GRACE_UNITS` of work the optimistic member runs alone, so the solves
   that meet the issue's latency targets (uniform tamp2d problems, examples) do exactly what
@@ -91,8 +92,8 @@ HEURISTIC_UNITS = 0.04
 # problem: a smaller grace only starts the portfolio earlier.
 GRACE_UNITS = 270_000.0
 # Work units of the incremental member per unit of the optimistic member's past the grace:
-# about a third of the CPU (see the module docstring: the optimistic member about 1.33x
-# slower past the grace, an incremental win about 3.5x slower plus the grace).
+# about 0.4 of its CPU (see the module docstring: the optimistic member about 1.4x slower
+# past the grace, an incremental win about 3.5x slower plus the grace).
 SHARE = 0.4
 
 
