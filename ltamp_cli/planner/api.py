@@ -5,7 +5,8 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import replace
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -47,17 +48,27 @@ ABANDONED_READ_ATTEMPTS = 5
 _paused_gc = PausedCollection()
 
 
-def _run(state: PlannerState) -> tuple[PlanResult, InterleavedIncremental | None]:
-    """One round of ``state``'s algorithm; for the optimistic ones, also the incremental
-    member interleaved with it (made here when one applies, see
-    :mod:`.algorithms.interleave`), which an unproven "infeasible" runs on."""
-    name = state.config.algorithm
-    if name == "incremental":
-        return solve_incremental(state), None
-    member = interleaved_incremental(state)
-    if name == "focused":
-        return solve_focused(state, member), member
-    return solve_with_skeletons(state, name == "adaptive", member), member
+@dataclass
+class _Run:
+    """The algorithm ``name`` as a callable on a state; for the optimistic ones it keeps
+    ``member``, the incremental member interleaved with its latest round (made here when
+    one applies, see :mod:`.algorithms.interleave`), which an unproven "infeasible" runs
+    on. Kept here, not on the state: the member refers to the state."""
+
+    name: str
+    member: InterleavedIncremental | None = None
+
+    def __call__(self, state: PlannerState) -> PlanResult:
+        if self.name == "incremental":
+            return solve_incremental(state)
+        self.member = interleaved_incremental(state)
+        if self.name == "focused":
+            return solve_focused(state, self.member)
+        return solve_with_skeletons(state, self.name == "adaptive", self.member)
+
+
+def _algorithm(name: str) -> Callable[[PlannerState], PlanResult]:
+    return _Run(name)
 
 
 def solve(problem: PlanningProblem, config: PlannerConfig | None = None) -> PlanResult:
@@ -295,11 +306,14 @@ def _solve(problem: PlanningProblem, config: PlannerConfig, start: float,
     state.tracker = tracker
     state.history = statistics.totals
     holder.append(state)
-    best, member = _run(state)
+    run = _algorithm(config.algorithm)
+    best = run(state)
     if best.status == INFEASIBLE:
         check: dict[str, object] = {}
         unproven = _infeasibility_unproven(problem, config, state, check)
         if unproven is not None:
+            # (a wrapped algorithm, as in tests, has no member: a fresh incremental solve)
+            member = run.member if isinstance(run, _Run) else None
             best = _complete_with_incremental(problem, config, state, statistics, unproven,
                                               member)
         best.stats.update(check)
@@ -307,7 +321,7 @@ def _solve(problem: PlanningProblem, config: PlannerConfig, start: float,
     while (best.solved and best.cost > config.success_cost + COST_EPSILON
            and not state.timed_out()):
         state.cost_bound = best.cost
-        better, _ = _run(state)
+        better = run(state)
         if not better.solved or better.cost >= best.cost - COST_EPSILON:
             break
         best = better
