@@ -143,7 +143,12 @@ def run_one(problem: Any, algorithm: str, seed: int, max_time: float,
                            "wall_s_repeats": walls, "cpu_s_repeats": cpus,
                            "cost": result.cost if result.solved else None,
                            "length": len(result.plan) if result.plan is not None else None,
-                           "valid": None, "errors": []}
+                           "valid": None, "errors": [],
+                           # Load-independent work counts; which member of an interleaved
+                           # solve found the plan and what the incremental member did.
+                           "work": result.stats.get("work"),
+                           "solved_by": result.stats.get("solved_by"),
+                           "interleaved": result.stats.get("interleaved")}
     if len(plans) > 1 and result.status != "timeout":
         row["errors"].append(f"{len(plans)} different plans in {repeats} identical runs")
     if result.solved:

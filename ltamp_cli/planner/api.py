@@ -6,7 +6,7 @@ import logging
 import math
 import time
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -21,6 +21,7 @@ from ltamp_cli.planner.algorithms.common import (
 from ltamp_cli.planner.algorithms.companions import missed_outputs
 from ltamp_cli.planner.algorithms.focused import solve_focused
 from ltamp_cli.planner.algorithms.incremental import solve_incremental
+from ltamp_cli.planner.algorithms.interleave import InterleavedIncremental, interleaved_incremental
 from ltamp_cli.planner.algorithms.multiplicity import check_infeasibility, has_generators
 from ltamp_cli.planner.algorithms.skeletons import solve_with_skeletons
 from ltamp_cli.planner.gc_pacing import CollectionPacer, PausedCollection
@@ -49,12 +50,27 @@ ABANDONED_READ_ATTEMPTS = 5
 _paused_gc = PausedCollection()
 
 
+@dataclass
+class _Run:
+    """The algorithm ``name`` as a callable on a state; for the optimistic ones it keeps
+    ``member``, the incremental member interleaved with its latest round (made here when
+    one applies, see :mod:`.algorithms.interleave`), which an unproven "infeasible" runs
+    on. Kept here, not on the state: the member refers to the state."""
+
+    name: str
+    member: InterleavedIncremental | None = None
+
+    def __call__(self, state: PlannerState) -> PlanResult:
+        if self.name == "incremental":
+            return solve_incremental(state)
+        self.member = interleaved_incremental(state)
+        if self.name == "focused":
+            return solve_focused(state, self.member)
+        return solve_with_skeletons(state, self.name == "adaptive", self.member)
+
+
 def _algorithm(name: str) -> Callable[[PlannerState], PlanResult]:
-    if name == "incremental":
-        return solve_incremental
-    if name == "focused":
-        return solve_focused
-    return lambda state: solve_with_skeletons(state, adaptive=name == "adaptive")
+    return _Run(name)
 
 
 def solve(problem: PlanningProblem, config: PlannerConfig | None = None) -> PlanResult:
@@ -273,10 +289,14 @@ def _probe_uncalled_instances(state: PlannerState) -> None:
 
 def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
                                state: PlannerState, statistics: StreamStatistics,
-                               note: str) -> PlanResult:
+                               note: str, member: InterleavedIncremental | None = None
+                               ) -> PlanResult:
     """The incremental algorithm, which calls every stream instance (and so finds wild
     facts and distinct outputs of one instance), for the time left; a timeout (not
-    "infeasible") when it cannot run (:fluents). ``note``: why it runs."""
+    "infeasible") when it cannot run (:fluents). ``note``: why it runs. ``member``: the
+    solve's interleaved incremental member (:mod:`.algorithms.interleave`), run on from
+    where it stopped (also when the grace had not yet started it); a fresh incremental
+    solve without one (``PlannerConfig.interleave`` off) or when it had ended (a timeout)."""
     remaining = state.deadline - time.perf_counter()
     if remaining <= 0 or any(s.fluents for s in problem.stream_file.streams):  # type: ignore[union-attr]
         result = state.result(TIMEOUT, None)
@@ -288,6 +308,17 @@ def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
         LOGGER.warning("ltamp: no plan found by %s and infeasibility unproven (%s); the "
                        "incremental algorithm continues without a time limit (give max_time "
                        "to bound it)", config.algorithm, note)
+    continued = member.finish() if member is not None else None
+    if continued is not None and member is not None and member.member is not None:
+        # The interleaved incremental member goes on where it stopped (its samples, rounds
+        # and search budget kept) rather than a fresh incremental solve redoing its work.
+        if continued.status == INFEASIBLE:
+            missed = missed_outputs(member.member, [state, *state.companions])
+            if missed is not None:  # its generators were spent by the solve's other states
+                continued = member.annotate(member.member.result(TIMEOUT, None))
+                continued.diagnostics["infeasibility_unproven"] = f"{note}; {missed}"
+        state.stream_stats = member.member.stream_stats
+        return _completed(continued, state, note)
     try:
         fallback = initial_state(problem, replace(config, algorithm="incremental"))
     except InputError as error:  # a make_streams that refuses a second call
@@ -308,8 +339,14 @@ def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
             result = fallback.result(TIMEOUT, None)
             result.diagnostics["infeasibility_unproven"] = f"{note}; {missed}"
     state.stream_stats = fallback.stream_stats
+    return _completed(result, state, note)
+
+
+def _completed(result: PlanResult, state: PlannerState, note: str) -> PlanResult:
+    """``result`` of the incremental completion, labelled, with the optimistic searches'
+    explanation when unsolved (incremental gives none)."""
     result.stats["completed_by"] = f"incremental ({note})"
-    if not result.solved:  # the optimistic searches' explanation (incremental gives none)
+    if not result.solved:
         result.diagnostics["unreachable_goal_facts"] = state.unreachable_goal
         result.diagnostics["last_skeletons"] = state.last_skeletons
     return result
@@ -336,9 +373,12 @@ def _solve(problem: PlanningProblem, config: PlannerConfig, start: float,
         unproven = _infeasibility_unproven(problem, config, state, check)
         if unproven is not None:
             interleaved = best.stats.get("interleaved")
-            best = _complete_with_incremental(problem, config, state, statistics, unproven)
-            if interleaved is not None:  # the optimistic solve's member, as reported
-                best.stats["interleaved"] = interleaved
+            # (a wrapped algorithm, as in tests, has no member: a fresh incremental solve)
+            member = run.member if isinstance(run, _Run) else None
+            best = _complete_with_incremental(problem, config, state, statistics, unproven,
+                                              member)
+            if interleaved is not None and "interleaved" not in best.stats:
+                best.stats["interleaved"] = interleaved  # the optimistic solve's member
         best.stats.update(check)
     improvements = [plan_cost(best, config)] if best.solved else []
     while (best.solved and plan_cost(best, config) > config.success_cost + COST_EPSILON

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import functools
 import time
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence, Sized
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -100,9 +100,9 @@ class PlannerConfig:
     searches, -6 % (adaptive) and -14 % (binding) median CPU; it costs when each search
     brings mostly new instances (tamp2d problems with uniform placements: +10-25 %), so it
     is off by default (docs/results/planner/issue19.md).
-    ``interleave``: the optimistic algorithms give the incremental algorithm an equal share
-    of CPU once they have spent a grace period without a plan (a two-member portfolio, see
-    :mod:`.interleave`); the injected ``stream_cpu_clock``, when given, measures the shares.
+    ``interleave``: the optimistic algorithms give the incremental algorithm a share of
+    their work once they have done a grace amount without a plan (a two-member portfolio,
+    see :mod:`.interleave`), counted in load-independent work units, not seconds.
     """
 
     algorithm: str = "adaptive"
@@ -209,6 +209,33 @@ def _stream_cycles(externals: list[External]) -> tuple[frozenset[str], frozenset
 
 
 @dataclass
+class WorkCount:
+    """What a solve did, counted the same way whatever the machine's load (the interleaved
+    incremental member's grace and share are measured in it, see :mod:`.interleave`):
+    ``calls``: stream calls; ``facts``: facts in the initial states of the searched tasks;
+    ``grounded``: their ground actions and axioms; ``evaluated``: states the searches
+    evaluated (a followed guess evaluates none); ``heuristic``: the sum over searches of
+    evaluated states times ground actions and axioms (a state's heuristic costs about the
+    task's size)."""
+
+    calls: int = 0
+    facts: int = 0
+    grounded: int = 0
+    evaluated: int = 0
+    heuristic: int = 0
+
+    def add_search(self, init_facts: int, result: DiscreteResult) -> None:
+        """Count one search: ``init_facts`` facts grounded into ``result``'s task."""
+        size = len(result.grounding.actions) + len(result.grounding.axioms)
+        evaluated = 0 if result.outcome is None or result.outcome.guessed else (
+            result.outcome.evaluated)
+        self.facts += init_facts
+        self.grounded += size
+        self.evaluated += evaluated
+        self.heuristic += evaluated * size
+
+
+@dataclass
 class PlannerState:
     """Facts known to be true (from the problem or certified by streams) and objects."""
 
@@ -233,6 +260,7 @@ class PlannerState:
     tracker: CallTracker = field(default_factory=CallTracker)
     iterations: int = 0
     searches: int = 0
+    work: WorkCount = field(default_factory=WorkCount)
     # Grounds this solve's successive search tasks without redoing the joins.
     grounding_cache: GroundingCache = field(default_factory=GroundingCache)
     last_skeletons: list[list[str]] = field(default_factory=list)
@@ -421,6 +449,7 @@ class PlannerState:
         stats = self.stream_stats.setdefault(instance.name, StreamStats())
         self.tracker.running = RunningCall(instance.name, instance.inputs, start)
         try:
+            self.work.calls += 1
             outputs = instance.call(self.objects, stats, self.config.stream_cpu_clock)
         except (InputError, KeyboardInterrupt):
             raise
@@ -529,6 +558,7 @@ class PlannerState:
             self.search_time += time.perf_counter() - start
             self.search_cpu += time.thread_time() - cpu_start
         self.grounding_time += result.ground_time_s
+        self.work.add_search(len(init) if isinstance(init, Sized) else 0, result)
         if budgeted and result.capped and not result.skipped:
             self.search_budget *= 2
         return result
@@ -615,6 +645,8 @@ class PlannerState:
             "sampling_time_s": round(self.sampling_time, 6),
             "facts": len(self.facts.members),
             "streams": {name: s.as_dict() for name, s in sorted(self.stream_stats.items())},
+            # Load-independent counts of the work done (see WorkCount).
+            "work": asdict(self.work),
         }
         return PlanResult(status, plan, cost, time.perf_counter() - self.start_time, stats,
                           certificate, {n: self.objects.value(n) for n in self.objects.names()},

@@ -137,10 +137,12 @@ def _output(state: PlannerState, instance: StreamInstance, index: int
     return instance.results[index] if index < len(instance.results) else None
 
 
-def solve_focused(state: PlannerState) -> PlanResult:
+def solve_focused(state: PlannerState, member: InterleavedIncremental | None = None
+                  ) -> PlanResult:
     """Focused, interleaved with the incremental algorithm once a grace period passed
-    without a plan (:mod:`.interleave`)."""
-    member = interleaved_incremental(state)
+    without a plan (:mod:`.interleave`): with ``member`` (the caller's, to run it on after
+    an unproven "infeasible"), else with a member made here when one applies."""
+    member = member or interleaved_incremental(state)
     result = _solve_focused(state, member)
     return result if member is None else member.annotate(result)
 

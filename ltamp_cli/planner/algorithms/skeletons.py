@@ -631,10 +631,13 @@ def _local_repair(state: PlannerState, failed: Binding, consumed: tuple[str, ...
     return []
 
 
-def solve_with_skeletons(state: PlannerState, adaptive: bool) -> PlanResult:
+def solve_with_skeletons(state: PlannerState, adaptive: bool,
+                         member: InterleavedIncremental | None = None) -> PlanResult:
     """Adaptive (``adaptive``) or binding, interleaved with the incremental algorithm once
-    a grace period passed without a plan (:mod:`.interleave`)."""
-    member = interleaved_incremental(state)
+    a grace period passed without a plan (:mod:`.interleave`): with ``member`` (the
+    caller's, to run it on after an unproven "infeasible"), else with a member made here
+    when one applies."""
+    member = member or interleaved_incremental(state)
     result = _solve_with_skeletons(state, adaptive, member)
     return result if member is None else member.annotate(result)
 
