@@ -16,7 +16,7 @@ from conftest import MakeProblem
 from test_multiplicity import visits
 
 from ltamp_cli.errors import InputError
-from ltamp_cli.planner.algorithms.common import PlannerConfig, initial_state
+from ltamp_cli.planner.algorithms.common import SLOW_CALL_US, PlannerConfig, initial_state
 from ltamp_cli.planner.algorithms.interleave import (
     CALL_UNITS,
     GRACE_UNITS,
@@ -101,6 +101,36 @@ def test_member_waits_for_its_grace_then_keeps_to_its_share() -> None:
     assert again.spent() == spent
 
 
+class StepClock:
+    """A CPU clock that advances ``step`` seconds at every reading: every timed stream call
+    costs ``step`` seconds (as a motion plan or a physics pre-check does)."""
+
+    def __init__(self, step: float) -> None:
+        self.step, self.now = step, 0.0
+
+    def __call__(self) -> float:
+        self.now += self.step
+        return self.now
+
+
+def test_slow_stream_calls_are_charged_their_cpu() -> None:
+    """A call's count stands for its CPU only up to 10 ms: with every call costing 50 ms,
+    the member's share of the same optimistic work buys about 50 ms of calls per 50,000
+    units, not 4,000 calls (3D coffee: the member took 149 of 155 s of CPU when each of
+    its motion plans counted 12 units)."""
+    config = PlannerConfig(seed=0, max_time=60, stream_cpu_clock=StepClock(0.05))
+    state = initial_state(load_problem(HANDOFF), config)
+    member = InterleavedIncremental(state, time.thread_time, work_units(state.work))
+    past = 200_000
+    state.work.calls = int((GRACE_UNITS + past) / CALL_UNITS)
+    member.run()
+    assert member.member is not None
+    calls = member.member.work.calls
+    per_call = CALL_UNITS + (50_000 - SLOW_CALL_US)
+    assert member.member.work.slow_call_us == pytest.approx(calls * (50_000 - SLOW_CALL_US))
+    assert calls <= SHARE * past / per_call + 1  # its share, plus the call that overshot
+
+
 def test_same_plan_and_winner_whatever_the_cpu_clock_says() -> None:
     """chain_4 seed 0: the incremental member wins (about 0.8 s CPU; adaptive alone needs
     about 1.5 s). The same solve with the thread's CPU clock running 10x slower (as on a
@@ -116,6 +146,8 @@ def test_same_plan_and_winner_whatever_the_cpu_clock_says() -> None:
     assert first.stats["solved_by"] == "interleaved incremental"
     assert slow.stats.get("solved_by") == first.stats["solved_by"]
     assert plan_of(slow) == plan_of(first)
+    # No call took 10 ms of CPU (only such a call's excess is charged as measured).
+    assert first.stats["work"]["slow_call_us"] == slow.stats["work"]["slow_call_us"] == 0.0
     assert slow.stats["work"] == first.stats["work"]
     assert slow.stats["interleaved"]["work_units"] == first.stats["interleaved"]["work_units"]
 

@@ -84,6 +84,11 @@ from ltamp_cli.planner.watchdog import RunningCall
 # Deterministic counts, not seconds: the sequence of both members' steps, and so the plan
 # a seed returns, does not depend on the machine's load (only ``max_time`` is a clock).
 CALL_UNITS = 12.0
+# A stream call's CPU past ``common.SLOW_CALL_US`` (10 ms), in microseconds: 3D coffee's
+# calls (motion plans, IK, physics pre-checks) take 0.1-3 s; counted as 12 units each they
+# let the member take 149 of a timed-out solve's 155 s of CPU (seeds 0 and 2; 36 s without
+# the member).
+SLOW_CALL_UNITS = 1.0
 FACT_UNITS = 5.0
 GROUND_UNITS = 55.0
 EVALUATED_UNITS = 90.0
@@ -103,7 +108,8 @@ SHARE = 0.4
 def work_units(work: WorkCount) -> float:
     """``work`` in work units (about microseconds of CPU, see :data:`CALL_UNITS`)."""
     return (CALL_UNITS * work.calls + FACT_UNITS * work.facts + GROUND_UNITS * work.grounded
-            + EVALUATED_UNITS * work.evaluated + HEURISTIC_UNITS * work.heuristic)
+            + EVALUATED_UNITS * work.evaluated + HEURISTIC_UNITS * work.heuristic
+            + SLOW_CALL_UNITS * work.slow_call_us)
 
 
 @dataclass
