@@ -146,24 +146,8 @@ class InterleavedIncremental:
         A step that overshoots the share (a search) is a debt the member waits out."""
         if self.finished or self.optimistic.timed_out() or self.allowance() <= 0:
             return None
-        start = self.clock()
-        try:
-            if self.steps is None:
-                self.member = self._make_member()
-                if self.member is None:
-                    self.finished = True
-                    return None
-                self.steps = incremental_steps(self.member)
-            self.slices += 1
-            while self.allowance() > 0:
-                try:
-                    next(self.steps)
-                except StopIteration as done:
-                    self.finished = True
-                    return self._outcome(done.value)
-        finally:
-            self.cpu_s += self.clock() - start
-        return None
+        result = self._advance(within_share=True)
+        return None if result is None else self._outcome(result)
 
     def finish(self) -> PlanResult | None:
         """Run the incremental member to its end, for the time left (after the optimistic
@@ -171,6 +155,12 @@ class InterleavedIncremental:
         if self.finished:
             return None
         self.continued = True
+        result = self._advance(within_share=False)
+        return None if result is None else self.annotate(result)
+
+    def _advance(self, within_share: bool) -> PlanResult | None:
+        """Step the member (made on first use) while it has allowance (``within_share``)
+        or to its end; its result once it ended, else ``None``."""
         start = self.clock()
         try:
             if self.steps is None:
@@ -180,16 +170,15 @@ class InterleavedIncremental:
                     return None
                 self.steps = incremental_steps(self.member)
             self.slices += 1
-            while True:
+            while not within_share or self.allowance() > 0:
                 try:
                     next(self.steps)
                 except StopIteration as done:
                     self.finished = True
-                    result: PlanResult = done.value
-                    break
+                    return done.value  # type: ignore[no-any-return]
+            return None
         finally:
             self.cpu_s += self.clock() - start
-        return self.annotate(result)
 
     def _make_member(self) -> PlannerState | None:
         """The member's state (``None``, the reason in :attr:`skipped`, when the bindings'
