@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
 
@@ -105,3 +107,21 @@ def test_shortcutting_never_lengthens_and_stays_valid() -> None:
     assert path_length(short) < path_length(detour) - 0.1
     assert np.allclose(short[0], detour[0]) and np.allclose(short[-1], detour[-1])
     assert is_path_valid(short, wall_free, 0.01)
+
+
+def test_a_check_budget_is_not_cut_short_by_a_loaded_machine() -> None:
+    """With ``max_checks`` the time limit caps CPU time, not wall time: checks that take
+    wall time without CPU (a machine busy with other work; here a 0.5 ms sleep each) still
+    get their whole budget, so which queries succeed depends on the seed, not the load.
+    The query needs ~2,600 checks (~1.3 s of wall, ~0.15 s of CPU); a wall cap of 0.5 s
+    stopped it after ~1,000."""
+    def slow_wall_free(q: np.ndarray) -> bool:
+        time.sleep(0.0005)
+        return wall_free(q)
+
+    plan = plan_rrt_connect(np.array([-0.5, 0.5]), np.array([0.5, 0.5]), LOWS, HIGHS,
+                            slow_wall_free,
+                            RRTConnectConfig(time_limit=0.5, seed=0, max_checks=5000,
+                                             shortcut_iterations=0))
+    assert plan.success, plan.status
+    assert plan.planning_time > 0.5  # it ran past the wall time the limit names

@@ -59,7 +59,8 @@ class PlanningSettings:
     RRT budgets count collision checks (``rrt_checks``; ``rrt_carry_checks`` for motions
     carrying contents, whose tilt limit leaves a thin free space), so a query's outcome
     depends on its seed, not on the machine's load; ``rrt_time_s``/``rrt_carry_time_s``
-    (wall seconds) only cap a query on a very slow machine. A check costs ~0.15-0.27 ms
+    (CPU seconds of the planning thread, so that a loaded machine does not cut a query
+    short) only cap a query on a very slow machine. A check costs ~0.15-0.27 ms
     free and ~0.55-0.67 ms carrying (pour_blocked, coffee; one core), so 5,000 checks are
     about the earlier wall budgets of 1 s free / 3 s carrying on an idle core (one
     push_to_reach carry: 4/12 solved with 1 s, 9/12 with 3 s). Solved queries used ~1,000
