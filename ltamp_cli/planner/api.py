@@ -312,11 +312,8 @@ def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
     if continued is not None and member is not None and member.member is not None:
         # The interleaved incremental member goes on where it stopped (its samples, rounds
         # and search budget kept) rather than a fresh incremental solve redoing its work.
-        if continued.status == INFEASIBLE:
-            missed = missed_outputs(member.member, [state, *state.companions])
-            if missed is not None:  # its generators were spent by the solve's other states
-                continued = member.annotate(member.member.result(TIMEOUT, None))
-                continued.diagnostics["infeasibility_unproven"] = f"{note}; {missed}"
+        continued = _unless_outputs_missed(continued, member.member, state, note,
+                                           member.annotate)
         state.stream_stats = member.member.stream_stats
         return _completed(continued, state, note)
     try:
@@ -333,13 +330,25 @@ def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
     fallback.history = statistics.totals
     fallback.tracker = state.tracker  # the watchdog follows (and may cancel) its calls too
     result = solve_incremental(fallback)
-    if result.status == INFEASIBLE:
-        missed = missed_outputs(fallback, [state, *state.companions])
-        if missed is not None:  # its generators were spent by the solve's other states
-            result = fallback.result(TIMEOUT, None)
-            result.diagnostics["infeasibility_unproven"] = f"{note}; {missed}"
+    result = _unless_outputs_missed(result, fallback, state, note)
     state.stream_stats = fallback.stream_stats
     return _completed(result, state, note)
+
+
+def _unless_outputs_missed(result: PlanResult, claimer: PlannerState, state: PlannerState,
+                           note: str,
+                           annotate: Callable[[PlanResult], PlanResult] = lambda r: r
+                           ) -> PlanResult:
+    """``result``, or a timeout saying why when it is an "infeasible" of ``claimer`` whose
+    generators were spent by the solve's other states (:mod:`.algorithms.companions`)."""
+    if result.status != INFEASIBLE:
+        return result
+    missed = missed_outputs(claimer, [state, *state.companions])
+    if missed is None:
+        return result
+    timeout = annotate(claimer.result(TIMEOUT, None))
+    timeout.diagnostics["infeasibility_unproven"] = f"{note}; {missed}"
+    return timeout
 
 
 def _completed(result: PlanResult, state: PlannerState, note: str) -> PlanResult:
