@@ -51,6 +51,7 @@ from ltamp_cli.learned_streams.stream import (
     LearnedStreamConfig,
     learned_stream_configs,
 )
+from ltamp_cli.planner.keyed_random import KeyedRandom
 from ltamp_cli.planner.streams import Binding, StreamInfo
 
 HERE = Path(__file__).resolve().parent
@@ -170,9 +171,11 @@ class _LearnedSkill:
 
     def __init__(self, config: LearnedStreamConfig, to_context: Callable[..., np.ndarray],
                  to_outputs: Callable[..., tuple[Any, ...] | None],
-                 rng: np.random.Generator, check: PhysicsCheck | None = None,
+                 keyed: KeyedRandom, name: str, check: PhysicsCheck | None = None,
                  skill: SkillSpec | None = None) -> None:
-        self._args = (config, to_context, to_outputs, rng)
+        self._args = (config, to_context, to_outputs, keyed(name))
+        self._name = name
+        self._keyed = keyed
         # the model must be of this skill (its parameter names), not merely of its size
         self._names = ({} if skill is None else
                        {"context_names": skill.context.names,
@@ -182,7 +185,7 @@ class _LearnedSkill:
 
     def __call__(self, *inputs: Any) -> Iterator[list[tuple[Any, ...]]]:
         if self.stream is None:  # the model is loaded on first use only
-            self.stream = LearnedStream(*self._args, **self._names)
+            self.stream = LearnedStream(*self._args, rng_for=self._draws_for, **self._names)
         if self.check is not None:
             # Controls that passed their trial for other inputs (another grasp of the cup)
             # first: the trial depends on the context only, so they cost no new trial.
@@ -210,6 +213,9 @@ class _LearnedSkill:
             if self.check is not None:  # the next call of the planner's has its own trials
                 self.check.begin()
 
+    def _draws_for(self, *inputs: Any) -> np.random.Generator:
+        return self._keyed(self._name, *inputs)
+
     def feedback(self, inputs: tuple[Any, ...], outputs: tuple[Any, ...]) -> None:
         if self.stream is not None:
             self.stream.on_unusable(inputs, outputs)
@@ -222,7 +228,10 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
     configs = learned_stream_configs({"learned_streams": learned}, HERE)
     pour_check = _precheck(world, "pour")
     table_z = planning.table_z
-    motion_seed = iter(range(1, 1_000_000))
+    # Every instance draws from its own generator, keyed by its stream and inputs: the
+    # samples one stream gives do not depend on how many draws the others made (a new
+    # scoop model would otherwise reshuffle every pour, grasp and motion after it).
+    keyed = KeyedRandom(rng)
     # What must stand where whenever an arm is at a conf: a pick/place conf of object o at
     # pose p has o at p (it is about to be picked or has just been placed). Motions to and
     # from such confs avoid those objects (they would otherwise sweep through the object
@@ -261,10 +270,11 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         half = scene.object(name).footprint()
         if area.x[1] - area.x[0] < 2 * half[0] or area.y[1] - area.y[0] < 2 * half[1]:
             return
+        draws = keyed("sample-placement", name, region)
 
         def draw() -> tuple[float, float]:
-            return (round(float(rng.uniform(area.x[0] + half[0], area.x[1] - half[0])), 4),
-                    round(float(rng.uniform(area.y[0] + half[1], area.y[1] - half[1])), 4))
+            return (round(float(draws.uniform(area.x[0] + half[0], area.x[1] - half[0])), 4),
+                    round(float(draws.uniform(area.y[0] + half[1], area.y[1] - half[1])), 4))
 
         def roomy(xy: tuple[float, float]) -> bool:
             """A hand's room from every other movable object at its one given pose."""
@@ -300,8 +310,9 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         seen(name, pose)
         if arm is None:
             return
-        found = list(planning.pick_kinematics(name, _xy(pose), tuple(grasp), rng,  # type: ignore[arg-type]
-                                              arms=(arm,)))
+        draws = keyed("inverse-kinematics", arm, name, _xy(pose), tuple(grasp))
+        found = list(planning.pick_kinematics(name, _xy(pose), tuple(grasp),  # type: ignore[arg-type]
+                                              draws, arms=(arm,)))
         for conf, _ in found:
             standing_at.setdefault(conf, set()).add((name, _xy(pose)))
         yield found
@@ -323,10 +334,11 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         # may still hit a movable object elsewhere (CFreeTraj), so a later call gives
         # another one (a new RRT-Connect seed).
         found = 0
-        for _ in range(MOTION_ATTEMPTS):
+        for attempt in range(MOTION_ATTEMPTS):
             # The first path also keeps clear of the likely obstacles; a later one need not.
             avoid = standing | likely if found == 0 else standing
-            path = planning.plan_motion(a, b, held, next(motion_seed), sorted(avoid),
+            seed = keyed.seed("motion", a, b, held, attempt)
+            path = planning.plan_motion(a, b, held, seed, sorted(avoid),
                                         straight_first=found == 0)
             yield [] if path is None else [(path,)]
             found += path is not None
@@ -354,7 +366,8 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         for psi, phi in planning.skill_yaws(cup, g, arm):
             poses = skill_paths.pour_tool_poses(scene.object(cup), scene.object(bowl), _xy(pose),
                                                 table_z, control, psi, phi)
-            path = planning.follow_object_path(cup, g, poses, arm, rng, "pour", target=bowl)
+            draws = keyed("pour-path", arm, cup, g, bowl, _xy(pose), control, psi, phi)
+            path = planning.follow_object_path(cup, g, poses, arm, draws, "pour", target=bowl)
             if path is not None:
                 # The physics pre-check only for controls the arm can follow (IK is the
                 # more selective test, and ~5x cheaper than a trial).
@@ -375,7 +388,9 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         for psi in yaws(arm, _xy(pose)):
             poses = skill_paths.scoop_tool_poses(scene.object(bowl), scene.object(spoon),
                                                  _xy(pose), table_z, control, psi)
-            path = planning.follow_object_path(spoon, g, poses, arm, rng, "scoop", target=bowl)
+            draws = keyed("scoop-path", arm, spoon, g, bowl, _xy(pose), control, psi)
+            path = planning.follow_object_path(spoon, g, poses, arm, draws, "scoop",
+                                               target=bowl)
             if path is not None:
                 return (path.start, path.end, path, tuple(round(float(v), 6) for v in control))
         return ()
@@ -384,12 +399,12 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         configs["sample-pour"],
         lambda r, cup, grasp, bowl, pose: skill_paths.pour_context(scene.object(cup),
                                                                    scene.object(bowl)),
-        pour_outputs, rng, pour_check, POUR_SPEC)
+        pour_outputs, keyed, "sample-pour", pour_check, POUR_SPEC)
     scoop = _LearnedSkill(
         configs["sample-scoop"],
         lambda r, spoon, grasp, bowl, pose: skill_paths.scoop_context(scene.object(bowl),
                                                                       scene.object(spoon)),
-        scoop_outputs, rng, skill=SCOOP_SPEC)
+        scoop_outputs, keyed, "sample-scoop", skill=SCOOP_SPEC)
 
     def sample_pour(r: Any, cup: str, grasp: GraspValue, bowl: str, pose: Any
                     ) -> Iterator[list[tuple[Any, ...]]]:
@@ -418,7 +433,8 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
             for sign in (1.0, -1.0):
                 poses = skill_paths.dump_tool_poses(scene.object(spoon), scene.object(cup),
                                                     _xy(pose), table_z, psi, sign)
-                path = planning.follow_object_path(spoon, g, poses, arm, rng, "dump")
+                draws = keyed("dump-path", arm, spoon, g, cup, _xy(pose), psi, sign)
+                path = planning.follow_object_path(spoon, g, poses, arm, draws, "dump")
                 yield [] if path is None else [(path.start, path)]
 
     def sample_stir(r: Any, stirrer: str, grasp: GraspValue, cup: str, pose: Any
@@ -431,7 +447,8 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
         for phi in YAW_OFFSETS:  # the rod is symmetric: its spin only changes the wrist
             poses = skill_paths.stir_tool_poses(scene.object(stirrer), scene.object(cup),
                                                 _xy(pose), table_z, phi)
-            path = planning.follow_object_path(stirrer, g, poses, arm, rng, "stir")
+            draws = keyed("stir-path", arm, stirrer, g, cup, _xy(pose), phi)
+            path = planning.follow_object_path(stirrer, g, poses, arm, draws, "stir")
             yield [] if path is None else [(path.start, path)]
 
     def sample_push(r: Any, name: str, start: Any, goal: Any
@@ -451,7 +468,8 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
                 continue
             poses = skill_paths.push_hand_poses(obj, a, b, table_z, hand_yaw)
             gap = skill_paths.push_hand_gap(obj, a, b, hand_yaw)
-            path = planning.follow_hand_path(poses, arm, rng, "push", touching=name,
+            draws = keyed("push-path", arm, name, a, b, offset)
+            path = planning.follow_hand_path(poses, arm, draws, "push", touching=name,
                                              finger_gap=gap)
             if path is not None and planning.approach_collides(path, name, a, poses[1]):
                 path = None  # the hand would come down on the object, not behind it

@@ -249,6 +249,11 @@ class LearnedStream:
     on the stream's first call: a context of the wrong size, or a ``to_outputs`` that fails
     on the model's controls (e.g. indexes a value the model does not have), is one
     :class:`InputError` line naming the model's parameters.
+
+    ``rng_for(*inputs)``, if given, returns the generator each input tuple's sampler draws
+    from (e.g. :class:`ltamp_cli.planner.keyed_random.KeyedRandom` keyed by the inputs), so
+    one instance's controls do not depend on the draws of the others; otherwise every
+    sampler draws from ``rng``.
     """
 
     def __init__(
@@ -264,11 +269,13 @@ class LearnedStream:
         context_names: Sequence[str] | None = None,
         control_names: Sequence[str] | None = None,
         skill: SkillSpec | None = None,
+        rng_for: Callable[..., np.random.Generator] | None = None,
     ) -> None:
         self.config = config
         self.to_context = to_context
         self.to_outputs = to_outputs
         self.rng = rng
+        self.rng_for = rng_for
         self.is_valid = is_valid
         self.validity_for = validity_for
         self.model = (models or ModelCache()).get(config.model_dir)
@@ -331,7 +338,8 @@ class LearnedStream:
                 self.n_outside += 1
                 return None
         return make_sampler(
-            self.config.sampler, self.model, context, self.rng, beta=self.config.beta,
+            self.config.sampler, self.model, context,
+            self.rng if self.rng_for is None else self.rng_for(*inputs), beta=self.config.beta,
             is_valid=self.validity(*inputs), lam=self.config.lam, kernel=self.kernel,
             extrapolate=True,
         )
