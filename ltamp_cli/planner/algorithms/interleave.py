@@ -15,7 +15,8 @@ turns decided by **work units** (:func:`work_units`: stream calls, facts and gro
 actions of searched tasks, evaluated states, each weighted by its typical CPU cost), never
 by a clock, so that when each member runs, and so which member's plan a seed returns, is
 the same on a quiet and a loaded machine (a CPU-timed share made them depend on the load;
-the algorithms' own CPU-timed rule, :func:`.effort.observed_cheap`, is another matter):
+the algorithms' own CPU-timed rule, :func:`.effort.observed_cheap`, is decided once per
+stream and solve, far from the measured costs of the project's streams):
 
 * for its first :data:`GRACE_UNITS` of work the optimistic member runs alone, so the solves
   that meet the issue's latency targets (uniform tamp2d problems, examples) do exactly what
@@ -52,9 +53,14 @@ CPU and the member, which calls every instance, takes more than its share of the
 The incremental member has its own :class:`.PlannerState` (made by
 :func:`.common.initial_state` from the same problem, configuration and seed, so its stream
 generators draw what a plain incremental solve would draw) and is created only once the
-grace has passed: the optimistic member's state, its statistics and its decisions are left
-exactly as without the portfolio (running the member on the optimistic state, sharing its
-facts, was measured and not kept: slower, see docs/results/planner/issue19.md, hidden-suite
+grace has passed, once per solve: the anytime rounds of a solve (``success_cost``) go on
+with the same member, its samples and work (:meth:`InterleavedIncremental.next_round`), so
+a solve calls the bindings' ``make_streams`` for it (a physics world in 3D domains: setup,
+not counted as the member's work) once. The member's stream calls are added to the solve's
+statistics (``stats["streams"]``, the persisted history) beside the optimistic member's.
+The optimistic member's state, its statistics and its decisions are left exactly as
+without the portfolio (running the member on the optimistic state, sharing its facts, was
+measured and not kept: slower, see docs/results/planner/issue19.md, hidden-suite
 session 3). Not run when the incremental algorithm does not apply: streams with
 ``:fluents`` (it cannot call them in the states a plan visits), no streams at all (nothing
 to sample), or ``PlannerConfig.interleave`` off. With the drop-in API, whose samplers may
