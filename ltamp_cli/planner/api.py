@@ -52,18 +52,25 @@ _paused_gc = PausedCollection()
 
 @dataclass
 class _Run:
-    """The algorithm ``name`` as a callable on a state; for the optimistic ones it keeps
-    ``member``, the incremental member interleaved with its latest round (made here when
-    one applies, see :mod:`.algorithms.interleave`), which an unproven "infeasible" runs
-    on. Kept here, not on the state: the member refers to the state."""
+    """The algorithm ``name`` as a callable on a state, called once per anytime round; for
+    the optimistic ones it keeps ``member``, the solve's incremental member (made at the
+    first round when one applies, see :mod:`.algorithms.interleave`), which every later
+    round goes on with (:meth:`.InterleavedIncremental.next_round`: one ``make_streams``,
+    one grace and the member's samples per solve) and an unproven "infeasible" runs on.
+    Kept here, not on the state: the member refers to the state."""
 
     name: str
     member: InterleavedIncremental | None = None
+    rounds: int = 0
 
     def __call__(self, state: PlannerState) -> PlanResult:
         if self.name == "incremental":
             return solve_incremental(state)
-        self.member = interleaved_incremental(state)
+        self.rounds += 1
+        if self.rounds == 1:
+            self.member = interleaved_incremental(state)
+        elif self.member is not None:
+            self.member.next_round()
         if self.name == "focused":
             return solve_focused(state, self.member)
         return solve_with_skeletons(state, self.name == "adaptive", self.member)
@@ -312,9 +319,9 @@ def _complete_with_incremental(problem: PlanningProblem, config: PlannerConfig,
     if continued is not None and member is not None and member.member is not None:
         # The interleaved incremental member goes on where it stopped (its samples, rounds
         # and search budget kept) rather than a fresh incremental solve redoing its work.
+        # (Both members' stream statistics are persisted by _solve.)
         continued = _unless_outputs_missed(continued, member.member, state, note,
-                                           member.annotate)
-        state.stream_stats = member.member.stream_stats
+                                           member.of_member)
         return _completed(continued, state, note)
     try:
         fallback = initial_state(problem, replace(config, algorithm="incremental"))
@@ -404,6 +411,11 @@ def _solve(problem: PlanningProblem, config: PlannerConfig, start: float,
     if tracker.cancelled:
         return best  # abandoned: the caller has returned already; persist nothing
     statistics.update(state.stream_stats)
+    # The interleaved member's calls are this solve's too (its own states' statistics,
+    # added once: no other state shares them).
+    member = run.member.member if isinstance(run, _Run) and run.member is not None else None
+    if member is not None:
+        statistics.update(member.stream_stats)
     statistics.save()
     best.stats["stream_history"] = statistics.summary()
     return best

@@ -40,7 +40,7 @@ def test_slots_where_objects_were_seen_come_last(seed: int) -> None:
 def fixed_cost_clock(seconds_per_call: float) -> Callable[[], float]:
     """A CPU clock for stream calls under which every call measures ``seconds_per_call``
     (each call reads the clock twice), whatever the machine's load: the planner's
-    cheap/expensive decision (``effort.AUTO_EAGER_MAX_OVERHEAD_S``, 0.25 ms) then does not
+    cheap/expensive decision (``effort.AUTO_EAGER_MAX_OVERHEAD_S``, 1 ms) then does not
     depend on measured time (a garbage collection inside a 20 us call once made it
     expensive under load: 5 searches instead of 1)."""
     ticks = itertools.count()

@@ -100,9 +100,13 @@ class PlannerConfig:
     searches, -6 % (adaptive) and -14 % (binding) median CPU; it costs when each search
     brings mostly new instances (tamp2d problems with uniform placements: +10-25 %), so it
     is off by default (docs/results/planner/issue19.md).
-    ``interleave``: the optimistic algorithms give the incremental algorithm a share of
-    their work once they have done a grace amount without a plan (a two-member portfolio,
-    see :mod:`.interleave`), counted in load-independent work units, not seconds.
+    ``interleave``: the optimistic algorithms (adaptive, binding, focused) run an
+    incremental member beside them (a two-member portfolio, see :mod:`.interleave`): alone
+    for their first ``interleave.GRACE_UNITS`` (270,000, about 0.28 s of CPU) of work, then
+    giving the member ``interleave.SHARE`` (0.4) work units per unit of theirs past that
+    grace, so about 0.4 of the optimistic member's CPU, 0.29 of the solve's; work is
+    counted in load-independent units, not seconds. One member per solve: anytime rounds
+    go on with it. Not for ``:fluents`` streams.
     """
 
     algorithm: str = "adaptive"
@@ -664,6 +668,8 @@ class PlannerState:
             "streams": {name: s.as_dict() for name, s in sorted(self.stream_stats.items())},
             # Load-independent counts of the work done (see WorkCount).
             "work": asdict(self.work),
+            # The streams decided cheap in this solve (effort.observed_cheap).
+            "cheap_streams": sorted(n for n, s in self.stream_stats.items() if s.cheap),
         }
         return PlanResult(status, plan, cost, time.perf_counter() - self.start_time, stats,
                           certificate, {n: self.objects.value(n) for n in self.objects.names()},

@@ -15,7 +15,8 @@ turns decided by **work units** (:func:`work_units`: stream calls, facts and gro
 actions of searched tasks, evaluated states, each weighted by its typical CPU cost), never
 by a clock, so that when each member runs, and so which member's plan a seed returns, is
 the same on a quiet and a loaded machine (a CPU-timed share made them depend on the load;
-the algorithms' own CPU-timed rule, :func:`.effort.observed_cheap`, is another matter):
+the algorithms' own CPU-timed rule, :func:`.effort.observed_cheap`, is decided once per
+stream and solve, far from the measured costs of the project's streams):
 
 * for its first :data:`GRACE_UNITS` of work the optimistic member runs alone, so the solves
   that meet the issue's latency targets (uniform tamp2d problems, examples) do exactly what
@@ -52,9 +53,14 @@ CPU and the member, which calls every instance, takes more than its share of the
 The incremental member has its own :class:`.PlannerState` (made by
 :func:`.common.initial_state` from the same problem, configuration and seed, so its stream
 generators draw what a plain incremental solve would draw) and is created only once the
-grace has passed: the optimistic member's state, its statistics and its decisions are left
-exactly as without the portfolio (running the member on the optimistic state, sharing its
-facts, was measured and not kept: slower, see docs/results/planner/issue19.md, hidden-suite
+grace has passed, once per solve: the anytime rounds of a solve (``success_cost``) go on
+with the same member, its samples and work (:meth:`InterleavedIncremental.next_round`), so
+a solve calls the bindings' ``make_streams`` for it (a physics world in 3D domains: setup,
+not counted as the member's work) once. The member's stream calls are added to the solve's
+statistics (``stats["streams"]``, the persisted history) beside the optimistic member's.
+The optimistic member's state, its statistics and its decisions are left exactly as
+without the portfolio (running the member on the optimistic state, sharing its facts, was
+measured and not kept: slower, see docs/results/planner/issue19.md, hidden-suite
 session 3). Not run when the incremental algorithm does not apply: streams with
 ``:fluents`` (it cannot call them in the states a plan visits), no streams at all (nothing
 to sample), or ``PlannerConfig.interleave`` off. With the drop-in API, whose samplers may
@@ -103,6 +109,8 @@ GRACE_UNITS = 270_000.0
 # about 0.4 of its CPU (see the module docstring: the optimistic member about 1.4x slower
 # past the grace, an incremental win about 3.5x slower plus the grace).
 SHARE = 0.4
+# ``stats["solved_by"]`` of a result that the incremental member made.
+MEMBER = "interleaved incremental"
 
 
 def work_units(work: WorkCount) -> float:
@@ -114,19 +122,23 @@ def work_units(work: WorkCount) -> float:
 
 @dataclass
 class InterleavedIncremental:
-    """The incremental member of a solve (see the module's docstring). ``started``: the
-    optimistic member's work units when this solve (or anytime round) started; ``clock``:
-    CPU seconds of the solving thread (``PlannerConfig.stream_cpu_clock`` when injected),
-    only to report the member's CPU, never to decide."""
+    """The incremental member of a solve (see the module's docstring), one per solve:
+    every anytime round goes on with it (:meth:`next_round`). ``started``: the optimistic
+    member's work units when the solve started; ``clock``: CPU seconds of the solving
+    thread (``PlannerConfig.stream_cpu_clock`` when injected), only to report the member's
+    CPU, never to decide."""
 
     optimistic: PlannerState
     clock: Callable[[], float]
     started: float
     member: PlannerState | None = None
     steps: Generator[None, None, PlanResult] | None = None
-    cpu_s: float = 0.0  # CPU seconds of the incremental member so far (reported only)
+    cpu_s: float = 0.0  # CPU seconds of the incremental member's steps (reported only)
+    setup_cpu_s: float = 0.0  # CPU seconds of its make_streams (setup, not a step)
     slices: int = 0
+    rounds: int = 1  # anytime rounds of the solve served (see next_round)
     finished: bool = False
+    ended: str | None = None  # the status its steps ended with (when finished)
     skipped: str | None = None  # why the member could not be made (see _make_member)
     unproven: str | None = None  # why its "infeasible" was no proof (.companions)
     continued: bool = False  # run on to its end after the optimistic member stopped
@@ -156,25 +168,47 @@ class InterleavedIncremental:
             return None
         self.continued = True
         result = self._advance(within_share=False)
-        return None if result is None else self.annotate(result)
+        return None if result is None else self.of_member(result)
+
+    def next_round(self) -> None:
+        """Go on into the solve's next anytime round, in which the optimistic state asks
+        for plans cheaper than its ``cost_bound``: the same member (no second
+        ``make_streams``, no new grace: its work and the optimistic member's count from the
+        solve's start), under the same bound. A member whose plan ended the last round
+        searches again over the samples it has (a new run of its steps over the same
+        state: its instances, objects and search budget are kept); one that ended
+        otherwise (a proof, a timeout, an "infeasible" that proved nothing) stays ended."""
+        self.rounds += 1
+        if self.member is None:
+            return
+        self.member.cost_bound = self.optimistic.cost_bound
+        if self.finished and self.ended == SOLVED:
+            self.steps = incremental_steps(self.member)
+            self.finished = False
+            self.ended = None
 
     def _advance(self, within_share: bool) -> PlanResult | None:
         """Step the member (made on first use) while it has allowance (``within_share``)
-        or to its end; its result once it ended, else ``None``."""
+        or to its end; its result once it ended, else ``None``. Making it (the bindings'
+        ``make_streams``: a physics world in 3D domains) is setup, as the optimistic
+        member's own is: reported apart (:attr:`setup_cpu_s`), neither a step nor work."""
+        if self.steps is None:
+            start = self.clock()
+            self.member = self._make_member()
+            self.setup_cpu_s += self.clock() - start
+            if self.member is None:
+                self.finished = True
+                return None
+            self.steps = incremental_steps(self.member)
         start = self.clock()
         try:
-            if self.steps is None:
-                self.member = self._make_member()
-                if self.member is None:
-                    self.finished = True
-                    return None
-                self.steps = incremental_steps(self.member)
             self.slices += 1
             while not within_share or self.allowance() > 0:
                 try:
                     next(self.steps)
                 except StopIteration as done:
                     self.finished = True
+                    self.ended = done.value.status
                     return done.value  # type: ignore[no-any-return]
             return None
         finally:
@@ -216,35 +250,63 @@ class InterleavedIncremental:
                 self.unproven = missed
                 return None
         result.stats["algorithm"] = self.optimistic.config.algorithm
-        result.stats["solved_by"] = "interleaved incremental"
-        # Both members' work: the solve's searches and iterations.
-        result.stats["searches"] = self.optimistic.searches + result.stats["searches"]
-        result.stats["iterations"] = self.optimistic.iterations + result.stats["iterations"]
-        # One thread ran both members: their seconds add up to at most the solve's.
-        optimistic = self.optimistic
-        for key, seconds in (("search_time_s", optimistic.search_time),
-                             ("grounding_time_s", optimistic.grounding_time),
-                             ("sampling_time_s", optimistic.sampling_time)):
-            result.stats[key] = round(result.stats[key] + seconds, 6)
-        self.annotate(result)
-        return result
+        return self.of_member(result)
+
+    def of_member(self, result: PlanResult) -> PlanResult:
+        """``result``, made by the member's state: labelled ``solved_by`` the member when
+        it settles the solve, with the optimistic member's work added (:func:`add_work`)
+        and the member's recorded."""
+        if result.status in (SOLVED, INFEASIBLE):
+            result.stats["solved_by"] = MEMBER
+        add_work(result, self.optimistic)
+        return self._record(result)
 
     def annotate(self, result: PlanResult) -> PlanResult:
-        """Record the member's work in ``result.stats["interleaved"]`` (when it ran)."""
+        """Record the member's work in ``result.stats["interleaved"]`` (when it ran); a
+        result of the optimistic member's state gets the member's searches, seconds and
+        stream calls added (:func:`add_work`) the first time (a result that has the record
+        already was made by :meth:`of_member` or seen before)."""
+        if self.member is not None and "interleaved" not in result.stats:
+            add_work(result, self.member)
+        return self._record(result)
+
+    def _record(self, result: PlanResult) -> PlanResult:
+        """Set ``result.stats["interleaved"]``: the member's work, or why it was skipped."""
         if self.skipped is not None:
             result.stats["interleaved"] = {"skipped": self.skipped}
         if self.unproven is not None:
             result.stats["interleaved_infeasibility_unproven"] = self.unproven
         if self.member is not None:
             result.stats["interleaved"] = {
-                "slices": self.slices, "continued": self.continued,
-                "cpu_s": round(self.cpu_s, 6),
+                "slices": self.slices, "continued": self.continued, "rounds": self.rounds,
+                "cpu_s": round(self.cpu_s, 6), "setup_cpu_s": round(self.setup_cpu_s, 6),
                 "work_units": round(self.spent()),
                 "optimistic_work_units": round(work_units(self.optimistic.work)
                                                - self.started),
                 "searches": self.member.searches, "iterations": self.member.iterations,
                 "stream_calls": sum(s.calls for s in self.member.stream_stats.values())}
         return result
+
+
+def add_work(result: PlanResult, other: PlannerState) -> None:
+    """Add what ``other`` (the solve's other member) did to ``result``'s statistics: its
+    searches, iterations, seconds (search, grounding, stream calls) and, per stream, its
+    calls, successes, outputs and seconds, so that ``--json`` shows the whole solve. One
+    thread ran both members, so the seconds add up to at most the solve's."""
+    stats = result.stats
+    stats["searches"] += other.searches
+    stats["iterations"] += other.iterations
+    for key, seconds in (("search_time_s", other.search_time),
+                         ("grounding_time_s", other.grounding_time),
+                         ("sampling_time_s", other.sampling_time)):
+        stats[key] = round(stats[key] + seconds, 6)
+    streams = stats.setdefault("streams", {})
+    for name, calls in other.stream_stats.items():
+        mine = streams.setdefault(name, {"calls": 0, "successes": 0, "outputs": 0,
+                                         "time_s": 0.0})
+        for key, value in calls.as_dict().items():
+            mine[key] = round(mine[key] + value, 6) if key == "time_s" else mine[key] + value
+    stats["streams"] = dict(sorted(streams.items()))
 
 
 def interleaved_incremental(state: PlannerState) -> InterleavedIncremental | None:
