@@ -76,6 +76,7 @@ from ltamp_cli.planner.algorithms.optimistic import (
     stream_plan,
     within_limit,
 )
+from ltamp_cli.planner.algorithms.parking import latest_sample
 from ltamp_cli.planner.algorithms.preimage import plan_preimage
 from ltamp_cli.planner.pddl.syntax import Stream, StreamFunction
 from ltamp_cli.planner.result import INFEASIBLE, SOLVED, TIMEOUT, PlanResult
@@ -323,6 +324,10 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
         state.record_failure(instance)
         report_unusable(state, real_inputs, binding.made_by)
         record_rejection(state, real_inputs, binding.made_by)
+        if PARK_REJECTED_SAMPLES and not state_dependent(instance):
+            rejected = latest_sample(real_inputs, binding.made_by, state.objects.ranks)
+            if rejected is not None:
+                state.parked.park(rejected)
         binding.skeleton.retries.cheap = not state_dependent(instance)
         if not context:
             binding.skeleton.learn_nogood(binding.step, binding.mapping)
@@ -371,6 +376,11 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
 # inputs that differ from its own in one value) are tried at once with the stream plan's
 # tests on their outputs, up to this many outputs each (0: off); see probe_siblings.
 SIBLING_PROBE_OUTPUTS = 4
+
+# When a test on a binding's path rejects values, the one the binding sampled last is
+# parked: kept out of optimistic tasks and eager calls until a full search fails (see
+# :mod:`.parking`). False: every sample enters every later task.
+PARK_REJECTED_SAMPLES = True
 
 
 def probe_siblings(state: PlannerState, failed: Binding) -> None:
@@ -787,6 +797,13 @@ def _solve_with_skeletons(state: PlannerState, adaptive: bool,
                 else:
                     if not evaluation.cut and not len(queue) and not discrete.capped:
                         return state.result(INFEASIBLE, None)
+                    if state.parked and not discrete.capped:
+                        # A full search proved that no plan uses the samples it saw: search
+                        # again at the same bound over every sample (and their eager calls).
+                        # One that ran out of expansions keeps them parked: its budget has
+                        # doubled, and a later exhaustive failure releases them.
+                        state.parked.release(state.deferred_eager)
+                        continue
                     retry_threshold += 1
                     complexity += 1
                     if (complexity > state.config.max_complexity + state.max_object_level()

@@ -1,0 +1,103 @@
+"""Parked samples: values a binding's test rejected stay out of later optimistic tasks.
+
+Why (issue #19, crowded regions): with placement samplers that know nothing of other
+blocks, most samples of a stream plan fail one of its tests (the pose collides with a
+block standing in the goal region, or with the pose sampled just before). Each such sample
+stays a real object, and with an eager pairwise test (collision between every two poses)
+it adds a row of test calls and facts to **every later task**: on ``hidden_clutter_10``
+418 poses gave 183,000 collision tests and 34,000-fact tasks, 0.7-1.1 s a search, most of
+it for poses no plan used. PDDLStream's adaptive keeps such tasks small another way (its
+collision test is a negated stream: only failures enter the task, and only the pairs a
+plan's preimage needs are tested); here the values are set aside instead.
+
+The rule: when a test on a binding's path rejects values, the value that binding sampled
+last among them (the generator output the local repair would replace) is *parked*. A
+parked value
+
+* keeps its facts in the store (a binding that holds it goes on using it; its instances
+  and outputs are kept for reuse), but
+* no fact that mentions it enters an optimistic task, no optimistic instance takes it as
+  an input, and eager streams are not called on input tuples that hold it (they wait in
+  :attr:`ParkedSamples.held`).
+
+Completeness: a task that leaves parked values out is *cut* (it does not prove
+"infeasible"), and when a full search (not a speculative one) finds no plan, every value
+is released (:meth:`ParkedSamples.release`) before the complexity bound is raised, so the
+next tasks see all samples and the eager calls that waited are made.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+
+Fact = tuple[str, ...]
+
+
+@dataclass
+class ParkedSamples:
+    """Sampled object names set aside (see the module docstring), and the eager input
+    tuples that wait for them (stream name -> tuples)."""
+
+    values: set[str] = field(default_factory=set)
+    held: dict[str, list[tuple[str, ...]]] = field(default_factory=dict)
+    parked_total: int = 0  # values parked over the solve (a value parked twice counts twice)
+    releases: int = 0
+
+    def __bool__(self) -> bool:
+        return bool(self.values)
+
+    def park(self, value: str) -> None:
+        if value not in self.values:
+            self.values.add(value)
+            self.parked_total += 1
+
+    def holds(self, inputs: Iterable[str]) -> bool:
+        """Whether ``inputs`` (an input tuple or a fact's arguments) mention a parked value."""
+        values = self.values
+        return bool(values) and any(x in values for x in inputs)
+
+    def hold_back(self, name: str, candidates: list[tuple[str, ...]]
+                  ) -> list[tuple[str, ...]]:
+        """The eager ``candidates`` of stream ``name`` free of parked values; the others
+        are kept in :attr:`held` until :meth:`release`."""
+        if not self.values:
+            return candidates
+        free = [inputs for inputs in candidates if not self.holds(inputs)]
+        if len(free) < len(candidates):
+            self.held.setdefault(name, []).extend(
+                inputs for inputs in candidates if self.holds(inputs))
+        return free
+
+    def task_facts(self, facts: Iterable[Fact]) -> Iterable[Fact]:
+        """``facts`` without those whose arguments mention a parked value."""
+        values = self.values
+        if not values:
+            return facts
+        return [fact for fact in facts if not any(x in values for x in fact[1:])]
+
+    def release(self, deferred: dict[str, list[tuple[str, ...]]]) -> None:
+        """Unpark every value; the eager tuples that waited go to ``deferred`` (the
+        state's deferred eager calls, made at the next eager evaluation)."""
+        if not self.values and not self.held:
+            return
+        for name, waiting in self.held.items():
+            deferred.setdefault(name, []).extend(waiting)
+        self.held = {}
+        self.values = set()
+        self.releases += 1
+
+    def stats(self) -> dict[str, int]:
+        return {"parked": self.parked_total, "releases": self.releases,
+                "parked_now": len(self.values)}
+
+
+def latest_sample(consumed: Iterable[str], made_by: Mapping[str, object],
+                  order: Mapping[str, int]) -> str | None:
+    """Among ``consumed``, the value the binding sampled last: those in ``made_by`` (made
+    by one of its generator steps), the one with the highest ``order`` (its creation
+    rank); ``None`` when the binding sampled none of them."""
+    sampled = [x for x in consumed if x in made_by]
+    if not sampled:
+        return None
+    return max(sampled, key=lambda x: order.get(x, -1))
