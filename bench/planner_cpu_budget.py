@@ -92,7 +92,7 @@ def main() -> None:
                 print(f"{name:<20} {algorithm:<9} {seed:>4} {row['status']:<9} "
                       f"{row['cpu_s']:>7.2f} {work.get('calls', '-'):>7} "
                       f"{work.get('facts', '-'):>9} {work.get('grounded', '-'):>9} "
-                      f"{row['length'] or '-':>4} {str(row['valid']):>5} {row['load']:>5.1f}",
+                      f"{row['length'] or '-':>4} {row['valid']!s:>5} {row['load']:>5.1f}",
                       flush=True)
                 args.out.write_text(json.dumps({"budget_cpu_s": args.budget, "runs": rows},
                                                indent=1))
