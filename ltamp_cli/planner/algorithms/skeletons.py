@@ -324,7 +324,8 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
         state.record_failure(instance)
         report_unusable(state, real_inputs, binding.made_by)
         record_rejection(state, real_inputs, binding.made_by)
-        if PARK_REJECTED_SAMPLES and not state_dependent(instance):
+        if (PARK_REJECTED_SAMPLES and not state_dependent(instance)
+                and not _against_given_value(state, real_inputs, binding.made_by)):
             rejected = latest_sample(real_inputs, binding.made_by, state.objects.ranks)
             if rejected is not None:
                 state.parked.park(rejected)
@@ -603,6 +604,17 @@ def _domain_real(state: PlannerState, name: str, inputs: tuple[str, ...]) -> boo
     domain = instantiate_atoms(external_domain(external),
                                dict(zip(external_inputs(external), inputs, strict=True)))
     return all(fact in state.facts.members for fact in domain)
+
+
+def _against_given_value(state: PlannerState, consumed: tuple[str, ...],
+                         made_by: dict[str, tuple[StreamInstance, tuple[str, ...]]]) -> bool:
+    """Whether a test rejected ``consumed`` against a value the problem gave (an initial
+    pose: a problem object with a value other than its name). Such a sample is kept in
+    later tasks: the value in its way may move (a block standing in the goal region), and a
+    plan that moves it first can use the sample."""
+    objects = state.problem.objects
+    return any(x not in made_by and x in objects and state.objects.value(x) != x
+               for x in consumed)
 
 
 def state_dependent(instance: StreamInstance) -> bool:
