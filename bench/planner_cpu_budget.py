@@ -25,6 +25,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+import planner as bench_planner
 from planner import run_one
 
 from ltamp_cli.planner.algorithms import common
@@ -76,9 +77,21 @@ def main() -> None:
               file=sys.stderr)
         raise SystemExit(2)
     use_one_thread()
+    # The last solve's own statistics (run_one keeps only its work counts).
+    last: dict[str, Any] = {}
+    plain_solve = bench_planner.solve
+
+    def solve(*args: Any, **kwargs: Any) -> Any:
+        result = plain_solve(*args, **kwargs)
+        last.update(searches=result.stats.get("searches"), parked=result.stats.get("parked"),
+                    solved_by=result.stats.get("solved_by"))
+        return result
+
+    bench_planner.solve = solve
     rows: list[dict[str, Any]] = []
     print(f"{'problem':<20} {'algorithm':<9} {'seed':>4} {'status':<9} {'cpu s':>7} "
-          f"{'calls':>7} {'facts':>9} {'grounded':>9} {'len':>4} {'valid':>5} {'load':>5}",
+          f"{'searches':>8} {'calls':>7} {'facts':>9} {'grounded':>9} {'len':>4} {'valid':>5} "
+          f"{'load':>5}",
           flush=True)
     for name in args.problems.split(","):
         problem = load_problem(SUITE / f"{name}.yaml")
@@ -87,12 +100,14 @@ def main() -> None:
                 with cpu_budget(args.budget):
                     row = run_one(problem, algorithm, seed, args.max_time)
                 work = row.get("work") or {}
-                row.update(problem=name, budget_cpu_s=args.budget, load=os.getloadavg()[0])
+                row.update(problem=name, budget_cpu_s=args.budget, load=os.getloadavg()[0],
+                           **last)
                 rows.append(row)
                 print(f"{name:<20} {algorithm:<9} {seed:>4} {row['status']:<9} "
-                      f"{row['cpu_s']:>7.2f} {work.get('calls', '-'):>7} "
+                      f"{row['cpu_s']:>7.2f} {row['searches']!s:>8} {work.get('calls', '-'):>7} "
                       f"{work.get('facts', '-'):>9} {work.get('grounded', '-'):>9} "
-                      f"{row['length'] or '-':>4} {row['valid']!s:>5} {row['load']:>5.1f}",
+                      f"{row['length'] or '-':>4} {row['valid']!s:>5} {row['load']:>5.1f} "
+                      f"{'parked ' + str(row['parked']['parked']) if row['parked'] else ''}",
                       flush=True)
                 args.out.write_text(json.dumps({"budget_cpu_s": args.budget, "runs": rows},
                                                indent=1))

@@ -11,17 +11,19 @@ member is off so that the counts are the optimistic algorithm's own.
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from ltamp_cli.planner.algorithms import common, skeletons
+from ltamp_cli.planner.algorithms import common, parking, skeletons
 from ltamp_cli.planner.algorithms.common import PlannerConfig, initial_state
 from ltamp_cli.planner.algorithms.parking import ParkedSamples, latest_sample
 from ltamp_cli.planner.api import solve
 from ltamp_cli.planner.problem import load_problem
 from ltamp_cli.planner.result import PlanResult
+from ltamp_cli.planner.validate import validate_plan
 
 ROBOTS = Path(__file__).resolve().parents[2] / "bench" / "problems" / "hidden19" / "robots"
 
@@ -55,6 +57,8 @@ def _solve(path: Path, seed: int, park: bool, monkeypatch: pytest.MonkeyPatch,
     of every optimistic search (not the check of a complete binding's plan over every
     real fact, which may hold parked values the binding used)."""
     monkeypatch.setattr(skeletons, "PARK_REJECTED_SAMPLES", park)
+    # These tasks stay small (< 600 facts): parking from the first task on.
+    monkeypatch.setattr(parking, "PARK_ABOVE_TASK_FACTS", 0)
     if tasks is not None:
         original = common.PlannerState.search
 
@@ -78,6 +82,13 @@ def test_parked_values_stay_out_of_tasks_and_eager_calls() -> None:
     parked = ParkedSamples()
     assert not parked and parked.hold_back("t", [("a", "@p1")]) == [("a", "@p1")]
     parked.park("@p1")
+    assert not parked  # not active: no task has reached the threshold
+    parked.note_task(parking.PARK_ABOVE_TASK_FACTS - 1)
+    assert not parked.active
+    parked.note_task(parking.PARK_ABOVE_TASK_FACTS)
+    parked.note_task(0)
+    assert parked.active  # stays on
+    parked.park("@p1")
     parked.park("@p1")
     assert parked and parked.parked_total == 1
     assert parked.holds(("a", "@p1", "b", "p_b")) and not parked.holds(("a", "@p2"))
@@ -96,9 +107,14 @@ def test_the_latest_sample_of_the_binding_is_the_one_parked() -> None:
     ranks = {"@p3": 3, "@p7": 7, "@p5": 5}
     made_by = {"@p3": object(), "@p7": object()}
     # @p5 is real but not sampled by this binding; problem objects are never parked.
-    assert latest_sample(("a", "@p3", "b", "@p7"), made_by, ranks) == "@p7"
-    assert latest_sample(("a", "@p5", "b", "@p3"), made_by, ranks) == "@p3"
-    assert latest_sample(("a", "@p5", "b", "p_b"), made_by, ranks) is None
+    given = {"a", "b", "p_b"}
+    assert latest_sample(("a", "@p3", "b", "@p7"), made_by, ranks, given) == "@p7"
+    assert latest_sample(("a", "@p5", "b", "@p3"), made_by, ranks, given) == "@p3"
+    assert latest_sample(("a", "@p5", "b", "p_b"), made_by, ranks, given) is None
+    # A sample equal to a value the problem gave is that problem object: never parked
+    # (kitchen_fluent: a pose sampled onto the kettle's start pose).
+    assert latest_sample(("a", "@p3", "b", "p_b"), {**made_by, "p_b": object()}, ranks,
+                         given) == "@p3"
 
 
 @pytest.mark.parametrize("seed", [2, 5])
@@ -142,3 +158,31 @@ def test_a_sample_rejected_against_a_given_value_is_not_parked(tight: Path) -> N
     assert skeletons._against_given_value(state, ("a", "@p1", "b", "p_b"), made_by)
     assert not skeletons._against_given_value(state, ("a", "@p1", "b", "@p2"), made_by)
     assert not skeletons._against_given_value(state, ("a", "@p1", "b", "@p9"), made_by)
+
+
+def test_small_tasks_park_nothing(tight: Path) -> None:
+    """With the default threshold, the tight pair's tasks (< 600 facts) never park: the
+    solve is main's, sample for sample."""
+    result = solve(load_problem(tight), PlannerConfig(algorithm="adaptive", seed=2,
+                                                      max_time=60, interleave=False))
+    assert result.solved and "parked" not in result.stats
+    assert _calls(result, "test-cfree") == 361  # main's count (see above)
+
+
+def test_kitchen_fluent_plans_stay_valid(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A pose sampled onto an object's start pose is that problem object: parking it took
+    the initial state's facts out of the task, and a plan placed the spoon where the
+    kettle stands (seed 1 without the refinement and sibling probes). Problem objects are
+    never parked, and a plan found while samples are parked is checked over every fact."""
+    examples = Path(__file__).resolve().parents[2] / "problems" / "examples"
+    problem = load_problem(examples / "kitchen_fluent.yaml")
+    monkeypatch.setattr(skeletons, "REFINEMENT_PROBE_OUTPUTS", 0)
+    monkeypatch.setattr(skeletons, "HOLD_BACK_FAILED_SIBLINGS", False)
+    monkeypatch.setattr(skeletons, "CONTEXT_SIBLING_PROBE_CALLS", 0)
+    monkeypatch.setattr(parking, "PARK_ABOVE_TASK_FACTS", 0)
+    ticks = itertools.count()
+    result = solve(problem, PlannerConfig(algorithm="adaptive", seed=1, max_time=60,
+                                          stream_cpu_clock=lambda: next(ticks) * 20e-6))
+    assert result.solved
+    report = validate_plan(problem, result)
+    assert report.valid, report.errors

@@ -326,7 +326,8 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
         record_rejection(state, real_inputs, binding.made_by)
         if (PARK_REJECTED_SAMPLES and not state_dependent(instance)
                 and not _against_given_value(state, real_inputs, binding.made_by)):
-            rejected = latest_sample(real_inputs, binding.made_by, state.objects.ranks)
+            rejected = latest_sample(real_inputs, binding.made_by, state.objects.ranks,
+                                     state.problem.objects)
             if rejected is not None:
                 state.parked.park(rejected)
         binding.skeleton.retries.cheap = not state_dependent(instance)
@@ -723,6 +724,7 @@ def _solve_with_skeletons(state: PlannerState, adaptive: bool,
                     state, complexity, placeholders,
                     failed_siblings(state) if speculative and HOLD_BACK_FAILED_SIBLINGS
                     else None)
+                state.parked.note_task(len(evaluation.index.members))
                 # The most advanced binding's plan, with what it bound so far, is checked
                 # first: once sampling made its facts real it is usually still a plan.
                 # Rebased onto this task (partial_guess) only without action costs: with
@@ -788,6 +790,19 @@ def _solve_with_skeletons(state: PlannerState, adaptive: bool,
                             or discrete.outcome.guessed else 0)
                         continue
                     plan = tuple(found)
+                    if not plan and state.parked:
+                        # The task left parked samples out: a plan over real facts only is
+                        # checked over all of them (a derived condition such as "no block
+                        # in the way" may hold only because a fact was left out).
+                        real = state.search(state.facts.members, state.object_types,
+                                            state.function_values, REAL_SEARCH_EXPANSIONS,
+                                            guess=[(a.name, a.args)
+                                                   for a in discrete.actions or ()])
+                        if real.solved:
+                            facts, terms = plan_preimage(real)
+                            return state.result(SOLVED, real, facts | terms)
+                        state.parked.release(state.deferred_eager)
+                        continue
                     if not plan:
                         return state.result(SOLVED, discrete, facts | terms)
                     state.remember_skeleton([str(a) for a in discrete.actions or []])
