@@ -28,9 +28,14 @@ are placed from a pool of earlier samples, and parking those took the tight plac
 ``tamp2d_uniform_tight_6`` adaptive from 0.10 to 0.16 s median CPU.
 
 Completeness: a task that leaves parked values out is *cut* (it does not prove
-"infeasible"), and when a full search (not a speculative one) finds no plan, every value
-is released (:meth:`ParkedSamples.release`) before the complexity bound is raised, so the
-next tasks see all samples and the eager calls that waited are made.
+"infeasible"), and when a full search (not a speculative one) proves that it has no plan
+(it did not run out of expansions), every value is released (:meth:`ParkedSamples.release`)
+and the same bound is searched again, so the next tasks see all samples and the eager
+calls that waited are made; a search that ran out of expansions keeps them parked (its
+budget doubles, so an exhaustive failure comes). Soundness: a plan that needs no stream,
+found while values are parked, is checked over every real fact before it is returned (a
+derived condition such as "no block in the way" may hold in the task only because a fact
+was left out), and the problem's own objects are never parked.
 """
 
 from __future__ import annotations
