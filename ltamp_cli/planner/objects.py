@@ -8,7 +8,7 @@ Each :class:`ObjectTable` is private to one planner run.
 from __future__ import annotations
 
 import numbers
-from collections.abc import Hashable
+from collections.abc import Hashable, Mapping
 from typing import Any
 
 import numpy as np
@@ -46,6 +46,8 @@ class ObjectTable:
         self._values: dict[str, Any] = {}
         self._by_key: dict[Hashable, str] = {}
         self._counter = 0
+        # Created object -> its creation rank (problem objects have none).
+        self._rank: dict[str, int] = {}
 
     def add(self, name: str, value: Any) -> None:
         """Register a named object (from the problem file)."""
@@ -59,10 +61,16 @@ class ObjectTable:
         name = self._by_key.get(key)
         if name is None:
             name = f"@{prefix}{self._counter}"
+            self._rank[name] = self._counter
             self._counter += 1
             self._by_key[key] = name
             self._values[name] = value
         return name
+
+    @property
+    def ranks(self) -> Mapping[str, int]:
+        """Created object -> creation rank (0 first); problem objects are absent."""
+        return self._rank
 
     def value(self, name: str) -> Any:
         """The Python value of an object; symbolic objects are their own name."""

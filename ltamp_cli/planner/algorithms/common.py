@@ -12,6 +12,7 @@ import numpy as np
 from ltamp_cli.errors import InputError
 from ltamp_cli.planner.algorithms.effort import Effort, estimate_effort, observed_cheap
 from ltamp_cli.planner.algorithms.families import StreamFamilies
+from ltamp_cli.planner.algorithms.parking import ParkedSamples
 from ltamp_cli.planner.objects import ObjectTable
 from ltamp_cli.planner.pddl.syntax import (
     OBJECT_TYPE,
@@ -341,6 +342,9 @@ class PlannerState:
     # Other states of this solve that call the same bindings (the interleaved member, see
     # :mod:`.companions`): an "infeasible" is checked against what their instances made.
     companions: list[PlannerState] = field(default_factory=list)
+    # Sampled values a binding's test rejected, kept out of optimistic tasks and eager
+    # calls until a full search fails (:mod:`.parking`; only the skeleton algorithms park).
+    parked: ParkedSamples = field(default_factory=ParkedSamples)
 
     @functools.cached_property
     def recursive(self) -> frozenset[str]:
@@ -671,6 +675,8 @@ class PlannerState:
             # The streams decided cheap in this solve (effort.observed_cheap).
             "cheap_streams": sorted(n for n, s in self.stream_stats.items() if s.cheap),
         }
+        if self.parked.parked_total:
+            stats["parked"] = self.parked.stats()
         return PlanResult(status, plan, cost, time.perf_counter() - self.start_time, stats,
                           certificate, {n: self.objects.value(n) for n in self.objects.names()},
                           diagnostics)

@@ -234,10 +234,12 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
     out too (:func:`failed_siblings`; the evaluation is then ``cut``)."""
     # A hash-independent order, sorted and loaded in bounded steps (10^5 known facts: one
     # ``sorted`` call would hold the GIL past the deadline).
-    index = FactIndex.of_sorted(sorted_before(state.facts.members, state.deadline),
-                                state.deadline)
+    # Facts of parked samples stay out (see .parking): the task is then cut.
+    parked = state.parked
+    index = FactIndex.of_sorted(sorted_before(parked.task_facts(state.facts.members),
+                                              state.deadline), state.deadline)
     evaluation = OptimisticEvaluation(index, dict(state.function_values),
-                                      dict(state.object_types))
+                                      dict(state.object_types), cut=bool(parked))
     done: set[InstanceKey] = set()
     levels = evaluation.level
     real_levels = state.object_level
@@ -263,6 +265,8 @@ def optimistic_evaluation(state: PlannerState, complexity: int,
             check_deadline(state.deadline)
             if since is None:
                 candidates = state.open_real_bindings(external)
+                if parked:
+                    candidates = [x for x in candidates if not parked.holds(x)]
             else:
                 # Bindings whose inputs alone exceed the bound are not even enumerated: an
                 # instance's level is at least its inputs' summed levels, so they would be
@@ -747,6 +751,8 @@ def _eager_fixpoint(state: PlannerState, complexity: int | None) -> Iterator[Non
                 candidates = _below_level(state, external, complexity)
             else:
                 continue
+            # Tuples over parked samples wait for their release (see .parking).
+            candidates = state.parked.hold_back(name, candidates)
             for inputs in candidates:
                 instance = state.instance(name, inputs)
                 if instance.num_calls == 0:

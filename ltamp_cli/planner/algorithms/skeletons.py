@@ -76,6 +76,7 @@ from ltamp_cli.planner.algorithms.optimistic import (
     stream_plan,
     within_limit,
 )
+from ltamp_cli.planner.algorithms.parking import latest_sample
 from ltamp_cli.planner.algorithms.preimage import plan_preimage
 from ltamp_cli.planner.pddl.syntax import Stream, StreamFunction
 from ltamp_cli.planner.result import INFEASIBLE, SOLVED, TIMEOUT, PlanResult
@@ -323,6 +324,12 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
         state.record_failure(instance)
         report_unusable(state, real_inputs, binding.made_by)
         record_rejection(state, real_inputs, binding.made_by)
+        if (PARK_REJECTED_SAMPLES and not state_dependent(instance)
+                and not _against_given_value(state, real_inputs, binding.made_by)):
+            rejected = latest_sample(real_inputs, binding.made_by, state.objects.ranks,
+                                     state.problem.objects)
+            if rejected is not None:
+                state.parked.park(rejected)
         binding.skeleton.retries.cheap = not state_dependent(instance)
         if not context:
             binding.skeleton.learn_nogood(binding.step, binding.mapping)
@@ -371,6 +378,11 @@ def advance(state: PlannerState, binding: Binding) -> list[Binding] | None:
 # inputs that differ from its own in one value) are tried at once with the stream plan's
 # tests on their outputs, up to this many outputs each (0: off); see probe_siblings.
 SIBLING_PROBE_OUTPUTS = 4
+
+# When a test on a binding's path rejects values, the one the binding sampled last is
+# parked: kept out of optimistic tasks and eager calls until a full search fails (see
+# :mod:`.parking`). False: every sample enters every later task.
+PARK_REJECTED_SAMPLES = True
 
 
 def probe_siblings(state: PlannerState, failed: Binding) -> None:
@@ -595,6 +607,17 @@ def _domain_real(state: PlannerState, name: str, inputs: tuple[str, ...]) -> boo
     return all(fact in state.facts.members for fact in domain)
 
 
+def _against_given_value(state: PlannerState, consumed: tuple[str, ...],
+                         made_by: dict[str, tuple[StreamInstance, tuple[str, ...]]]) -> bool:
+    """Whether a test rejected ``consumed`` against a value the problem gave (an initial
+    pose: a problem object with a value other than its name). Such a sample is kept in
+    later tasks: the value in its way may move (a block standing in the goal region), and a
+    plan that moves it first can use the sample."""
+    objects = state.problem.objects
+    return any(x not in made_by and x in objects and state.objects.value(x) != x
+               for x in consumed)
+
+
 def state_dependent(instance: StreamInstance) -> bool:
     """Whether ``instance``'s stream declares ``:fluents``: its failure is one in the state
     it was called in (a route blocked by debris, a motion blocked by the objects standing
@@ -701,6 +724,7 @@ def _solve_with_skeletons(state: PlannerState, adaptive: bool,
                     state, complexity, placeholders,
                     failed_siblings(state) if speculative and HOLD_BACK_FAILED_SIBLINGS
                     else None)
+                state.parked.note_task(len(evaluation.index.members))
                 # The most advanced binding's plan, with what it bound so far, is checked
                 # first: once sampling made its facts real it is usually still a plan.
                 # Rebased onto this task (partial_guess) only without action costs: with
@@ -766,6 +790,19 @@ def _solve_with_skeletons(state: PlannerState, adaptive: bool,
                             or discrete.outcome.guessed else 0)
                         continue
                     plan = tuple(found)
+                    if not plan and state.parked:
+                        # The task left parked samples out: a plan over real facts only is
+                        # checked over all of them (a derived condition such as "no block
+                        # in the way" may hold only because a fact was left out).
+                        real = state.search(state.facts.members, state.object_types,
+                                            state.function_values, REAL_SEARCH_EXPANSIONS,
+                                            guess=[(a.name, a.args)
+                                                   for a in discrete.actions or ()])
+                        if real.solved:
+                            facts, terms = plan_preimage(real)
+                            return state.result(SOLVED, real, facts | terms)
+                        state.parked.release(state.deferred_eager)
+                        continue
                     if not plan:
                         return state.result(SOLVED, discrete, facts | terms)
                     state.remember_skeleton([str(a) for a in discrete.actions or []])
@@ -787,6 +824,13 @@ def _solve_with_skeletons(state: PlannerState, adaptive: bool,
                 else:
                     if not evaluation.cut and not len(queue) and not discrete.capped:
                         return state.result(INFEASIBLE, None)
+                    if state.parked and not discrete.capped:
+                        # A full search proved that no plan uses the samples it saw: search
+                        # again at the same bound over every sample (and their eager calls).
+                        # One that ran out of expansions keeps them parked: its budget has
+                        # doubled, and a later exhaustive failure releases them.
+                        state.parked.release(state.deferred_eager)
+                        continue
                     retry_threshold += 1
                     complexity += 1
                     if (complexity > state.config.max_complexity + state.max_object_level()
