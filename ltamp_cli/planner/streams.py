@@ -239,9 +239,6 @@ class StreamStats:
     # one; the others are counted at the measured mean (see :meth:`StreamInstance.call`).
     cpu_s: float = 0.0
     cpu_timed_calls: int = 0
-    # Whether the stream is cheap, decided once in a solve (``effort.observed_cheap``;
-    # ``None``: not yet), so that the decision does not flip with timing noise mid-solve.
-    cheap: bool | None = None
 
     def as_dict(self) -> dict[str, float]:
         return {"calls": self.calls, "successes": self.successes, "outputs": self.outputs,

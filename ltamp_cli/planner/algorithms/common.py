@@ -672,8 +672,6 @@ class PlannerState:
             "streams": {name: s.as_dict() for name, s in sorted(self.stream_stats.items())},
             # Load-independent counts of the work done (see WorkCount).
             "work": asdict(self.work),
-            # The streams decided cheap in this solve (effort.observed_cheap).
-            "cheap_streams": sorted(n for n, s in self.stream_stats.items() if s.cheap),
         }
         if self.parked.parked_total:
             stats["parked"] = self.parked.stats()

@@ -22,24 +22,15 @@ PRIOR_CALLS = 2.0
 # Streams that never fail still need a finite key; their relative order stays by overhead.
 MIN_FAILURE_PROBABILITY = 1e-3
 
-# With ``PlannerConfig.eager_cheap_streams``, a stream observed to be cheap is evaluated
-# eagerly, as if declared ``eager``: calling it on every real input is cheaper than the
-# searches and failed stream plans its optimistic placeholders would cause (test streams
-# always; see ``PlannerState.eager``). The decision (:func:`observed_cheap`) is made once
-# per stream and solve, from at least this many observed calls.
+# With ``PlannerConfig.eager_cheap_streams``, a stream observed this often to cost at most
+# this much per call is evaluated eagerly, as if declared ``eager``: calling it on every real
+# input is cheaper than the searches and failed stream plans its optimistic placeholders
+# would cause. The threshold is far above the cost of closed-form Python samplers
+# (~10-50 us) and below GP predictions and simulations, so measured time noise does not
+# flip the decision in practice; with the current run's calls timed in CPU seconds, one
+# call is enough to decide (three made cold kitchen_symbolic runs search 5-6 times, not 4).
 AUTO_EAGER_MIN_CALLS = 1
-# Mean CPU per call below which a stream is cheap. Closed-form Python samplers and tests
-# cost 3-50 us a call (medians in the examples, the uniform suite and the hidden problems;
-# the costliest, tamp2d_4blocks' sample-pose, 80 us), GP-based samplers ~6 ms. A stream's
-# first call also pays for cold caches and first-time code paths (+100-250 us measured:
-# sample-pose 170-250 us on its first call, test-cfree 254 us then 3-4 us), more on a
-# loaded machine. The former 250 us threshold sat inside that noise, so a seed's plan
-# changed between runs (tamp2d_4blocks seed 1); 1 ms is four times above it and still far
-# below both a GP prediction and the search (0.1-0.4 s) that an optimistic placeholder
-# of a stream can waste. Kitchen3D's PyBullet streams span 0.02-1.2 ms (trajectory
-# collision tests 0.5-1.2 ms, declared eager there): no threshold is clear of all of them,
-# hence the decision is also kept for the solve (docs/results/planner/issue19.md).
-AUTO_EAGER_MAX_OVERHEAD_S = 1e-3
+AUTO_EAGER_MAX_OVERHEAD_S = 2.5e-4
 
 InstanceKey = tuple[str, tuple[str, ...]]
 
@@ -82,44 +73,17 @@ def estimate_effort(prior: StreamInfo, history: Mapping[str, float] | None,
 
 
 def observed_cheap(history: Mapping[str, float] | None, run: StreamStats | None) -> bool:
-    """Whether a stream's observed calls show it cheap enough for eager evaluation (and the
-    other uses of "cheap": local repairs, probes); the prior does not count.
-
-    Decided once per solve and then kept in ``run.cheap``, so that it does not flip in the
-    middle of a solve as the measured mean drifts (a noisy call moved the moment a stream
-    became eager, and so the searches): from the persisted ``history`` alone when it has
-    :data:`AUTO_EAGER_MIN_CALLS` calls (a fixed input of the solve: the same history, the
-    same decision, whatever this run measures), else from this ``run``'s first calls: cheap
-    when their mean CPU is below :data:`AUTO_EAGER_MAX_OVERHEAD_S`. Before that, not cheap
-    (undecided, nothing kept)."""
-    if run is not None and run.cheap is not None:
-        return run.cheap
-    decision = cheap_decision(history, run)
-    if decision is None:
-        return False
-    if run is not None and run.calls:
-        run.cheap = decision
-    return decision
-
-
-def cheap_decision(history: Mapping[str, float] | None, run: StreamStats | None
-                   ) -> bool | None:
-    """Cheap (``True``), costly (``False``) or undecided (``None``: too few calls), from
-    the mean CPU per call of ``history`` when it has at least :data:`AUTO_EAGER_MIN_CALLS`
-    calls, else of ``run``, against :data:`AUTO_EAGER_MAX_OVERHEAD_S`."""
+    """Whether the observed calls (persisted ``history`` plus this ``run``) show a stream to
+    be cheap enough for eager evaluation; the prior does not count."""
+    calls, seconds = 0.0, 0.0
+    # Calls count with their CPU time: wall time depends on the machine's load, and one
+    # preempted call of a 20 us sampler measures milliseconds. Histories from before CPU time
+    # was persisted only have wall time.
     current = {"calls": run.calls, "cpu_s": run.cpu_s} if run is not None else {}
     for source in (history or {}, current):
-        if float(source.get("calls", 0.0)) >= AUTO_EAGER_MIN_CALLS:
-            return _mean_cpu_us(source) < AUTO_EAGER_MAX_OVERHEAD_S * 1e6
-    return None
-
-
-def _mean_cpu_us(source: Mapping[str, float]) -> float:
-    """Mean CPU microseconds per call of ``source`` (which has calls), rounded to
-    nanoseconds so that a clock's float steps (1 ms read as 0.999999... ms) do not decide.
-    Histories from before CPU time was persisted only have wall time, which bounds it."""
-    seconds = float(source.get("cpu_s", source.get("time_s", 0.0)))
-    return round(seconds / float(source["calls"]) * 1e6, 3)
+        calls += float(source.get("calls", 0.0))
+        seconds += float(source.get("cpu_s", source.get("time_s", 0.0)))
+    return calls >= AUTO_EAGER_MIN_CALLS and seconds / calls <= AUTO_EAGER_MAX_OVERHEAD_S
 
 
 def _as_totals(run: StreamStats | None) -> dict[str, float]:

@@ -15,8 +15,8 @@ turns decided by **work units** (:func:`work_units`: stream calls, facts and gro
 actions of searched tasks, evaluated states, each weighted by its typical CPU cost), never
 by a clock, so that when each member runs, and so which member's plan a seed returns, is
 the same on a quiet and a loaded machine (a CPU-timed share made them depend on the load;
-the algorithms' own CPU-timed rule, :func:`.effort.observed_cheap`, is decided once per
-stream and solve, far from the measured costs of the project's streams):
+the algorithms' own CPU-timed rule, :func:`.effort.observed_cheap`, still is: a stream
+whose mean CPU per call lies near its 250 us threshold can be decided either way):
 
 * for its first :data:`GRACE_UNITS` of work the optimistic member runs alone, so the solves
   that meet the issue's latency targets (uniform tamp2d problems, examples) do exactly what
