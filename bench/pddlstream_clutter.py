@@ -21,38 +21,19 @@ import argparse
 import json
 import os
 import statistics
-import subprocess
 import sys
-import tempfile
-import time
 from pathlib import Path
 from typing import Any
 
-SUITE = Path(__file__).resolve().parent / "problems" / "hidden19"
+from planner_hidden import pddlstream_child
+
 PROBLEMS = ("hidden_clutter_10", "hidden_clutter_12", "hidden_stack_4")
 
 
 def run_one(checkout: Path, name: str, settings: str, seed: int, max_time: float
             ) -> dict[str, Any]:
     """One PDDLStream solve; ``status`` is solved / timeout / infeasible / killed / error."""
-    with tempfile.TemporaryDirectory() as scratch:
-        start = time.perf_counter()
-        try:
-            done = subprocess.run(
-                [sys.executable, str(SUITE / "run_pddlstream.py"), str(SUITE / f"{name}.yaml"),
-                 str(seed), str(max_time)], capture_output=True, text=True, cwd=scratch,
-                timeout=max_time + 120,
-                env={**os.environ, "PYTHONPATH": str(checkout), "OMP_NUM_THREADS": "1",
-                     "PDS_SETTINGS": settings})
-            lines = [line for line in done.stdout.splitlines() if line.startswith("{")]
-            report = json.loads(lines[-1]) if lines else {
-                "status": f"error: {done.stderr.strip().splitlines()[-1:]}"}
-        except subprocess.TimeoutExpired:
-            report = {"status": "killed"}
-        wall = time.perf_counter() - start
-    status = report.get("status")
-    if status == "unsolved":
-        status = "timeout" if report.get("wall_s", 0.0) >= max_time else "infeasible"
+    report, wall, status = pddlstream_child(checkout, name, seed, max_time, settings)
     return {"problem": name, "settings": settings, "seed": seed, "status": status,
             "wall_s": wall, "cpu_s": report.get("cpu_s", float("nan"))
             + (report.get("fd_cpu_s") or 0.0), "fd_cpu_s": report.get("fd_cpu_s"),

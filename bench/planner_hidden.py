@@ -116,9 +116,13 @@ def run_cli(name: str, algorithm: str, seed: int, max_time: float) -> dict[str, 
             "length": len(report["plan"]) if report.get("plan") else None}
 
 
-def run_pddlstream(checkout: Path, name: str, seed: int, max_time: float) -> dict[str, Any]:
-    """PDDLStream itself (``run_pddlstream.py``) in a scratch working directory: its
-    ``temp/`` and ``statistics/`` go there. CPU: the solve's own plus Fast Downward's."""
+def pddlstream_child(checkout: Path, name: str, seed: int, max_time: float,
+                     settings: str | None = None) -> tuple[dict[str, Any], float, str | None]:
+    """PDDLStream itself (``run_pddlstream.py``, optionally with ``PDS_SETTINGS=settings``)
+    in a scratch working directory: its ``temp/`` and ``statistics/`` go there. Returns the
+    child's report, the wall seconds and the status (solved / timeout / infeasible / killed
+    / error)."""
+    extra = {} if settings is None else {"PDS_SETTINGS": settings}
     with tempfile.TemporaryDirectory() as scratch:
         start = time.perf_counter()
         try:
@@ -126,7 +130,8 @@ def run_pddlstream(checkout: Path, name: str, seed: int, max_time: float) -> dic
                 [sys.executable, str(SUITE / "run_pddlstream.py"), str(SUITE / f"{name}.yaml"),
                  str(seed), str(max_time)], capture_output=True, text=True, cwd=scratch,
                 timeout=max_time + 120,
-                env={**os.environ, "PYTHONPATH": str(checkout), "OMP_NUM_THREADS": "1"})
+                env={**os.environ, "PYTHONPATH": str(checkout), "OMP_NUM_THREADS": "1",
+                     **extra})
             lines = [line for line in done.stdout.splitlines() if line.startswith("{")]
             report = json.loads(lines[-1]) if lines else {
                 "status": f"error: {done.stderr.strip().splitlines()[-1:]}"}
@@ -136,6 +141,13 @@ def run_pddlstream(checkout: Path, name: str, seed: int, max_time: float) -> dic
     status = report.get("status")
     if status == "unsolved":
         status = "timeout" if report.get("wall_s", 0.0) >= max_time else "infeasible"
+    return report, wall, status
+
+
+def run_pddlstream(checkout: Path, name: str, seed: int, max_time: float) -> dict[str, Any]:
+    """One PDDLStream solve (:func:`pddlstream_child`). CPU: the solve's own plus Fast
+    Downward's."""
+    report, wall, status = pddlstream_child(checkout, name, seed, max_time)
     return {"algorithm": "adaptive", "seed": seed, "status": status, "wall_s": wall,
             "wall_s_repeats": [report.get("wall_s", wall)],
             "cpu_s": report.get("cpu_s", float("nan")) + report.get("fd_cpu_s", 0.0),
