@@ -60,6 +60,7 @@ from ltamp_cli.learned_streams.stream import (
     ModelCache,
     learned_stream_configs,
 )
+from ltamp_cli.planner.keyed_random import KeyedRandom
 from ltamp_cli.planner.streams import Binding, StreamInfo
 
 HERE = Path(__file__).resolve().parent
@@ -178,7 +179,7 @@ def control_scale(stream: LearnedStream) -> np.ndarray:
 
 
 def pour_stream(config: LearnedStreamConfig, geometry: KitchenGeometry,
-                rng: np.random.Generator, check: SkillCheck | None,
+                keyed: KeyedRandom, check: SkillCheck | None,
                 models: ModelCache) -> KitchenLearnedStream:
     """GoodPour over the kitchen: inputs ``(source, target, pose, region)``, outputs
     ``(grasp, conf, approach, control)``. Hard tests inside the sampler: the pour skill's
@@ -216,14 +217,15 @@ def pour_stream(config: LearnedStreamConfig, geometry: KitchenGeometry,
             budgets[(source, target, str(pose), region)] = check.budget(control_scale(stream))
         return True
 
-    stream = GoodPour(config, rng, outputs, models=models, to_context=context,
-                      validity_for=validity_for)
+    stream = GoodPour(config, keyed("sample-pour"), outputs, models=models,
+                      to_context=context, validity_for=validity_for,
+                      rng_for=lambda *inputs: keyed("sample-pour", *inputs))
     wired = KitchenLearnedStream(stream, applies)
     return wired
 
 
 def scoop_stream(config: LearnedStreamConfig, geometry: KitchenGeometry,
-                 rng: np.random.Generator, check: SkillCheck | None,
+                 keyed: KeyedRandom, check: SkillCheck | None,
                  models: ModelCache) -> KitchenLearnedStream:
     """GoodScoop over the kitchen: inputs ``(spoon, bowl, pose)``, outputs ``(grasp, conf,
     approach, control)``; hard tests inside the sampler: the skill's swept-path test and the
@@ -260,14 +262,15 @@ def scoop_stream(config: LearnedStreamConfig, geometry: KitchenGeometry,
             budgets[(spoon, bowl, str(pose))] = check.budget(control_scale(stream))
         return True
 
-    stream = GoodScoop(config, rng, outputs, models=models, to_context=context,
-                       validity_for=validity_for)
+    stream = GoodScoop(config, keyed("sample-scoop"), outputs, models=models,
+                       to_context=context, validity_for=validity_for,
+                       rng_for=lambda *inputs: keyed("sample-scoop", *inputs))
     wired = KitchenLearnedStream(stream, applies)
     return wired
 
 
 def push_stream(config: LearnedStreamConfig, geometry: KitchenGeometry,
-                rng: np.random.Generator, models: ModelCache) -> KitchenLearnedStream:
+                keyed: KeyedRandom, models: ModelCache) -> KitchenLearnedStream:
     """GoodPush: inputs ``(block, pose, edge)``, outputs ``(conf, approach, control)``; hard
     tests inside the sampler: the skill's start test, the kitchen's section (pushes in line
     with the block) and the pusher's path (:func:`~ltamp_cli.backends.box2d.tamp_batch.
@@ -313,9 +316,10 @@ def push_stream(config: LearnedStreamConfig, geometry: KitchenGeometry,
         return geometry.push_context(block, p, edge) is not None and geometry.push_path_clear(
             block, p, edge)
 
-    stream = LearnedStream(config, context, outputs, rng, models=models,
+    stream = LearnedStream(config, context, outputs, keyed("sample-push"), models=models,
                            validity_for=validity_for, context_names=PUSH_NAMES[0],
-                           control_names=PUSH_NAMES[1])
+                           control_names=PUSH_NAMES[1],
+                           rng_for=lambda *inputs: keyed("sample-push", *inputs))
     wired = KitchenLearnedStream(stream, applies)
     return wired
 
@@ -414,6 +418,10 @@ def _tuple(values: np.ndarray) -> tuple[float, ...]:
 
 def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str, Any]:
     scene = scene_from_world(world, rng)  # first draws: the executor repeats them
+    # The learned streams draw per input tuple (KeyedRandom): one skill's samples do not
+    # depend on how many controls the others drew (a new pour model leaves the scoops as
+    # they were, so two models compare seed by seed).
+    keyed = KeyedRandom(rng)
     geometry = KitchenGeometry(scene, motion_time=float(world.get("motion_time", 1.0)))
     # A learned stream is built (its model loaded) only if the scene has something it can act
     # on: a cup holding a material to pour, a spoon and a bowl or cup of material, a block.
@@ -433,13 +441,13 @@ def make_streams(world: Mapping[str, Any], rng: np.random.Generator) -> dict[str
     def learned_stream(name: str) -> KitchenLearnedStream:
         if name not in learned:
             if name == "sample-pour":
-                learned[name] = pour_stream(configs[name], geometry, rng,
+                learned[name] = pour_stream(configs[name], geometry, keyed,
                                             prechecks.get("pour"), models)
             elif name == "sample-scoop":
-                learned[name] = scoop_stream(configs[name], geometry, rng,
+                learned[name] = scoop_stream(configs[name], geometry, keyed,
                                              prechecks.get("scoop"), models)
             else:
-                learned[name] = push_stream(configs[name], geometry, rng, models)
+                learned[name] = push_stream(configs[name], geometry, keyed, models)
         return learned[name]
 
     def sample_placement(name: str, region: str) -> Iterator[tuple[Point]]:

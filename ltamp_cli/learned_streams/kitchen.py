@@ -60,9 +60,11 @@ class GoodPour(LearnedStream):
                  is_valid: PhysicalValidity | None = None,
                  models: ModelCache | None = None, *,
                  to_context: Callable[..., np.ndarray] = _pour_context,
-                 validity_for: Callable[..., PhysicalValidity | None] | None = None) -> None:
+                 validity_for: Callable[..., PhysicalValidity | None] | None = None,
+                 rng_for: Callable[..., np.random.Generator] | None = None) -> None:
         super().__init__(config, to_context, to_outputs, rng, is_valid, models, validity_for,
-                         context_names=POUR_NAMES[0], control_names=POUR_NAMES[1])
+                         context_names=POUR_NAMES[0], control_names=POUR_NAMES[1],
+                         rng_for=rng_for)
 
 
 class GoodScoop(LearnedStream):
@@ -73,6 +75,8 @@ class GoodScoop(LearnedStream):
                  is_valid: PhysicalValidity | None = None,
                  models: ModelCache | None = None, *,
                  to_context: Callable[..., np.ndarray] = _scoop_context,
-                 validity_for: Callable[..., PhysicalValidity | None] | None = None) -> None:
+                 validity_for: Callable[..., PhysicalValidity | None] | None = None,
+                 rng_for: Callable[..., np.random.Generator] | None = None) -> None:
         super().__init__(config, to_context, to_outputs, rng, is_valid, models, validity_for,
-                         context_names=SCOOP_NAMES[0], control_names=SCOOP_NAMES[1])
+                         context_names=SCOOP_NAMES[0], control_names=SCOOP_NAMES[1],
+                         rng_for=rng_for)
