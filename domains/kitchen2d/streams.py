@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Collection, Iterator, Mapping
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -219,7 +220,7 @@ def pour_stream(config: LearnedStreamConfig, geometry: KitchenGeometry,
 
     stream = GoodPour(config, keyed("sample-pour"), outputs, models=models,
                       to_context=context, validity_for=validity_for,
-                      rng_for=lambda *inputs: keyed("sample-pour", *inputs))
+                      rng_for=partial(keyed, "sample-pour"))
     wired = KitchenLearnedStream(stream, applies)
     return wired
 
@@ -264,7 +265,7 @@ def scoop_stream(config: LearnedStreamConfig, geometry: KitchenGeometry,
 
     stream = GoodScoop(config, keyed("sample-scoop"), outputs, models=models,
                        to_context=context, validity_for=validity_for,
-                       rng_for=lambda *inputs: keyed("sample-scoop", *inputs))
+                       rng_for=partial(keyed, "sample-scoop"))
     wired = KitchenLearnedStream(stream, applies)
     return wired
 
@@ -319,7 +320,7 @@ def push_stream(config: LearnedStreamConfig, geometry: KitchenGeometry,
     stream = LearnedStream(config, context, outputs, keyed("sample-push"), models=models,
                            validity_for=validity_for, context_names=PUSH_NAMES[0],
                            control_names=PUSH_NAMES[1],
-                           rng_for=lambda *inputs: keyed("sample-push", *inputs))
+                           rng_for=partial(keyed, "sample-push"))
     wired = KitchenLearnedStream(stream, applies)
     return wired
 

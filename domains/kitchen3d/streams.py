@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 import weakref
 from collections.abc import Callable, Iterator, Mapping
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -174,8 +175,7 @@ class _LearnedSkill:
                  keyed: KeyedRandom, name: str, check: PhysicsCheck | None = None,
                  skill: SkillSpec | None = None) -> None:
         self._args = (config, to_context, to_outputs, keyed(name))
-        self._name = name
-        self._keyed = keyed
+        self._draws_for = partial(keyed, name)  # a generator per input tuple
         # the model must be of this skill (its parameter names), not merely of its size
         self._names = ({} if skill is None else
                        {"context_names": skill.context.names,
@@ -212,9 +212,6 @@ class _LearnedSkill:
                     continue
             if self.check is not None:  # the next call of the planner's has its own trials
                 self.check.begin()
-
-    def _draws_for(self, *inputs: Any) -> np.random.Generator:
-        return self._keyed(self._name, *inputs)
 
     def feedback(self, inputs: tuple[Any, ...], outputs: tuple[Any, ...]) -> None:
         if self.stream is not None:

@@ -4,10 +4,7 @@ does not depend on the draws other streams made before it, so a new model for on
 
 from __future__ import annotations
 
-import importlib.util
-from collections.abc import Iterator
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -20,58 +17,37 @@ ROOT = Path(__file__).resolve().parents[2]
 COFFEE = ROOT / "problems/kitchen3d/coffee.yaml"
 
 
-def _bindings() -> ModuleType:
-    spec = importlib.util.spec_from_file_location(
-        "kitchen3d_streams_keyed_under_test", ROOT / "domains/kitchen3d/streams.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.fixture(scope="module")
-def make() -> Any:
-    bindings, world = _bindings(), load_problem(COFFEE).world
+def make(load_bindings: Any) -> Any:
+    bindings = load_bindings("domains/kitchen3d/streams.py")
+    world = load_problem(COFFEE).world
     return lambda seed: bindings.make_streams(world, np.random.default_rng(seed))
-
-
-def _first_outputs(generator: Iterator[Any], n: int, calls: int = 12) -> list[int]:
-    """Digests of the first ``n`` output tuples (paths hold arrays: compare by contents)."""
-    found: list[Any] = []
-    for _ in range(calls):
-        batch = next(generator, None)
-        if batch is None:
-            break
-        found.extend(batch if isinstance(batch, list) else [batch])
-        if len(found) >= n:
-            break
-    return [key_digest(outputs) for outputs in found[:n]]
 
 
 def _grasp(streams: dict[str, Any], name: str) -> Any:
     return next(streams["sample-grasp"].function(name))[0]
 
 
-def test_pours_do_not_depend_on_the_scoops_drawn_before(make: Any) -> None:
+def test_pours_do_not_depend_on_the_scoops_drawn_before(make: Any, first_outputs: Any) -> None:
     alone, after_scoops = make(0), make(0)
     cup_grasp = _grasp(alone, "cup")
     pour_inputs = (0, "cup", cup_grasp, "bowl", (0.0, -0.12))
     scoops = after_scoops["sample-scoop"].function(1, "spoon", _grasp(after_scoops, "spoon"),
                                                    "sugarbowl", (0.22, 0.2))
-    assert _first_outputs(scoops, 2), "the scoop stream gave nothing: nothing was drawn"
-    _first_outputs(after_scoops["inverse-kinematics"].function(  # and an IK meanwhile
+    assert first_outputs(scoops, 2), "the scoop stream gave nothing: nothing was drawn"
+    first_outputs(after_scoops["inverse-kinematics"].function(  # and an IK meanwhile
         0, "cup", (-0.2, 0.12), cup_grasp), 1)
-    expected = _first_outputs(alone["sample-pour"].function(*pour_inputs), 1)
+    expected = first_outputs(alone["sample-pour"].function(*pour_inputs), 1)
     assert expected, "no pour found: the test compares nothing"
-    assert _first_outputs(after_scoops["sample-pour"].function(*pour_inputs), 1) == expected
+    assert first_outputs(after_scoops["sample-pour"].function(*pour_inputs), 1) == expected
     # and a different seed draws other pours (the keys are not all there is)
-    assert _first_outputs(make(1)["sample-pour"].function(*pour_inputs), 1) != expected
+    assert first_outputs(make(1)["sample-pour"].function(*pour_inputs), 1) != expected
 
 
-def test_ik_and_motions_do_not_depend_on_earlier_calls(make: Any) -> None:
+def test_ik_and_motions_do_not_depend_on_earlier_calls(make: Any, first_outputs: Any) -> None:
     alone, busy = make(0), make(0)
     for other in ("spoon", "stirrer"):  # other IK calls first, on the busy copy only
-        _first_outputs(busy["inverse-kinematics"].function(1, other, (0.25, -0.3),
+        first_outputs(busy["inverse-kinematics"].function(1, other, (0.25, -0.3),
                                                            _grasp(busy, other)), 1)
     for (grasp,) in alone["sample-grasp"].function("cup"):
         ik = (0, "cup", (-0.2, 0.12), grasp)
@@ -84,7 +60,7 @@ def test_ik_and_motions_do_not_depend_on_earlier_calls(make: Any) -> None:
     assert [key_digest(x) for x in again] == [key_digest(x) for x in found]
     home = load_problem(COFFEE).objects["q0"][1]
     motion = (0, home, found[0][0])
-    _first_outputs(busy["plan-free-motion"].function(0, found[0][0], home), 2)  # back first
-    path = _first_outputs(alone["plan-free-motion"].function(*motion), 2)
-    assert len(path) == 2 and path == _first_outputs(
+    first_outputs(busy["plan-free-motion"].function(0, found[0][0], home), 2)  # back first
+    path = first_outputs(alone["plan-free-motion"].function(*motion), 2)
+    assert len(path) == 2 and path == first_outputs(
         busy["plan-free-motion"].function(*motion), 2)
